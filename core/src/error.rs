@@ -1,0 +1,188 @@
+//! The one error type of coagula.
+//!
+//! Every fallible call returns [`Result<T, Error>`](Result). The enum is small and
+//! `Copy` (as `rand_distr`'s errors are), so it crosses the C ABI as a status code plus
+//! a message without allocation.
+
+use core::fmt;
+
+/// Everything that can go wrong in coagula.
+///
+/// Each variant carries the name of the offending parameter (a `&'static str`) and,
+/// where it helps, the value that was rejected.
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter is NaN or infinite.
+    NotFinite {
+        /// Name of the parameter.
+        name: &'static str,
+    },
+    /// A parameter lies outside its admissible range.
+    OutOfRange {
+        /// Name of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: f64,
+        /// Human-readable description of the admissible range, e.g. `"(0.5, 1)"`.
+        range: &'static str,
+    },
+    /// A kernel (coagulation or fragmentation rate, or a bound) returned a negative
+    /// or NaN value.
+    InvalidRate {
+        /// Which quantity was being evaluated.
+        name: &'static str,
+        /// The value that was returned.
+        value: f64,
+    },
+    /// A buffer has the wrong length.
+    BufferLength {
+        /// Name of the buffer.
+        name: &'static str,
+        /// Length that was expected (or the minimum length).
+        expected: usize,
+        /// Length that was given.
+        got: usize,
+    },
+    /// A caller-set capacity would be exceeded.
+    Capacity {
+        /// What ran out (e.g. `"max size M"`).
+        name: &'static str,
+        /// The capacity in force.
+        capacity: usize,
+    },
+    /// A count must be a power of two (or of the sequence's base) and is not.
+    NotPowerOfTwo {
+        /// Name of the parameter.
+        name: &'static str,
+        /// The rejected value.
+        value: u64,
+    },
+    /// A requested dimension is not supported.
+    Dimension {
+        /// The requested dimension.
+        requested: usize,
+        /// The largest supported dimension.
+        max: usize,
+    },
+    /// An index is past the end of what can be generated (e.g. point 2^bits of a
+    /// digital sequence).
+    IndexOutOfRange {
+        /// Name of the index.
+        name: &'static str,
+        /// The rejected index.
+        index: u64,
+        /// The first index that is not allowed.
+        limit: u64,
+    },
+    /// A sampling structure is empty (total weight zero), so nothing can be drawn.
+    Empty,
+    /// A time argument lies before the current time of a simulation.
+    TimeBackwards {
+        /// Current time of the simulation.
+        now: f64,
+        /// Requested time.
+        requested: f64,
+    },
+    /// A feature is not available for this kernel (e.g. no low-rank bound is known).
+    Unsupported {
+        /// What is missing.
+        what: &'static str,
+    },
+    /// Integer overflow of a size or a count.
+    Overflow {
+        /// What overflowed.
+        name: &'static str,
+    },
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Error::NotFinite { name } => write!(f, "{name} must be finite (got NaN or infinity)"),
+            Error::OutOfRange { name, value, range } => {
+                write!(
+                    f,
+                    "{name} = {value} is outside the admissible range {range}"
+                )
+            }
+            Error::InvalidRate { name, value } => {
+                write!(
+                    f,
+                    "{name} returned {value}; rates must be finite and non-negative"
+                )
+            }
+            Error::BufferLength {
+                name,
+                expected,
+                got,
+            } => write!(f, "buffer {name} has length {got}, expected {expected}"),
+            Error::Capacity { name, capacity } => {
+                write!(f, "capacity exceeded: {name} would pass {capacity}")
+            }
+            Error::NotPowerOfTwo { name, value } => {
+                write!(f, "{name} = {value} must be a power of two")
+            }
+            Error::Dimension { requested, max } => {
+                write!(f, "dimension {requested} is not supported (maximum {max})")
+            }
+            Error::IndexOutOfRange { name, index, limit } => {
+                write!(
+                    f,
+                    "{name} = {index} is out of range (must be below {limit})"
+                )
+            }
+            Error::Empty => f.write_str("cannot sample: total weight is zero"),
+            Error::TimeBackwards { now, requested } => write!(
+                f,
+                "requested time {requested} lies before the current time {now}"
+            ),
+            Error::Unsupported { what } => write!(f, "not supported: {what}"),
+            Error::Overflow { name } => write!(f, "integer overflow in {name}"),
+        }
+    }
+}
+
+#[cfg(feature = "std")]
+impl std::error::Error for Error {}
+
+/// Shorthand used throughout the crate.
+pub type Result<T> = core::result::Result<T, Error>;
+
+/// Checks that `value` is finite, naming it in the error otherwise.
+pub(crate) fn finite(name: &'static str, value: f64) -> Result<f64> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::NotFinite { name })
+    }
+}
+
+/// Checks that `value` is finite and strictly positive.
+pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
+    finite(name, value)?;
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::OutOfRange {
+            name,
+            value,
+            range: "(0, inf)",
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::string::ToString;
+
+    #[test]
+    fn messages_name_the_parameter() {
+        let e = positive("dt", -1.0).unwrap_err();
+        assert!(e.to_string().contains("dt"));
+        assert!(e.to_string().contains("-1"));
+        let e = finite("a", f64::NAN).unwrap_err();
+        assert_eq!(e, Error::NotFinite { name: "a" });
+    }
+}

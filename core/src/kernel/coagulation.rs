@@ -1,0 +1,420 @@
+//! The built-in coagulation kernels of SPEC §2 and their bounds.
+
+use super::CoagulationKernel;
+use crate::error::{Error, Result, finite, positive};
+use libm::{cbrt, pow, sqrt};
+
+/// `c²` of the free-molecular majorant `h(x) = c (x^{2/3} + x^{-1/2})`, valid for all
+/// `x > 0`: the supremum of `K(x,y) / ((x^{2/3}+x^{-1/2})(y^{2/3}+y^{-1/2}))` is
+/// 1.421874 (attained near x = 2.14, y = 0.467; found by maximisation and checked on a
+/// grid by the tests), rounded up.
+const FM_ALL_SIZES_C2: f64 = 1.4219;
+
+/// `K(1,1) = 4√2`: the supremum of `K(x,y)/(x y)^{2/3}` over `x, y ≥ 1`. By homogeneity
+/// (degree 1/6 against 4/3) the supremum over `x, y ≥ s` is `4√2 s^{-7/6}`.
+const FM_UNIT_C2: f64 = 5.656_854_249_492_381;
+
+/// A built-in coagulation kernel (SPEC §2), with a product majorant and a low-rank bound.
+///
+/// Constructors validate their parameters. Bounds hold for all sizes `x > 0` unless
+/// [`with_min_size`](Self::with_min_size) narrows them to `x ≥ s` (which tightens the
+/// additive and free-molecular majorants).
+///
+/// | kernel | majorant h(x) | low-rank A(x, y) | R |
+/// |---|---|---|---|
+/// | constant K0 | √K0 | K0/2 | 1 |
+/// | additive x + y | x + c, c = max(0, √(2s) − s, 1 − s) (c = 1 for s = 0) | x | 1 |
+/// | multiplicative x y | x | x y / 2 | 1 |
+/// | product (x y)^a | x^a | (x y)^a / 2 | 1 |
+/// | homogeneous-γ | c (x + x^{γ−1}) (x for γ = 2) | c² x y^{γ−1} | 1 |
+/// | free molecular | c (x^{2/3} + x^{−1/2}) (s = 0), √(4√2 s^{−7/6}) x^{2/3} (s > 0) | (x^{1/3}+y^{1/3})² y^{−1/2} | 3 |
+/// | Brownian | x^{1/3} + x^{−1/3} | 1 + (x/y)^{1/3} | 2 |
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coagulation {
+    kind: Kind,
+    min_size: f64,
+    /// Additive: the shift c; homogeneous: c² of the bound; free molecular: c².
+    c: f64,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Constant(f64),
+    Additive,
+    Multiplicative,
+    Product(f64),
+    Homogeneous(f64),
+    FreeMolecular,
+    Brownian,
+}
+
+impl Coagulation {
+    /// `K = k0` (k0 > 0).
+    pub fn constant(k0: f64) -> Result<Self> {
+        positive("k0", k0)?;
+        Ok(Self::new(Kind::Constant(k0)))
+    }
+
+    /// `K = x + y`.
+    pub fn additive() -> Self {
+        Self::new(Kind::Additive).with_c_additive(0.0)
+    }
+
+    /// `K = x y` (gels at t = 1 from a monodisperse start).
+    pub fn multiplicative() -> Self {
+        Self::new(Kind::Multiplicative)
+    }
+
+    /// `K = (x y)^a`, `0 < a ≤ 1` (gelling for a > 1/2; Eibeck–Wagner eq. 6.4).
+    pub fn product(a: f64) -> Result<Self> {
+        finite("a", a)?;
+        if !(a > 0.0 && a <= 1.0) {
+            return Err(Error::OutOfRange {
+                name: "a",
+                value: a,
+                range: "(0, 1]",
+            });
+        }
+        Ok(Self::new(Kind::Product(a)))
+    }
+
+    /// `K = 2 (x y)^γ / ((x + y)^γ − x^γ − y^γ)`, `1 < γ ≤ 2` (Eibeck–Wagner eq. 6.6;
+    /// γ = 2 gives `x y`).
+    pub fn homogeneous(gamma: f64) -> Result<Self> {
+        finite("gamma", gamma)?;
+        if !(gamma > 1.0 && gamma <= 2.0) {
+            return Err(Error::OutOfRange {
+                name: "gamma",
+                value: gamma,
+                range: "(1, 2]",
+            });
+        }
+        let mut k = Self::new(Kind::Homogeneous(gamma));
+        k.c = homogeneous_bound_c2(gamma);
+        Ok(k)
+    }
+
+    /// Free-molecular (ballistic) kernel `K = √(1/x + 1/y) (x^{1/3} + y^{1/3})²`
+    /// (Eibeck–Wagner eq. 6.2, Osinsky eq. 24).
+    pub fn free_molecular() -> Self {
+        let mut k = Self::new(Kind::FreeMolecular);
+        k.c = FM_ALL_SIZES_C2;
+        k
+    }
+
+    /// Brownian (continuum) kernel `K = (x^{1/3} + y^{1/3})(x^{−1/3} + y^{−1/3})`
+    /// (Osinsky eq. 27).
+    pub fn brownian() -> Self {
+        Self::new(Kind::Brownian)
+    }
+
+    fn new(kind: Kind) -> Self {
+        Coagulation {
+            kind,
+            min_size: 0.0,
+            c: 0.0,
+        }
+    }
+
+    fn with_c_additive(mut self, s: f64) -> Self {
+        // (x + c)(y + c) ≥ x + y for x, y ≥ s  ⇔  (c + s)² ≥ 2s and s ≥ 1 − c.
+        self.c = if s == 0.0 {
+            1.0
+        } else {
+            (sqrt(2.0 * s) - s).max(1.0 - s).max(0.0)
+        };
+        self
+    }
+
+    /// Narrows the bounds to sizes `x ≥ s` (`s ≥ 0`; e.g. 1 for integer sizes), which
+    /// tightens the majorants of the additive and free-molecular kernels.
+    pub fn with_min_size(mut self, s: f64) -> Result<Self> {
+        finite("min_size", s)?;
+        if s < 0.0 {
+            return Err(Error::OutOfRange {
+                name: "min_size",
+                value: s,
+                range: "[0, inf)",
+            });
+        }
+        self.min_size = s;
+        match self.kind {
+            Kind::Additive => self = self.with_c_additive(s),
+            Kind::FreeMolecular => {
+                self.c = if s > 0.0 {
+                    FM_UNIT_C2 * pow(s, -7.0 / 6.0)
+                } else {
+                    FM_ALL_SIZES_C2
+                };
+            }
+            _ => {}
+        }
+        Ok(self)
+    }
+
+    /// A short name of the kernel (`"constant"`, `"additive"`, ...).
+    pub fn name(&self) -> &'static str {
+        match self.kind {
+            Kind::Constant(_) => "constant",
+            Kind::Additive => "additive",
+            Kind::Multiplicative => "multiplicative",
+            Kind::Product(_) => "product",
+            Kind::Homogeneous(_) => "homogeneous",
+            Kind::FreeMolecular => "free-molecular",
+            Kind::Brownian => "brownian",
+        }
+    }
+}
+
+/// `(1 + r)^γ − 1 − r^γ` without cancellation for small r.
+fn homogeneous_den_unit(gamma: f64, r: f64) -> f64 {
+    libm::expm1(gamma * libm::log1p(r)) - pow(r, gamma)
+}
+
+/// `K(1, r) = 2 r^γ / ((1+r)^γ − 1 − r^γ)` for `0 < r ≤ 1`.
+fn homogeneous_unit(gamma: f64, r: f64) -> f64 {
+    2.0 * pow(r, gamma) / homogeneous_den_unit(gamma, r)
+}
+
+/// Supremum over r of `K(1, r) / (r + r^{γ−1})` (`0 < r ≤ 1` by symmetry), which makes
+/// `K(x, y) ≤ c² (x y^{γ−1} + x^{γ−1} y)`. The limit at r → 0 is 2/γ for γ < 2 (1/2 for
+/// γ = 2); interior values are scanned on a fine log grid and refined, then raised by
+/// 1e-9 relative for rounding.
+fn homogeneous_bound_c2(gamma: f64) -> f64 {
+    let ratio = |r: f64| homogeneous_unit(gamma, r) / (r + pow(r, gamma - 1.0));
+    let mut best = if gamma < 2.0 { 2.0 / gamma } else { 0.5 };
+    let n = 4000;
+    let (lo, hi) = (-40.0_f64, 0.0_f64); // ln r
+    let mut best_i = n;
+    for i in 0..=n {
+        let lr = lo + (hi - lo) * i as f64 / n as f64;
+        let v = ratio(libm::exp(lr));
+        if v > best {
+            best = v;
+            best_i = i;
+        }
+    }
+    // golden-section refinement around the best grid point
+    let h = (hi - lo) / n as f64;
+    let centre = lo + (hi - lo) * best_i as f64 / n as f64;
+    let (mut a, mut b) = ((centre - h).max(lo), (centre + h).min(hi));
+    let g = 0.618_033_988_749_894_9;
+    for _ in 0..80 {
+        let c1 = b - g * (b - a);
+        let c2 = a + g * (b - a);
+        let (v1, v2) = (ratio(libm::exp(c1)), ratio(libm::exp(c2)));
+        best = best.max(v1).max(v2);
+        if v1 > v2 {
+            b = c2;
+        } else {
+            a = c1;
+        }
+    }
+    best * (1.0 + 1e-9)
+}
+
+impl CoagulationKernel for Coagulation {
+    fn rate(&self, x: f64, y: f64) -> f64 {
+        match self.kind {
+            Kind::Constant(k0) => k0,
+            Kind::Additive => x + y,
+            Kind::Multiplicative => x * y,
+            Kind::Product(a) => pow(x * y, a),
+            Kind::Homogeneous(g) => {
+                let (big, small) = if x >= y { (x, y) } else { (y, x) };
+                pow(big, g) * homogeneous_unit(g, small / big)
+            }
+            Kind::FreeMolecular => {
+                let s = cbrt(x) + cbrt(y);
+                sqrt(1.0 / x + 1.0 / y) * s * s
+            }
+            Kind::Brownian => (cbrt(x) + cbrt(y)) * (1.0 / cbrt(x) + 1.0 / cbrt(y)),
+        }
+    }
+
+    fn majorant(&self, x: f64) -> Option<f64> {
+        Some(match self.kind {
+            Kind::Constant(k0) => sqrt(k0),
+            Kind::Additive => x + self.c,
+            Kind::Multiplicative => x,
+            Kind::Product(a) => pow(x, a),
+            // γ = 2 is exactly x y
+            Kind::Homogeneous(2.0) => x,
+            Kind::Homogeneous(g) => sqrt(self.c) * (x + pow(x, g - 1.0)),
+            Kind::FreeMolecular => {
+                if self.min_size > 0.0 {
+                    sqrt(self.c) * pow(x, 2.0 / 3.0)
+                } else {
+                    sqrt(self.c) * (pow(x, 2.0 / 3.0) + 1.0 / sqrt(x))
+                }
+            }
+            Kind::Brownian => cbrt(x) + 1.0 / cbrt(x),
+        })
+    }
+
+    fn rank(&self) -> usize {
+        match self.kind {
+            Kind::FreeMolecular => 3,
+            Kind::Brownian => 2,
+            _ => 1,
+        }
+    }
+
+    fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+        match self.kind {
+            Kind::Constant(k0) => {
+                a[0] = 0.5 * k0;
+                b[0] = 1.0;
+            }
+            Kind::Additive => {
+                a[0] = x;
+                b[0] = 1.0;
+            }
+            Kind::Multiplicative => {
+                a[0] = 0.5 * x;
+                b[0] = x;
+            }
+            Kind::Product(p) => {
+                let v = pow(x, p);
+                a[0] = 0.5 * v;
+                b[0] = v;
+            }
+            Kind::Homogeneous(g) => {
+                a[0] = self.c * x;
+                b[0] = pow(x, g - 1.0);
+            }
+            Kind::FreeMolecular => {
+                // A(x, y) = (x^{1/3} + y^{1/3})² y^{-1/2}
+                //         = x^{2/3} y^{-1/2} + 2 x^{1/3} y^{-1/6} + y^{1/6}
+                let c = cbrt(x);
+                let s6 = pow(x, 1.0 / 6.0);
+                a[0] = c * c;
+                b[0] = 1.0 / sqrt(x);
+                a[1] = 2.0 * c;
+                b[1] = 1.0 / s6;
+                a[2] = 1.0;
+                b[2] = s6;
+            }
+            Kind::Brownian => {
+                // A(x, y) = 1 + (x / y)^{1/3}
+                a[0] = 1.0;
+                b[0] = 1.0;
+                let c = cbrt(x);
+                a[1] = c;
+                b[1] = 1.0 / c;
+            }
+        }
+    }
+
+    fn min_size(&self) -> f64 {
+        self.min_size
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constructors_reject_bad_parameters() {
+        assert!(Coagulation::constant(0.0).is_err());
+        assert!(Coagulation::constant(-1.0).is_err());
+        assert!(Coagulation::constant(f64::NAN).is_err());
+        assert!(Coagulation::product(0.0).is_err());
+        assert!(Coagulation::product(1.5).is_err());
+        assert!(Coagulation::product(f64::NAN).is_err());
+        assert!(Coagulation::homogeneous(1.0).is_err());
+        assert!(Coagulation::homogeneous(2.5).is_err());
+        assert!(Coagulation::homogeneous(f64::INFINITY).is_err());
+        assert!(Coagulation::brownian().with_min_size(-1.0).is_err());
+        assert!(Coagulation::brownian().with_min_size(f64::NAN).is_err());
+    }
+
+    #[test]
+    fn rates_match_their_formulas() {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-12 * b.abs().max(1.0);
+        assert!(close(
+            Coagulation::constant(2.5).unwrap().rate(3.0, 7.0),
+            2.5
+        ));
+        assert!(close(Coagulation::additive().rate(3.0, 7.0), 10.0));
+        assert!(close(Coagulation::multiplicative().rate(3.0, 7.0), 21.0));
+        assert!(close(
+            Coagulation::product(0.5).unwrap().rate(4.0, 9.0),
+            6.0
+        ));
+        // γ = 2 is x y
+        let h2 = Coagulation::homogeneous(2.0).unwrap();
+        for &(x, y) in &[(1.0, 1.0), (3.0, 7.0), (1e-6, 1e6), (1e9, 2.0)] {
+            assert!(close(h2.rate(x, y), x * y), "{x} {y} {}", h2.rate(x, y));
+        }
+        // γ = 1.5 at (1, 1): 2 / (2^1.5 − 2)
+        let h15 = Coagulation::homogeneous(1.5).unwrap();
+        assert!(close(h15.rate(1.0, 1.0), 2.0 / (pow(2.0, 1.5) - 2.0)));
+        // symmetric and homogeneous of degree γ
+        assert!(close(h15.rate(2.0, 5.0), h15.rate(5.0, 2.0)));
+        assert!(close(
+            h15.rate(6.0, 15.0),
+            pow(3.0, 1.5) * h15.rate(2.0, 5.0)
+        ));
+        // free molecular at (1, 8): sqrt(1 + 1/8) (1 + 2)^2
+        assert!(close(
+            Coagulation::free_molecular().rate(1.0, 8.0),
+            sqrt(1.125) * 9.0
+        ));
+        // Brownian at (1, 1) = 4, homogeneous of degree 0
+        let b = Coagulation::brownian();
+        assert!(close(b.rate(1.0, 1.0), 4.0));
+        assert!(close(b.rate(5.0, 40.0), b.rate(1.0, 8.0)));
+    }
+
+    #[test]
+    fn low_rank_bounds_are_exact_where_spec_says() {
+        let exact = [
+            Coagulation::constant(3.0).unwrap(),
+            Coagulation::additive(),
+            Coagulation::multiplicative(),
+            Coagulation::product(0.8).unwrap(),
+            Coagulation::brownian(),
+        ];
+        for k in exact {
+            for &(x, y) in &[(1.0, 1.0), (2.0, 9.0), (1e5, 3.0), (0.01, 7.0)] {
+                let a = k.low_rank_bound(x, y).unwrap();
+                let r = k.rate(x, y);
+                assert!(
+                    (a - r).abs() <= 1e-12 * r,
+                    "{} {x} {y}: {a} vs {r}",
+                    k.name()
+                );
+            }
+        }
+        // Ballistic: K / (A + Aᵀ) = sqrt(1/x+1/y) / (x^{-1/2} + y^{-1/2}) ∈ [1/√2, 1]
+        let k = Coagulation::free_molecular();
+        let acc = k.rate(1.0, 1.0) / k.low_rank_bound(1.0, 1.0).unwrap();
+        assert!((acc - 1.0 / sqrt(2.0)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn homogeneous_constant_is_at_least_both_candidates() {
+        for &g in &[1.05, 1.2, 1.5, 1.8, 2.0] {
+            let c2 = homogeneous_bound_c2(g);
+            let at_one = 1.0 / (pow(2.0, g) - 2.0);
+            assert!(c2 >= at_one, "γ={g}: {c2} < {at_one}");
+            if g < 2.0 {
+                assert!(c2 >= 2.0 / g);
+            } else {
+                assert!((c2 - 0.5).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn additive_shift_is_tight_at_the_minimum_size() {
+        // for s = 1, c = √2 − 1 and K(1,1) = h(1)²
+        let k = Coagulation::additive().with_min_size(1.0).unwrap();
+        let h = k.majorant(1.0).unwrap();
+        assert!((h * h - 2.0).abs() < 1e-12);
+        // for s = 0 the shift is 1
+        assert_eq!(Coagulation::additive().majorant(0.0), Some(1.0));
+    }
+}
