@@ -30,6 +30,15 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         kmax: u64,
     },
+    /// Print the t-values of the digital sequences (rank test on generating matrices).
+    Qmc {
+        /// Number of coordinates to analyse.
+        #[arg(long, default_value_t = 20)]
+        dims: usize,
+        /// Largest m (block size 2^m) for the sequence t-values.
+        #[arg(long, default_value_t = 20)]
+        m: u32,
+    },
     /// Check every built-in kernel's bounds on a log grid and print the worst acceptance.
     Kernels {
         /// Smallest size of the grid (1 = integer sizes, bounds narrowed to x ≥ 1).
@@ -62,6 +71,7 @@ fn main() -> ExitCode {
             kmax,
         } => exact(solution, &times, kmax),
         Command::Kernels { min, max, points } => kernels(min, max, points),
+        Command::Qmc { dims, m } => qmc_tvalues(dims, m),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -126,6 +136,32 @@ fn kernels(min: f64, max: f64, points: usize) -> Result<(), coagula_core::Error>
             m.worst_acceptance,
             l.violations,
             l.worst_acceptance
+        );
+    }
+    Ok(())
+}
+
+fn qmc_tvalues(dims: usize, m: u32) -> Result<(), coagula_core::Error> {
+    use coagula_core::qmc::{Niederreiter2, Sobol, net};
+    let nied = Niederreiter2::<u64>::new(dims)?;
+    let sobol = Sobol::<u64>::new(dims)?;
+    println!("t-values by the rank test, blocks of 2^m for m <= {m}");
+    println!("{:>6} {:>12} {:>8}", "coord", "Nied. poly", "Nied. t");
+    for j in 0..dims {
+        println!(
+            "{:>6} {:>#12b} {:>8}",
+            j + 1,
+            nied.polynomial(j),
+            net::t_value_sequence(&nied, &[j], m)
+        );
+    }
+    for s in 1..=dims.min(6) {
+        let c: Vec<usize> = (0..s).collect();
+        println!(
+            "first {s} dims: Niederreiter t = {} (theory {}), Sobol' t = {}",
+            net::t_value_sequence(&nied, &c, m),
+            Niederreiter2::<u64>::new(s)?.t_theory(),
+            net::t_value_sequence(&sobol, &c, m)
         );
     }
     Ok(())

@@ -10,7 +10,9 @@
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
 //! * [`exact`] — exact solutions used as validation targets (SPEC §3);
 //! * [`tree`] — a flat-array sum tree for weighted sampling;
-//! * [`observe`] — moments, concentrations, gel mass and replica statistics.
+//! * [`observe`] — moments, concentrations, gel mass and replica statistics;
+//! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol') and their
+//!   randomisations.
 //!
 //! # Example
 //! ```
@@ -30,6 +32,7 @@ pub mod error;
 pub mod exact;
 pub mod kernel;
 pub mod observe;
+pub mod qmc;
 pub mod tree;
 
 pub use error::{Error, Result};
