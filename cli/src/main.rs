@@ -5,6 +5,8 @@ use coagula_core::exact::Exact;
 use coagula_core::kernel::{Coagulation, check_low_rank, check_majorant, log_grid};
 use std::process::ExitCode;
 
+mod bench;
+
 #[derive(Parser)]
 #[command(
     name = "coagula",
@@ -39,6 +41,11 @@ enum Command {
         #[arg(long, default_value_t = 20)]
         m: u32,
     },
+    /// Benchmarks: `coagula bench lowrank` reruns Osinsky's tables 1-3.
+    Bench {
+        #[command(subcommand)]
+        which: BenchKind,
+    },
     /// Check every built-in kernel's bounds on a log grid and print the worst acceptance.
     Kernels {
         /// Smallest size of the grid (1 = integer sizes, bounds narrowed to x ≥ 1).
@@ -50,6 +57,43 @@ enum Command {
         /// Grid points.
         #[arg(long, default_value_t = 400)]
         points: usize,
+    },
+}
+
+#[derive(Subcommand)]
+enum BenchKind {
+    /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
+    Lowrank {
+        /// Initial number of monomers (the paper uses 1e7).
+        #[arg(long, default_value_t = 10_000_000)]
+        n0: u64,
+        /// Wall-clock budget per baseline run, in seconds (cells beyond it print "-").
+        #[arg(long, default_value_t = 600.0)]
+        budget: f64,
+        /// Only this table: brownian, ballistic or linear.
+        #[arg(long)]
+        only: Option<String>,
+        /// Time only the low-rank method.
+        #[arg(long)]
+        skip_baselines: bool,
+        /// Seed of the random streams.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
+    /// Low-rank only, one kernel to one time (for profiling).
+    LowrankSingle {
+        /// brownian, ballistic or linear.
+        #[arg(long, default_value = "brownian")]
+        kernel: String,
+        #[arg(long, default_value_t = 10_000_000)]
+        n0: u64,
+        #[arg(long, default_value_t = 10.0)]
+        t: f64,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Use the binary tree layout instead of the 8-ary one.
+        #[arg(long)]
+        binary: bool,
     },
 }
 
@@ -72,6 +116,32 @@ fn main() -> ExitCode {
         } => exact(solution, &times, kmax),
         Command::Kernels { min, max, points } => kernels(min, max, points),
         Command::Qmc { dims, m } => qmc_tvalues(dims, m),
+        Command::Bench {
+            which:
+                BenchKind::Lowrank {
+                    n0,
+                    budget,
+                    only,
+                    skip_baselines,
+                    seed,
+                },
+        } => {
+            bench::lowrank(n0, budget, only, skip_baselines, seed);
+            Ok(())
+        }
+        Command::Bench {
+            which:
+                BenchKind::LowrankSingle {
+                    kernel,
+                    n0,
+                    t,
+                    seed,
+                    binary,
+                },
+        } => {
+            bench::lowrank_single(&kernel, n0, t, seed, binary);
+            Ok(())
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -13,6 +13,7 @@
 //! * [`observe`] — moments, concentrations, gel mass and replica statistics;
 //! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol') and their
 //!   randomisations.
+//! * [`scheme`] — the stepping schemes, behind one `advance_to` interface.
 //!
 //! # Example
 //! ```
@@ -23,6 +24,9 @@
 //! ```
 #![no_std]
 #![warn(missing_docs)]
+// Numerical code indexes parallel arrays (factors, counts, tree rows); index loops read
+// closer to the equations than zipped iterators.
+#![allow(clippy::needless_range_loop)]
 
 extern crate alloc;
 #[cfg(feature = "std")]
@@ -33,6 +37,7 @@ pub mod exact;
 pub mod kernel;
 pub mod observe;
 pub mod qmc;
+pub mod scheme;
 pub mod tree;
 
 pub use error::{Error, Result};

@@ -72,6 +72,17 @@ pub trait CoagulationKernel {
         0.0
     }
 
+    /// True when the low-rank bound equals the kernel (`K = A + Aᵀ` exactly), so a
+    /// scheme may accept every proposal without evaluating K.
+    fn low_rank_is_exact(&self) -> bool {
+        false
+    }
+
+    /// `sup K(x, y)` over `lo ≤ x, y ≤ hi`, if known (acceptance–rejection needs it).
+    fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
+        None
+    }
+
     /// The low-rank bound `Ã(x, y) = A(x, y) + A(y, x)` evaluated from the factors, or
     /// `None` when the kernel has no low-rank bound.
     fn low_rank_bound(&self, x: f64, y: f64) -> Option<f64> {

@@ -1,0 +1,284 @@
+//! `coagula bench lowrank`: Osinsky's tables 1–3 rerun side by side with the paper.
+
+use coagula_core::kernel::{Coagulation, CoagulationKernel};
+use coagula_core::scheme::Scheme;
+use coagula_core::scheme::lowrank::{
+    AcceptanceRejection, BinaryTree, Inverse, LowRank, ProposalTree, WideTree,
+};
+use rand_pcg::Pcg64Mcg;
+use std::time::{Duration, Instant};
+
+/// One row of the paper's tables: time, max size M, seconds (inverse, AR, low-rank;
+/// None = over 24 h) and collisions.
+pub struct PaperRow {
+    pub t: f64,
+    pub m: u64,
+    pub inverse: Option<f64>,
+    pub rejection: Option<f64>,
+    pub lowrank: f64,
+    pub collisions: f64,
+}
+
+const fn row(
+    t: f64,
+    m: u64,
+    inverse: Option<f64>,
+    rejection: Option<f64>,
+    lowrank: f64,
+    collisions: f64,
+) -> PaperRow {
+    PaperRow {
+        t,
+        m,
+        inverse,
+        rejection,
+        lowrank,
+        collisions,
+    }
+}
+
+/// Osinsky (2023) tables 1–3 (SPEC §6).
+pub const BROWNIAN: [PaperRow; 5] = [
+    row(10.0, 512, Some(67.0), Some(8.3), 3.5, 2.3e7),
+    row(100.0, 4096, Some(3366.0), Some(18.5), 7.1, 3.9e7),
+    row(1e3, 65536, None, Some(37.0), 11.0, 5.5e7),
+    row(1e4, 524288, None, Some(74.0), 17.0, 7.2e7),
+    row(1e5, 4194304, None, Some(147.0), 27.0, 8.9e7),
+];
+pub const BALLISTIC: [PaperRow; 5] = [
+    row(1.0, 128, Some(6.5), Some(5.4), 4.4, 1.1e7),
+    row(5.0, 512, Some(84.0), Some(17.0), 11.0, 2.3e7),
+    row(50.0, 8192, Some(7967.0), Some(62.0), 23.0, 4.3e7),
+    row(500.0, 131072, None, Some(221.0), 38.0, 6.3e7),
+    row(5000.0, 2097152, None, Some(840.0), 58.0, 8.3e7),
+];
+pub const LINEAR: [PaperRow; 3] = [
+    row(1.0, 128, Some(8.4), Some(14.0), 0.89, 7.6e6),
+    row(3.0, 8192, Some(4887.0), Some(172.0), 3.5, 2.2e7),
+    row(6.0, 2097152, None, Some(2370.0), 6.7, 4.4e7),
+];
+
+/// What one method reached at one checkpoint.
+#[derive(Clone, Copy, Debug)]
+pub struct Cell {
+    pub seconds: f64,
+    pub collisions: u64,
+    pub max_size: u64,
+}
+
+/// Runs a scheme through the checkpoints, stopping (None for the rest) once the wall
+/// clock passes `budget`. Time is advanced in slices so the budget is checked often.
+fn run_checkpoints<S, F>(
+    sim: &mut S,
+    times: &[f64],
+    budget: Duration,
+    seed: u64,
+    max_size: F,
+) -> Vec<Option<Cell>>
+where
+    S: Scheme,
+    F: Fn(&S) -> u64,
+{
+    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let start = Instant::now();
+    let mut collisions = 0u64;
+    let mut out = Vec::new();
+    let mut over = false;
+    for &t in times {
+        if over {
+            out.push(None);
+            continue;
+        }
+        // slices: 200 per checkpoint interval, so a slow method is stopped promptly
+        let t0 = sim.time();
+        for s in 1..=200 {
+            let target = t0 + (t - t0) * f64::from(s) / 200.0;
+            match sim.advance_to(target, &mut rng) {
+                Ok(rep) => collisions += rep.events,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    over = true;
+                    break;
+                }
+            }
+            if start.elapsed() > budget {
+                over = true;
+                break;
+            }
+        }
+        if over {
+            out.push(None);
+        } else {
+            out.push(Some(Cell {
+                seconds: start.elapsed().as_secs_f64(),
+                collisions,
+                max_size: max_size(sim),
+            }));
+        }
+    }
+    out
+}
+
+pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: bool, seed: u64) {
+    let budget = Duration::from_secs_f64(budget_s);
+    let tables: [(&str, &[PaperRow]); 3] = [
+        ("brownian", &BROWNIAN),
+        ("ballistic", &BALLISTIC),
+        ("linear", &LINEAR),
+    ];
+    println!(
+        "Osinsky (2023) tables 1-3 from {n0:.0e} monomers; baselines stopped after {budget_s} s (\"-\")."
+    );
+    println!("coll/s and ratios are ours; \"paper\" columns are the paper's low-rank figures.");
+    for (name, rows) in tables {
+        if only.as_deref().is_some_and(|o| o != name) {
+            continue;
+        }
+        let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
+        let (lr, ar, inv) = match name {
+            "brownian" => bench_kernel::<_, 2>(
+                Coagulation::brownian(),
+                n0,
+                &times,
+                budget,
+                skip_baselines,
+                seed,
+            ),
+            "ballistic" => bench_kernel::<_, 3>(
+                Coagulation::free_molecular()
+                    .with_min_size(1.0)
+                    .expect("valid"),
+                n0,
+                &times,
+                budget,
+                skip_baselines,
+                seed,
+            ),
+            _ => bench_kernel::<_, 1>(
+                Coagulation::additive(),
+                n0,
+                &times,
+                budget,
+                skip_baselines,
+                seed,
+            ),
+        };
+        println!();
+        println!("{name}");
+        println!(
+            "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>10} {:>10} {:>7} | {:>7} {:>7} | {:>9} {:>9}",
+            "t",
+            "M",
+            "coll",
+            "inv s",
+            "AR s",
+            "LR s",
+            "LR coll/s",
+            "paper c/s",
+            "x paper",
+            "LR/AR",
+            "paper",
+            "inv coll",
+            "AR coll"
+        );
+        for (i, r) in rows.iter().enumerate() {
+            let fmt = |c: Option<Cell>| c.map_or("-".to_string(), |c| format!("{:.2}", c.seconds));
+            let l = lr[i];
+            let paper_cps = r.collisions / r.lowrank;
+            let (lrs, lrc, m, cps) = match l {
+                Some(c) => (
+                    format!("{:.2}", c.seconds),
+                    format!("{:.2e}", c.collisions as f64),
+                    c.max_size,
+                    c.collisions as f64 / c.seconds,
+                ),
+                None => ("-".into(), "-".into(), 0, f64::NAN),
+            };
+            let ratio_ar = match (ar[i], l) {
+                (Some(a), Some(l)) => format!("{:.1}", a.seconds / l.seconds),
+                _ => "-".into(),
+            };
+            let paper_ar = r
+                .rejection
+                .map_or("-".into(), |a| format!("{:.1}", a / r.lowrank));
+            let _ = r.inverse;
+            println!(
+                "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>10.3e} {:>10.3e} {:>7.2} | {:>7} {:>7} | {:>9} {:>9}",
+                r.t,
+                m,
+                lrc,
+                fmt(inv[i]),
+                fmt(ar[i]),
+                lrs,
+                cps,
+                paper_cps,
+                cps / paper_cps,
+                ratio_ar,
+                paper_ar,
+                inv[i].map_or("-".into(), |c| format!("{:.2e}", c.collisions as f64)),
+                ar[i].map_or("-".into(), |c| format!("{:.2e}", c.collisions as f64)),
+            );
+            let _ = r.m;
+        }
+    }
+}
+
+type Cells = Vec<Option<Cell>>;
+
+fn bench_kernel<K: CoagulationKernel + Copy, const R: usize>(
+    kernel: K,
+    n0: u64,
+    times: &[f64],
+    budget: Duration,
+    skip_baselines: bool,
+    seed: u64,
+) -> (Cells, Cells, Cells) {
+    let mut lr = LowRank::<K, R>::monodisperse(kernel, n0).expect("valid low-rank set-up");
+    let lr_cells = run_checkpoints(&mut lr, times, Duration::from_secs(24 * 3600), seed, |s| {
+        s.max_size() as u64
+    });
+    let none = vec![None; times.len()];
+    if skip_baselines {
+        return (lr_cells, none.clone(), none);
+    }
+    let mut ar = AcceptanceRejection::monodisperse(kernel, n0).expect("valid AR set-up");
+    let ar_cells = run_checkpoints(&mut ar, times, budget, seed + 1, |s| s.max_size());
+    drop(ar);
+    let mut inv = Inverse::monodisperse(kernel, n0).expect("valid inverse set-up");
+    let inv_cells = run_checkpoints(&mut inv, times, budget, seed + 2, |s| s.max_size());
+    (lr_cells, ar_cells, inv_cells)
+}
+
+/// Low-rank only, one kernel, to one time: for profiling.
+pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool) {
+    let start = Instant::now();
+    let fm = Coagulation::free_molecular()
+        .with_min_size(1.0)
+        .expect("valid");
+    let (events, m) = match (name, binary) {
+        ("brownian", false) => single::<_, 2, WideTree<2>>(Coagulation::brownian(), n0, t, seed),
+        ("brownian", true) => single::<_, 2, BinaryTree<2>>(Coagulation::brownian(), n0, t, seed),
+        ("ballistic", false) => single::<_, 3, WideTree<3>>(fm, n0, t, seed),
+        ("ballistic", true) => single::<_, 3, BinaryTree<3>>(fm, n0, t, seed),
+        (_, false) => single::<_, 1, WideTree<1>>(Coagulation::additive(), n0, t, seed),
+        (_, true) => single::<_, 1, BinaryTree<1>>(Coagulation::additive(), n0, t, seed),
+    };
+    let s = start.elapsed().as_secs_f64();
+    let tree = if binary { "binary" } else { "wide" };
+    println!(
+        "{name} t={t} ({tree} tree): {events} collisions, M={m}, {s:.3} s, {:.3e} coll/s",
+        events as f64 / s
+    );
+}
+
+fn single<K: CoagulationKernel, const R: usize, T: ProposalTree<R>>(
+    k: K,
+    n0: u64,
+    t: f64,
+    seed: u64,
+) -> (u64, usize) {
+    let mut sim = LowRank::<K, R, T>::monodisperse(k, n0).expect("valid");
+    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let rep = sim.advance_to(t, &mut rng).expect("runs");
+    (rep.events, sim.max_size())
+}

@@ -1,0 +1,332 @@
+//! Inverse method (Gillespie on sizes) baseline (Osinsky 2023, §2).
+//!
+//! With `r_i = Σ_j K(i, j) N_j` and `s_i = N_i (r_i − K(i, i))` (pairs of distinct
+//! particles), the total collision rate is `S / (2V)`, `S = Σ_i s_i`. Each event draws i ∝
+//! `s_i`, then j ∝ `K(i, j) (N_j − δ_ij)`, both by a linear scan over the occupied sizes.
+//! The row sums `r_k` are kept up to date incrementally: after an event only `N_i`,
+//! `N_j`, `N_{i+j}` change, so every `r_k` moves by `Σ_m K(k, m) ΔN_m` — O(#occupied)
+//! kernel evaluations per event (the row of i is reused from the j scan).
+//!
+//! A kernel that returns NaN or a negative rate in the middle of an event's row update
+//! makes `advance_to` fail with the state of that event half applied; the low-rank
+//! scheme, by contrast, validates before it changes anything.
+
+use super::{DEFAULT_SIZE_LIMIT, check_counts};
+use crate::error::{Error, Result};
+use crate::kernel::CoagulationKernel;
+use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
+use alloc::vec;
+use alloc::vec::Vec;
+use rand_core::Rng;
+
+const NONE: u32 = u32::MAX;
+
+/// Inverse (Gillespie-on-sizes) method over the occupied sizes. O(#occupied) per event.
+///
+/// ```
+/// use coagula_core::kernel::Coagulation;
+/// use coagula_core::scheme::{Scheme, lowrank::Inverse};
+/// let mut rng = rand_pcg::Pcg64Mcg::new(5);
+/// let mut sim = Inverse::monodisperse(Coagulation::constant(1.0).unwrap(), 10_000).unwrap();
+/// sim.advance_to(1.0, &mut rng).unwrap();
+/// assert!((sim.moment(0.0) - 1.0 / 1.5).abs() < 0.02);
+/// ```
+pub struct Inverse<K> {
+    kernel: K,
+    /// Occupied sizes, their counts, row sums r and diagonal K(i, i).
+    size: Vec<u64>,
+    count: Vec<u64>,
+    row: Vec<f64>,
+    diag: Vec<f64>,
+    /// `slot[size - 1]` = position in the occupied arrays, or NONE.
+    slot: Vec<u32>,
+    /// Scratch: K(i, ·) over the occupied slots.
+    scratch: Vec<f64>,
+    n: u64,
+    n0: u64,
+    volume: f64,
+    time: f64,
+    size_limit: u64,
+    totals: StepReport,
+}
+
+impl<K> core::fmt::Debug for Inverse<K> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Inverse")
+            .field("occupied", &self.size.len())
+            .field("particles", &self.n)
+            .field("time", &self.time)
+            .finish_non_exhaustive()
+    }
+}
+
+impl<K: CoagulationKernel> Inverse<K> {
+    /// Starts from `n0` monomers in volume `n0`.
+    pub fn monodisperse(kernel: K, n0: u64) -> Result<Self> {
+        Self::new(kernel, &[n0], n0 as f64)
+    }
+
+    /// Starts from `counts[i - 1] = N_i` in volume `volume`.
+    pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
+        crate::error::positive("volume", volume)?;
+        let n = check_counts(counts)?;
+        let mut s = Inverse {
+            kernel,
+            size: Vec::new(),
+            count: Vec::new(),
+            row: Vec::new(),
+            diag: Vec::new(),
+            slot: vec![NONE; counts.len().next_power_of_two()],
+            scratch: Vec::new(),
+            n,
+            n0: n,
+            volume,
+            time: 0.0,
+            size_limit: DEFAULT_SIZE_LIMIT,
+            totals: StepReport::default(),
+        };
+        for (i, &c) in counts.iter().enumerate() {
+            if c > 0 {
+                let d = s.rate(i as u64 + 1, i as u64 + 1)?;
+                s.slot[i] = s.size.len() as u32;
+                s.size.push(i as u64 + 1);
+                s.count.push(c);
+                s.row.push(0.0);
+                s.diag.push(d);
+            }
+        }
+        for a in 0..s.size.len() {
+            let mut r = 0.0;
+            for b in 0..s.size.len() {
+                r += s.rate(s.size[a], s.size[b])? * s.count[b] as f64;
+            }
+            s.row[a] = r;
+        }
+        Ok(s)
+    }
+
+    /// Sets the largest particle size allowed.
+    pub fn with_size_limit(mut self, limit: u64) -> Self {
+        self.size_limit = limit;
+        self
+    }
+
+    #[inline]
+    fn rate(&self, x: u64, y: u64) -> Result<f64> {
+        crate::kernel::checked_rate(&self.kernel, x as f64, y as f64)
+    }
+
+    /// Counts per size `[N_1, ..., N_M]`.
+    pub fn counts(&self) -> Vec<u64> {
+        let mut c = vec![0u64; self.size.iter().copied().max().unwrap_or(0) as usize];
+        for (s, n) in self.size.iter().zip(&self.count) {
+            c[*s as usize - 1] = *n;
+        }
+        c
+    }
+
+    /// The simulation volume V.
+    pub fn volume(&self) -> f64 {
+        self.volume
+    }
+
+    /// Largest size present.
+    pub fn max_size(&self) -> u64 {
+        self.size.iter().copied().max().unwrap_or(0)
+    }
+
+    /// Number of occupied sizes.
+    pub fn occupied(&self) -> usize {
+        self.size.len()
+    }
+
+    /// The moment `Σ_i i^m N_i / V`.
+    pub fn moment(&self, m: f64) -> f64 {
+        let w = 1.0 / self.volume;
+        crate::observe::moment(
+            self.size
+                .iter()
+                .zip(&self.count)
+                .map(|(&s, &c)| (s as f64, c as f64 * w)),
+            m,
+        )
+    }
+
+    /// Totals over the whole run.
+    pub fn totals(&self) -> StepReport {
+        self.totals
+    }
+
+    /// Adds `delta` particles of size `x` and updates every row sum; creates or removes
+    /// the slot as needed.
+    fn change(&mut self, x: u64, delta: i64) -> Result<()> {
+        let xi = x as usize - 1;
+        if xi >= self.slot.len() {
+            self.slot.resize((xi + 1).next_power_of_two(), NONE);
+        }
+        // row sums move by K(k, x) * delta
+        for a in 0..self.size.len() {
+            let k = self.rate(self.size[a], x)?;
+            self.row[a] += k * delta as f64;
+        }
+        if self.slot[xi] == NONE {
+            // new occupied size: its row sum from scratch (it already includes itself)
+            let d = self.rate(x, x)?;
+            let mut r = d * delta as f64;
+            for b in 0..self.size.len() {
+                r += self.rate(x, self.size[b])? * self.count[b] as f64;
+            }
+            self.slot[xi] = self.size.len() as u32;
+            self.size.push(x);
+            self.count.push(delta as u64);
+            self.row.push(r);
+            self.diag.push(d);
+        } else {
+            let a = self.slot[xi] as usize;
+            let c = self.count[a] as i64 + delta;
+            if c == 0 {
+                // swap-remove the slot
+                let last = self.size.len() - 1;
+                self.slot[xi] = NONE;
+                if a != last {
+                    self.slot[self.size[last] as usize - 1] = a as u32;
+                }
+                self.size.swap_remove(a);
+                self.count.swap_remove(a);
+                self.row.swap_remove(a);
+                self.diag.swap_remove(a);
+            } else {
+                self.count[a] = c as u64;
+            }
+        }
+        Ok(())
+    }
+}
+
+impl<K: CoagulationKernel> Scheme for Inverse<K> {
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport> {
+        check_target(self.time, t)?;
+        let mut rep = StepReport::default();
+        let result = loop {
+            if self.n < 2 {
+                self.time = t;
+                break Ok(());
+            }
+            let occ = self.size.len();
+            let mut total = 0.0;
+            for a in 0..occ {
+                total += self.count[a] as f64 * (self.row[a] - self.diag[a]).max(0.0);
+            }
+            if total <= 0.0 {
+                self.time = t;
+                break Ok(());
+            }
+            let dt = exp1(rng) * 2.0 * self.volume / total;
+            if self.time + dt > t {
+                self.time = t;
+                break Ok(());
+            }
+            // i ∝ s_i
+            let mut u = total * open_unit(rng);
+            let mut ia = occ - 1;
+            for a in 0..occ {
+                u -= self.count[a] as f64 * (self.row[a] - self.diag[a]).max(0.0);
+                if u <= 0.0 {
+                    ia = a;
+                    break;
+                }
+            }
+            // j ∝ K(i, j)(N_j − δ_ij), keeping K(i, ·) for the row update
+            let xi = self.size[ia];
+            self.scratch.clear();
+            let mut wsum = 0.0;
+            let mut failed = None;
+            for b in 0..occ {
+                match self.rate(xi, self.size[b]) {
+                    Ok(k) => {
+                        self.scratch.push(k);
+                        let nb = self.count[b] - u64::from(b == ia);
+                        wsum += k * nb as f64;
+                    }
+                    Err(e) => {
+                        failed = Some(e);
+                        break;
+                    }
+                }
+            }
+            if let Some(e) = failed {
+                break Err(e);
+            }
+            let mut v = wsum * open_unit(rng);
+            let mut ja = occ - 1;
+            for b in 0..occ {
+                let nb = self.count[b] - u64::from(b == ia);
+                v -= self.scratch[b] * nb as f64;
+                if v <= 0.0 && nb > 0 {
+                    ja = b;
+                    break;
+                }
+            }
+            let xj = self.size[ja];
+            let merged = xi + xj;
+            if merged > self.size_limit {
+                break Err(Error::Capacity {
+                    name: "maximum particle size",
+                    capacity: self.size_limit as usize,
+                });
+            }
+            rep.proposals += 1;
+            self.time += dt;
+            // removals first (reuse the cached row of i for its own removal)
+            for a in 0..occ {
+                self.row[a] -= self.scratch[a];
+            }
+            if let Err(e) = self
+                .finish_removal(xi)
+                .and_then(|()| self.change(xj, -1))
+                .and_then(|()| self.change(merged, 1))
+            {
+                break Err(e);
+            }
+            self.n -= 1;
+            rep.events += 1;
+            if self.n < self.n0 / 2 {
+                for a in 0..self.size.len() {
+                    self.count[a] *= 2;
+                    self.row[a] *= 2.0;
+                }
+                self.n *= 2;
+                self.volume *= 2.0;
+                rep.doublings += 1;
+            }
+        };
+        rep.time = self.time;
+        self.totals.accumulate(&rep);
+        result.map(|()| rep)
+    }
+}
+
+impl<K: CoagulationKernel> Inverse<K> {
+    /// Removes one particle of size `x` whose row contribution was already subtracted.
+    fn finish_removal(&mut self, x: u64) -> Result<()> {
+        let a = self.slot[x as usize - 1] as usize;
+        if self.count[a] == 1 {
+            let last = self.size.len() - 1;
+            self.slot[x as usize - 1] = NONE;
+            if a != last {
+                self.slot[self.size[last] as usize - 1] = a as u32;
+            }
+            self.size.swap_remove(a);
+            self.count.swap_remove(a);
+            self.row.swap_remove(a);
+            self.diag.swap_remove(a);
+        } else {
+            self.count[a] -= 1;
+        }
+        Ok(())
+    }
+}

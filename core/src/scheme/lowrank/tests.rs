@@ -1,0 +1,295 @@
+//! Low-rank MC and its baselines against exact solutions and against each other, with
+//! tolerances of several standard errors over R independent replicas.
+
+use super::*;
+use crate::exact::Exact;
+use crate::kernel::{Coagulation, UserKernel};
+use crate::observe::Replicas;
+use alloc::format;
+use alloc::string::String;
+use rand_pcg::Pcg64Mcg;
+
+const REPLICAS: u64 = 16;
+const N0: u64 = 1 << 13;
+/// Tolerance in standard errors: a correct scheme fails a given (seeded) check with
+/// probability ~6e-5 per quantity; a wrong rate (factor 2) is off by tens of SE.
+const Z: f64 = 4.0;
+
+#[derive(Clone, Copy, Debug)]
+enum Method {
+    LowRank,
+    Rejection,
+    Inverse,
+}
+
+/// Runs R replicas of `method` to each time in `times`, and returns for each time the
+/// replica statistics of `n_1..n_kmax` (index 0..kmax) followed by M0 and M2.
+fn run<K: CoagulationKernel + Copy, const RANK: usize>(
+    method: Method,
+    kernel: K,
+    times: &[f64],
+    kmax: usize,
+) -> alloc::vec::Vec<alloc::vec::Vec<Replicas>> {
+    let mut stats = alloc::vec![alloc::vec![Replicas::new(); kmax + 2]; times.len()];
+    for rep in 0..REPLICAS {
+        let mut rng = Pcg64Mcg::new(
+            0x1234_5678_9abc_def0
+                ^ (rep as u128 * 0x9e37_79b9_7f4a_7c15)
+                ^ ((method as u128) << 100),
+        );
+        let mut record = |ti: usize, counts: &[u64], volume: f64| {
+            for k in 1..=kmax {
+                let c = counts.get(k - 1).copied().unwrap_or(0);
+                stats[ti][k - 1].push(c as f64 / volume);
+            }
+            stats[ti][kmax].push(crate::observe::moment_of_counts(counts, volume, 0.0));
+            stats[ti][kmax + 1].push(crate::observe::moment_of_counts(counts, volume, 2.0));
+        };
+        match method {
+            Method::LowRank => {
+                let mut s = LowRank::<K, RANK>::monodisperse(kernel, N0).unwrap();
+                for (ti, &t) in times.iter().enumerate() {
+                    s.advance_to(t, &mut rng).unwrap();
+                    record(ti, s.counts(), s.volume());
+                }
+            }
+            Method::Rejection => {
+                let mut s = AcceptanceRejection::monodisperse(kernel, N0).unwrap();
+                for (ti, &t) in times.iter().enumerate() {
+                    s.advance_to(t, &mut rng).unwrap();
+                    record(ti, &s.counts(), s.volume());
+                }
+            }
+            Method::Inverse => {
+                let mut s = Inverse::monodisperse(kernel, N0).unwrap();
+                for (ti, &t) in times.iter().enumerate() {
+                    s.advance_to(t, &mut rng).unwrap();
+                    record(ti, &s.counts(), s.volume());
+                }
+            }
+        }
+    }
+    stats
+}
+
+fn within(name: &str, r: &Replicas, exact: f64, failures: &mut String) {
+    let se = r.std_error();
+    let err = (r.mean() - exact).abs();
+    // a floor for quantities whose spread is zero at this N (e.g. tiny n_k)
+    let tol = Z * se + 1e-12;
+    if err > tol {
+        failures.push_str(&format!(
+            "{name}: mean {} exact {exact} |err| {err:.3e} > {Z} SE = {tol:.3e}\n",
+            r.mean()
+        ));
+    }
+}
+
+fn check_exact<K: CoagulationKernel + Copy, const RANK: usize>(
+    kernel: K,
+    exact: Exact,
+    times: &[f64],
+) {
+    let kmax = 4;
+    let mut failures = String::new();
+    for method in [Method::LowRank, Method::Rejection, Method::Inverse] {
+        let stats = run::<K, RANK>(method, kernel, times, kmax);
+        for (ti, &t) in times.iter().enumerate() {
+            for k in 1..=kmax {
+                let e = exact.number_density(k as u64, t).unwrap();
+                within(
+                    &format!("{method:?} {exact:?} t={t} n_{k}"),
+                    &stats[ti][k - 1],
+                    e,
+                    &mut failures,
+                );
+            }
+            let e = exact.moment(0, t).unwrap();
+            within(
+                &format!("{method:?} {exact:?} t={t} M0"),
+                &stats[ti][kmax],
+                e,
+                &mut failures,
+            );
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
+#[test]
+fn constant_kernel_matches_exact_solution() {
+    check_exact::<_, 1>(
+        Coagulation::constant(1.0).unwrap(),
+        Exact::constant(1.0).unwrap(),
+        &[0.5, 2.0, 6.0],
+    );
+}
+
+#[test]
+fn additive_kernel_matches_exact_solution() {
+    // t = 1.5: N has fallen below N0/2 at t = ln 2, so particle doubling is exercised
+    check_exact::<_, 1>(Coagulation::additive(), Exact::additive(), &[0.3, 1.5]);
+}
+
+#[test]
+fn multiplicative_kernel_matches_exact_solution_before_gelation() {
+    check_exact::<_, 1>(
+        Coagulation::multiplicative(),
+        Exact::multiplicative(),
+        &[0.4, 0.8],
+    );
+}
+
+/// Brownian (R = 2, exact bound) and ballistic (R = 3, thinning) have no exact
+/// solution: the three methods must agree (Welch statistic below Z).
+#[test]
+fn methods_agree_for_brownian_and_ballistic_kernels() {
+    fn compare<K: CoagulationKernel + Copy, const RANK: usize>(
+        kernel: K,
+        times: &[f64],
+        failures: &mut String,
+    ) {
+        let kmax = 3;
+        let lr = run::<K, RANK>(Method::LowRank, kernel, times, kmax);
+        for other in [Method::Rejection, Method::Inverse] {
+            let st = run::<K, RANK>(other, kernel, times, kmax);
+            for ti in 0..times.len() {
+                for q in 0..kmax + 2 {
+                    let (a, b) = (&lr[ti][q], &st[ti][q]);
+                    let se =
+                        libm::sqrt(a.std_error() * a.std_error() + b.std_error() * b.std_error());
+                    let d = (a.mean() - b.mean()).abs();
+                    if d > Z * se + 1e-12 {
+                        failures.push_str(&format!(
+                            "LowRank vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {Z} SE {se:.3e})\n",
+                            times[ti],
+                            a.mean(),
+                            b.mean()
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    let mut failures = String::new();
+    compare::<_, 2>(Coagulation::brownian(), &[1.0, 4.0], &mut failures);
+    compare::<_, 3>(
+        Coagulation::free_molecular().with_min_size(1.0).unwrap(),
+        &[1.0, 3.0],
+        &mut failures,
+    );
+    assert!(failures.is_empty(), "{failures}");
+}
+
+#[test]
+fn time_step_is_v_over_sa() {
+    // A wrong factor 2 in the waiting time would give M0(2) = 0.667 or 0.333 instead
+    // of 0.5; the replica mean over 16 runs of 8192 particles has SE ~ 1e-3.
+    let stats = run::<_, 1>(
+        Method::LowRank,
+        Coagulation::constant(1.0).unwrap(),
+        &[2.0],
+        1,
+    );
+    assert!(
+        (stats[0][1].mean() - 0.5).abs() < 0.01,
+        "M0(2) = {}",
+        stats[0][1].mean()
+    );
+}
+
+#[test]
+fn bad_input_is_an_error() {
+    let k = Coagulation::brownian();
+    assert!(
+        LowRank::<_, 1>::monodisperse(k, 100).is_err(),
+        "rank mismatch"
+    );
+    assert!(
+        LowRank::<_, 2>::new(k, &[0, 0], 1.0).is_err(),
+        "no particles"
+    );
+    assert!(LowRank::<_, 2>::new(k, &[10], 0.0).is_err(), "zero volume");
+    assert!(
+        LowRank::<_, 2>::new(k, &[10], f64::NAN).is_err(),
+        "NaN volume"
+    );
+    let negative = UserKernel::new(|x: f64, y: f64| x * y)
+        .with_low_rank(1, |x: f64, a: &mut [f64], b: &mut [f64]| {
+            a[0] = -x;
+            b[0] = x;
+        })
+        .unwrap();
+    assert!(matches!(
+        LowRank::<_, 1>::monodisperse(negative, 10),
+        Err(Error::InvalidRate { .. })
+    ));
+    let mut s = LowRank::<_, 2>::monodisperse(k, 100).unwrap();
+    let mut rng = Pcg64Mcg::new(1);
+    s.advance_to(1.0, &mut rng).unwrap();
+    assert!(matches!(
+        s.advance_to(0.5, &mut rng),
+        Err(Error::TimeBackwards { .. })
+    ));
+    assert!(s.advance_to(f64::NAN, &mut rng).is_err());
+    let no_sup = |x: f64, y: f64| x + y;
+    assert!(AcceptanceRejection::monodisperse(no_sup, 10).is_err());
+}
+
+#[test]
+fn capacity_error_leaves_state_unchanged() {
+    let mut rng = Pcg64Mcg::new(9);
+    let mut s = LowRank::<_, 1>::monodisperse(Coagulation::additive(), 1000)
+        .unwrap()
+        .with_size_limit(8);
+    let mut last = (s.counts().to_vec(), s.time());
+    loop {
+        let target = s.time() + 0.01;
+        match s.advance_to(target, &mut rng) {
+            Ok(_) => last = (s.counts().to_vec(), s.time()),
+            Err(e) => {
+                assert!(matches!(e, Error::Capacity { .. }));
+                // the failing event was not applied; earlier events of this call were
+                let total: u64 = s
+                    .counts()
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| (i as u64 + 1) * c)
+                    .sum();
+                assert_eq!(total % 1000, 0, "mass is conserved up to doubling");
+                assert!(s.counts().iter().enumerate().all(|(i, &c)| c == 0 || i < 8));
+                assert!(s.time() >= last.1);
+                break;
+            }
+        }
+    }
+}
+
+#[test]
+fn violated_bound_is_counted() {
+    // K = 2 x y but the factors only cover x y: every proposal violates the bound
+    let k = UserKernel::new(|x: f64, y: f64| 2.0 * x * y)
+        .with_low_rank(1, |x: f64, a: &mut [f64], b: &mut [f64]| {
+            a[0] = 0.5 * x;
+            b[0] = x;
+        })
+        .unwrap();
+    let mut s = LowRank::<_, 1>::monodisperse(k, 1000).unwrap();
+    let mut rng = Pcg64Mcg::new(2);
+    let rep = s.advance_to(0.3, &mut rng).unwrap();
+    assert!(rep.events > 0);
+    assert_eq!(rep.bound_violations, rep.events);
+}
+
+/// Determinism: the same seed and inputs give the same report and state.
+#[test]
+fn same_seed_gives_identical_results() {
+    let mut rng = Pcg64Mcg::new(42);
+    let mut s = LowRank::<_, 2>::monodisperse(Coagulation::brownian(), 1000).unwrap();
+    let rep = s.advance_to(2.0, &mut rng).unwrap();
+    let mut rng2 = Pcg64Mcg::new(42);
+    let mut s2 = LowRank::<_, 2>::monodisperse(Coagulation::brownian(), 1000).unwrap();
+    let rep2 = s2.advance_to(2.0, &mut rng2).unwrap();
+    assert_eq!(rep, rep2);
+    assert_eq!(s.counts(), s2.counts());
+}

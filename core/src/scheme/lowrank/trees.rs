@@ -1,0 +1,384 @@
+//! The proposal trees of low-rank Monte Carlo: one structure holds, for every size, all
+//! 2R weights `u^k_i = a_k(i) N_i` and `v^k_i = b_k(i) N_i`, and samples a size by
+//! descending one of them.
+//!
+//! Two layouts, measured against each other by `coagula bench lowrank --tree`:
+//! * [`BinaryTree`] — a binary segment tree whose nodes hold all 2R partial sums; an
+//!   update recomputes each ancestor from its two children (no drift, ever).
+//! * [`WideTree`] — an 8-ary tree whose nodes hold, per component, the running
+//!   (cumulative) sums of their 8 children in one 64-byte cache line. A descent reads one
+//!   line per level and picks the child by 8 independent comparisons (log₈ M dependent
+//!   loads instead of log₂ M); an update adds the change to the trailing entries of one
+//!   row per component and level. Updates add differences, so rounding can accumulate:
+//!   the tree is rebuilt from the exact integer counts every `REBUILD` updates, which
+//!   bounds the relative drift of any partial sum by about `REBUILD · 2⁻⁵³ ≈ 2e-10`. A
+//!   size whose count is zero can then carry a ghost weight of that order; the scheme
+//!   rejects a proposal that lands on it, which is exact thinning.
+
+use alloc::vec;
+use alloc::vec::Vec;
+
+/// Per-size weights: `[0][k] = u^k_i`, `[1][k] = v^k_i`.
+pub type Weights<const R: usize> = [[f64; R]; 2];
+
+/// A proposal tree over `m` sizes (m a power of two ≥ 8).
+pub trait ProposalTree<const R: usize>: Sized {
+    /// Builds the tree over `m` leaves with `leaf(i)` the weights of index i.
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self;
+    /// Totals of every component.
+    fn totals(&self) -> Weights<R>;
+    /// Leaf index found by descending component `k` of part `p` with `target ∈ [0, total)`.
+    fn descend(&self, p: usize, k: usize, target: f64) -> usize;
+    /// Two descents at once: component `k` of u with `tu` and of v with `tv`. Layouts
+    /// may interleave them so that the two chains of dependent loads overlap.
+    #[inline]
+    fn descend_pair(&self, k: usize, tu: f64, tv: f64) -> (usize, usize) {
+        (self.descend(0, k, tu), self.descend(1, k, tv))
+    }
+    /// Changes leaf `i` from `old` to `new`.
+    fn update(&mut self, i: usize, old: &Weights<R>, new: &Weights<R>);
+    /// Doubles every weight (exact in floating point).
+    fn double(&mut self);
+    /// True when the tree has drifted enough to want a rebuild.
+    fn wants_rebuild(&self) -> bool {
+        false
+    }
+}
+
+/// Binary segment tree with recomputed ancestors.
+#[derive(Clone, Debug)]
+pub struct BinaryTree<const R: usize> {
+    nodes: Vec<Weights<R>>,
+    m: usize,
+}
+
+#[inline]
+fn add<const R: usize>(a: &Weights<R>, b: &Weights<R>) -> Weights<R> {
+    let mut out = [[0.0; R]; 2];
+    for p in 0..2 {
+        for k in 0..R {
+            out[p][k] = a[p][k] + b[p][k];
+        }
+    }
+    out
+}
+
+impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
+        let mut nodes = vec![[[0.0; R]; 2]; 2 * m];
+        for i in 0..m {
+            nodes[m + i] = leaf(i);
+        }
+        for n in (1..m).rev() {
+            nodes[n] = add(&nodes[2 * n], &nodes[2 * n + 1]);
+        }
+        BinaryTree { nodes, m }
+    }
+
+    #[inline]
+    fn totals(&self) -> Weights<R> {
+        self.nodes[1]
+    }
+
+    #[inline(never)]
+    fn descend(&self, p: usize, k: usize, mut target: f64) -> usize {
+        let mut node = 1;
+        while node < self.m {
+            let left = self.nodes[2 * node][p][k];
+            let right = self.nodes[2 * node + 1][p][k];
+            // branch-free; never step into a zero-weight subtree
+            let go_right = (target >= left) & (right > 0.0);
+            target -= if go_right { left } else { 0.0 };
+            node = 2 * node + usize::from(go_right);
+        }
+        node - self.m
+    }
+
+    #[inline]
+    fn update(&mut self, i: usize, _old: &Weights<R>, new: &Weights<R>) {
+        let mut node = self.m + i;
+        self.nodes[node] = *new;
+        while node > 1 {
+            node >>= 1;
+            self.nodes[node] = add(&self.nodes[2 * node], &self.nodes[2 * node + 1]);
+        }
+    }
+
+    fn double(&mut self) {
+        for n in &mut self.nodes {
+            for part in n.iter_mut() {
+                for v in part.iter_mut() {
+                    *v *= 2.0;
+                }
+            }
+        }
+    }
+}
+
+const B: usize = 8;
+/// Updates between rebuilds of a [`WideTree`].
+pub const REBUILD: u64 = 1 << 22;
+
+/// `TAIL[c][e] = 1` for `e ≥ c`: the entries of a cumulative row that move with child c.
+const TAIL: [[f64; B]; B] = {
+    let mut t = [[0.0; B]; B];
+    let mut c = 0;
+    while c < B {
+        let mut e = c;
+        while e < B {
+            t[c][e] = 1.0;
+            e += 1;
+        }
+        c += 1;
+    }
+    t
+};
+
+/// One row: the cumulative sums of a node's 8 children for one component.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Row([f64; B]);
+
+/// 8-ary tree of cumulative child sums, one cache line per node and component.
+#[derive(Clone, Debug)]
+pub struct WideTree<const R: usize> {
+    /// Nodes level by level, bottom (each covering 8 leaves) first; node `q` of level `l`
+    /// is `rows[start[l] + q]`, and its rows are `[p][k]`.
+    rows: Vec<[[Row; R]; 2]>,
+    start: Vec<usize>,
+    updates: u64,
+}
+
+/// The child of a cumulative row that holds `target`, and the target within it: count
+/// the running sums ≤ target (8 independent comparisons). When rounding leaves
+/// `target ≥ total`, the last child with weight is taken.
+#[inline(always)]
+fn pick(row: &[f64; B], target: &mut f64) -> usize {
+    let mut c = 0;
+    for &v in row {
+        c += usize::from(v <= *target);
+    }
+    if c >= B {
+        c = B - 1;
+        while c > 0 && row[c] <= row[c - 1] {
+            c -= 1;
+        }
+    }
+    if c > 0 {
+        *target -= row[c - 1];
+    }
+    c
+}
+
+impl<const R: usize> WideTree<R> {
+    #[inline]
+    fn levels(&self) -> usize {
+        self.start.len()
+    }
+}
+
+impl<const R: usize> ProposalTree<R> for WideTree<R> {
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
+        debug_assert!(m.is_power_of_two() && m >= B);
+        // level sizes: m/8, m/64, ... down to 1 (the root may have fewer than 8 children)
+        let mut start = Vec::new();
+        let mut total = 0;
+        let mut n = m;
+        loop {
+            let nodes = n.div_ceil(B);
+            start.push(total);
+            total += nodes;
+            if nodes == 1 {
+                break;
+            }
+            n = nodes;
+        }
+        let zero = [[Row([0.0; B]); R]; 2];
+        let mut rows = vec![zero; total];
+        // bottom level from the leaves
+        for q in 0..m / B {
+            for c in 0..B {
+                let w = leaf(q * B + c);
+                for p in 0..2 {
+                    for k in 0..R {
+                        let prev = if c == 0 { 0.0 } else { rows[q][p][k].0[c - 1] };
+                        rows[q][p][k].0[c] = prev + w[p][k];
+                    }
+                }
+            }
+        }
+        // upper levels from the children's totals (entry B − 1)
+        let mut below = m / B;
+        for l in 1..start.len() {
+            let nodes = below.div_ceil(B);
+            for q in 0..nodes {
+                for c in 0..B {
+                    let child = q * B + c;
+                    for p in 0..2 {
+                        for k in 0..R {
+                            let w = if child < below {
+                                rows[start[l - 1] + child][p][k].0[B - 1]
+                            } else {
+                                0.0
+                            };
+                            let prev = if c == 0 {
+                                0.0
+                            } else {
+                                rows[start[l] + q][p][k].0[c - 1]
+                            };
+                            rows[start[l] + q][p][k].0[c] = prev + w;
+                        }
+                    }
+                }
+            }
+            below = nodes;
+        }
+        WideTree {
+            rows,
+            start,
+            updates: 0,
+        }
+    }
+
+    #[inline]
+    fn totals(&self) -> Weights<R> {
+        let root = &self.rows[self.rows.len() - 1];
+        let mut out = [[0.0; R]; 2];
+        for p in 0..2 {
+            for k in 0..R {
+                out[p][k] = root[p][k].0[B - 1];
+            }
+        }
+        out
+    }
+
+    #[inline]
+    fn descend(&self, p: usize, k: usize, mut target: f64) -> usize {
+        let mut q = 0; // node index within its level
+        for l in (0..self.levels()).rev() {
+            let row = &self.rows[self.start[l] + q][p][k].0;
+            let c = pick(row, &mut target);
+            q = q * B + c;
+        }
+        q
+    }
+
+    #[inline]
+    fn descend_pair(&self, k: usize, mut tu: f64, mut tv: f64) -> (usize, usize) {
+        let (mut qu, mut qv) = (0, 0);
+        for l in (0..self.levels()).rev() {
+            let s = self.start[l];
+            let (ru, rv) = (&self.rows[s + qu][0][k].0, &self.rows[s + qv][1][k].0);
+            let cu = pick(ru, &mut tu);
+            let cv = pick(rv, &mut tv);
+            qu = qu * B + cu;
+            qv = qv * B + cv;
+        }
+        (qu, qv)
+    }
+
+    #[inline]
+    fn update(&mut self, i: usize, old: &Weights<R>, new: &Weights<R>) {
+        let mut d = [[0.0; R]; 2];
+        for p in 0..2 {
+            for k in 0..R {
+                d[p][k] = new[p][k] - old[p][k];
+            }
+        }
+        let mut idx = i;
+        for l in 0..self.levels() {
+            let (q, c) = (idx / B, idx % B);
+            let node = &mut self.rows[self.start[l] + q];
+            // fixed-length masked add (vectorises; a variable-length tail loop does not)
+            let mask = &TAIL[c];
+            for p in 0..2 {
+                for k in 0..R {
+                    let row = &mut node[p][k].0;
+                    for e in 0..B {
+                        row[e] += d[p][k] * mask[e];
+                    }
+                }
+            }
+            idx = q;
+        }
+        self.updates += 1;
+    }
+
+    fn double(&mut self) {
+        for n in &mut self.rows {
+            for part in n.iter_mut() {
+                for row in part.iter_mut() {
+                    for v in row.0.iter_mut() {
+                        *v *= 2.0;
+                    }
+                }
+            }
+        }
+    }
+
+    fn wants_rebuild(&self) -> bool {
+        self.updates >= REBUILD
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand_core::Rng;
+
+    fn check_same<T: ProposalTree<2>>(m: usize) {
+        let mut rng = rand_pcg::Pcg64Mcg::new(5);
+        let mut w: Vec<Weights<2>> = (0..m)
+            .map(|i| {
+                if i % 3 == 1 {
+                    [[0.0; 2]; 2]
+                } else {
+                    [[(i % 7) as f64, 1.0], [2.0, (i % 5) as f64]]
+                }
+            })
+            .collect();
+        let mut t = T::build(m, |i| w[i]);
+        for _ in 0..2000 {
+            let i = (rng.next_u64() % m as u64) as usize;
+            let new = [
+                [(rng.next_u64() % 9) as f64, (rng.next_u64() % 3) as f64],
+                [1.0, (rng.next_u64() % 2) as f64],
+            ];
+            t.update(i, &w[i], &new);
+            w[i] = new;
+        }
+        // integer-valued weights add exactly: compare with a linear scan
+        for p in 0..2 {
+            for k in 0..2 {
+                let total: f64 = w.iter().map(|x| x[p][k]).sum();
+                assert_eq!(t.totals()[p][k], total);
+                if total == 0.0 {
+                    continue;
+                }
+                for u in 0..total as u64 {
+                    let target = u as f64 + 0.5;
+                    let mut acc = 0.0;
+                    let expect = w
+                        .iter()
+                        .position(|x| {
+                            acc += x[p][k];
+                            target < acc
+                        })
+                        .unwrap();
+                    assert_eq!(t.descend(p, k, target), expect, "m={m} p={p} k={k} u={u}");
+                }
+                // a target at or beyond the total lands on the last positive leaf
+                let last = w.iter().rposition(|x| x[p][k] > 0.0).unwrap();
+                assert_eq!(t.descend(p, k, total), last);
+            }
+        }
+    }
+
+    #[test]
+    fn both_layouts_match_a_linear_scan() {
+        for m in [8, 16, 64, 128, 1024] {
+            check_same::<BinaryTree<2>>(m);
+            check_same::<WideTree<2>>(m);
+        }
+    }
+}
