@@ -69,9 +69,9 @@ pub struct LowRank<K, const R: usize, T = WideTree<R>> {
     exact_bound: bool,
     /// `counts[i - 1] = N_i`, length M.
     counts: Vec<u64>,
-    /// `fa[i - 1][k] = a_k(i)`, `fb[i - 1][k] = b_k(i)`.
-    fa: Vec<[f64; R]>,
-    fb: Vec<[f64; R]>,
+    /// `fab[i - 1] = [[a_0(i), ..], [b_0(i), ..]]`: the weights of one particle of size i
+    /// (packed so that an update reads one cache line).
+    fab: Vec<Weights<R>>,
     /// Proposal tree over the weights `u^k_i = a_k(i) N_i`, `v^k_i = b_k(i) N_i`.
     tree: T,
     /// Current maximum size M (a power of two; the tree's leaf count).
@@ -129,13 +129,12 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         }
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
-        let m = counts.len().next_power_of_two().max(8);
+        let m = counts.len().next_power_of_two().max(64);
         let mut s = LowRank {
             exact_bound: kernel.low_rank_is_exact(),
             kernel,
             counts: vec![0; m],
-            fa: Vec::new(),
-            fb: Vec::new(),
+            fab: Vec::new(),
             tree: T::build(8, |_| [[0.0; R]; 2]),
             m,
             size_limit: DEFAULT_SIZE_LIMIT,
@@ -159,9 +158,9 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         self
     }
 
-    /// Computes the factor tables for sizes `fa.len() + 1 ..= m`, validating them.
+    /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them.
     fn extend_factors(&mut self, m: usize) -> Result<()> {
-        let start = self.fa.len();
+        let start = self.fab.len();
         let (mut na, mut nb) = (Vec::with_capacity(m - start), Vec::with_capacity(m - start));
         for i in start + 1..=m {
             let (mut a, mut b) = ([0.0; R], [0.0; R]);
@@ -177,21 +176,13 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             na.push(a);
             nb.push(b);
         }
-        self.fa.extend(na);
-        self.fb.extend(nb);
+        self.fab.extend(na.into_iter().zip(nb).map(|(a, b)| [a, b]));
         Ok(())
     }
 
     #[inline]
     fn leaf_value(&self, idx: usize) -> Weights<R> {
-        let c = self.counts[idx] as f64;
-        let (a, b) = (&self.fa[idx], &self.fb[idx]);
-        let mut out = [[0.0; R]; 2];
-        for k in 0..R {
-            out[0][k] = a[k] * c;
-            out[1][k] = b[k] * c;
-        }
-        out
+        scale(&self.fab[idx], self.counts[idx] as f64)
     }
 
     fn rebuild(&mut self) {
@@ -201,10 +192,10 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
     /// Changes `N` at index `idx` by `delta` and updates the tree.
     #[inline]
     fn change(&mut self, idx: usize, delta: i64) {
-        let old = self.leaf_value(idx);
         self.counts[idx] = (self.counts[idx] as i64 + delta) as u64;
-        let new = self.leaf_value(idx);
-        self.tree.update(idx, &old, &new);
+        let leaf = self.leaf_value(idx);
+        self.tree
+            .add(idx, &scale(&self.fab[idx], delta as f64), &leaf);
     }
 
     fn grow(&mut self, new_m: usize) -> Result<()> {
@@ -264,7 +255,8 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             }
             let mut bound = 0.0;
             for kk in 0..R {
-                bound += self.fa[i][kk] * self.fb[j][kk] + self.fa[j][kk] * self.fb[i][kk];
+                bound += self.fab[i][0][kk] * self.fab[j][1][kk]
+                    + self.fab[j][0][kk] * self.fab[i][1][kk];
             }
             if c > bound * (1.0 + 1e-12) {
                 rep.bound_violations += 1;
@@ -377,6 +369,18 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> Scheme for LowRan
         self.totals.accumulate(&rep);
         Ok(rep)
     }
+}
+
+/// `w · c` component-wise.
+#[inline]
+fn scale<const R: usize>(w: &Weights<R>, c: f64) -> Weights<R> {
+    let mut out = [[0.0; R]; 2];
+    for p in 0..2 {
+        for k in 0..R {
+            out[p][k] = w[p][k] * c;
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -5,11 +5,14 @@
 //! Two layouts, measured against each other by `coagula bench lowrank --tree`:
 //! * [`BinaryTree`] — a binary segment tree whose nodes hold all 2R partial sums; an
 //!   update recomputes each ancestor from its two children (no drift, ever).
-//! * [`WideTree`] — an 8-ary tree whose nodes hold, per component, the running
-//!   (cumulative) sums of their 8 children in one 64-byte cache line. A descent reads one
-//!   line per level and picks the child by 8 independent comparisons (log₈ M dependent
-//!   loads instead of log₂ M); an update adds the change to the trailing entries of one
-//!   row per component and level. Updates add differences, so rounding can accumulate:
+//! * [`WideTree`] — an 8-ary tree whose nodes hold, per component, the sums of their 8
+//!   children in one 64-byte cache line. A descent reads one line per level, forms the
+//!   running sums in a depth-3 tree of additions and picks the child by 8 independent
+//!   comparisons (log₈ M dependent loads instead of log₂ M); an update adds the change
+//!   to one entry per component and level. (Storing running sums instead makes the
+//!   descent cheaper but an update 8 times dearer; a collision makes 3 updates of 2R
+//!   rows against 2 descents of one row, and that layout measured slower.) Updates
+//!   add differences, so rounding can accumulate:
 //!   the tree is rebuilt from the exact integer counts every `REBUILD` updates, which
 //!   bounds the relative drift of any partial sum by about `REBUILD · 2⁻⁵³ ≈ 2e-10`. A
 //!   size whose count is zero can then carry a ghost weight of that order; the scheme
@@ -35,8 +38,10 @@ pub trait ProposalTree<const R: usize>: Sized {
     fn descend_pair(&self, k: usize, tu: f64, tv: f64) -> (usize, usize) {
         (self.descend(0, k, tu), self.descend(1, k, tv))
     }
-    /// Changes leaf `i` from `old` to `new`.
-    fn update(&mut self, i: usize, old: &Weights<R>, new: &Weights<R>);
+    /// Adds `delta` to the weights of leaf `i`, whose new exact value is `leaf` (layouts
+    /// that recompute from children store `leaf`; the others add `delta`).
+    fn add(&mut self, i: usize, delta: &Weights<R>, leaf: &Weights<R>);
+
     /// Doubles every weight (exact in floating point).
     fn double(&mut self);
     /// True when the tree has drifted enough to want a rebuild.
@@ -95,9 +100,9 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
     }
 
     #[inline]
-    fn update(&mut self, i: usize, _old: &Weights<R>, new: &Weights<R>) {
+    fn add(&mut self, i: usize, _delta: &Weights<R>, leaf: &Weights<R>) {
         let mut node = self.m + i;
-        self.nodes[node] = *new;
+        self.nodes[node] = *leaf;
         while node > 1 {
             node >>= 1;
             self.nodes[node] = add(&self.nodes[2 * node], &self.nodes[2 * node + 1]);
@@ -119,53 +124,56 @@ const B: usize = 8;
 /// Updates between rebuilds of a [`WideTree`].
 pub const REBUILD: u64 = 1 << 22;
 
-/// `TAIL[c][e] = 1` for `e ≥ c`: the entries of a cumulative row that move with child c.
-const TAIL: [[f64; B]; B] = {
-    let mut t = [[0.0; B]; B];
-    let mut c = 0;
-    while c < B {
-        let mut e = c;
-        while e < B {
-            t[c][e] = 1.0;
-            e += 1;
-        }
-        c += 1;
-    }
-    t
-};
-
-/// One row: the cumulative sums of a node's 8 children for one component.
+/// One row: the sums of a node's 8 children for one component (one cache line).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
 struct Row([f64; B]);
 
-/// 8-ary tree of cumulative child sums, one cache line per node and component.
+/// 8-ary tree of child sums, one cache line per node and component.
 #[derive(Clone, Debug)]
 pub struct WideTree<const R: usize> {
     /// Nodes level by level, bottom (each covering 8 leaves) first; node `q` of level `l`
     /// is `rows[start[l] + q]`, and its rows are `[p][k]`.
     rows: Vec<[[Row; R]; 2]>,
     start: Vec<usize>,
+    total: Weights<R>,
     updates: u64,
 }
 
-/// The child of a cumulative row that holds `target`, and the target within it: count
-/// the running sums ≤ target (8 independent comparisons). When rounding leaves
-/// `target ≥ total`, the last child with weight is taken.
+/// The child of a row that holds `target`, and the target within it. The running sums
+/// are formed in a tree of additions (depth 3, not 7) and compared independently; when
+/// rounding leaves `target ≥` the row's total, the last child with weight is taken.
 #[inline(always)]
 fn pick(row: &[f64; B], target: &mut f64) -> usize {
+    let r = row;
+    let s01 = r[0] + r[1];
+    let s23 = r[2] + r[3];
+    let s45 = r[4] + r[5];
+    let s67 = r[6] + r[7];
+    let s03 = s01 + s23;
+    let s47 = s45 + s67;
+    let prefix = [
+        r[0],
+        s01,
+        s01 + r[2],
+        s03,
+        s03 + r[4],
+        s03 + s45,
+        s03 + s45 + r[6],
+        s03 + s47,
+    ];
     let mut c = 0;
-    for &v in row {
-        c += usize::from(v <= *target);
+    for &p in &prefix {
+        c += usize::from(p <= *target);
     }
     if c >= B {
         c = B - 1;
-        while c > 0 && row[c] <= row[c - 1] {
+        while c > 0 && r[c] <= 0.0 {
             c -= 1;
         }
     }
     if c > 0 {
-        *target -= row[c - 1];
+        *target -= prefix[c - 1];
     }
     c
 }
@@ -182,82 +190,69 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
         debug_assert!(m.is_power_of_two() && m >= B);
         // level sizes: m/8, m/64, ... down to 1 (the root may have fewer than 8 children)
         let mut start = Vec::new();
-        let mut total = 0;
+        let mut count = 0;
         let mut n = m;
         loop {
             let nodes = n.div_ceil(B);
-            start.push(total);
-            total += nodes;
+            start.push(count);
+            count += nodes;
             if nodes == 1 {
                 break;
             }
             n = nodes;
         }
         let zero = [[Row([0.0; B]); R]; 2];
-        let mut rows = vec![zero; total];
-        // bottom level from the leaves
+        let mut rows = vec![zero; count];
         for q in 0..m / B {
             for c in 0..B {
                 let w = leaf(q * B + c);
                 for p in 0..2 {
                     for k in 0..R {
-                        let prev = if c == 0 { 0.0 } else { rows[q][p][k].0[c - 1] };
-                        rows[q][p][k].0[c] = prev + w[p][k];
+                        rows[q][p][k].0[c] = w[p][k];
                     }
                 }
             }
         }
-        // upper levels from the children's totals (entry B − 1)
         let mut below = m / B;
         for l in 1..start.len() {
             let nodes = below.div_ceil(B);
             for q in 0..nodes {
-                for c in 0..B {
-                    let child = q * B + c;
+                for c in 0..B.min(below - q * B) {
+                    let child = start[l - 1] + q * B + c;
                     for p in 0..2 {
                         for k in 0..R {
-                            let w = if child < below {
-                                rows[start[l - 1] + child][p][k].0[B - 1]
-                            } else {
-                                0.0
-                            };
-                            let prev = if c == 0 {
-                                0.0
-                            } else {
-                                rows[start[l] + q][p][k].0[c - 1]
-                            };
-                            rows[start[l] + q][p][k].0[c] = prev + w;
+                            rows[start[l] + q][p][k].0[c] = rows[child][p][k].0.iter().sum();
                         }
                     }
                 }
             }
             below = nodes;
         }
+        let root = &rows[count - 1];
+        let mut total = [[0.0; R]; 2];
+        for p in 0..2 {
+            for k in 0..R {
+                total[p][k] = root[p][k].0.iter().sum();
+            }
+        }
         WideTree {
             rows,
             start,
+            total,
             updates: 0,
         }
     }
 
     #[inline]
     fn totals(&self) -> Weights<R> {
-        let root = &self.rows[self.rows.len() - 1];
-        let mut out = [[0.0; R]; 2];
-        for p in 0..2 {
-            for k in 0..R {
-                out[p][k] = root[p][k].0[B - 1];
-            }
-        }
-        out
+        self.total
     }
 
     #[inline]
     fn descend(&self, p: usize, k: usize, mut target: f64) -> usize {
         let mut q = 0; // node index within its level
         for l in (0..self.levels()).rev() {
-            let row = &self.rows[self.start[l] + q][p][k].0;
-            let c = pick(row, &mut target);
+            let c = pick(&self.rows[self.start[l] + q][p][k].0, &mut target);
             q = q * B + c;
         }
         q
@@ -268,9 +263,8 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
         let (mut qu, mut qv) = (0, 0);
         for l in (0..self.levels()).rev() {
             let s = self.start[l];
-            let (ru, rv) = (&self.rows[s + qu][0][k].0, &self.rows[s + qv][1][k].0);
-            let cu = pick(ru, &mut tu);
-            let cv = pick(rv, &mut tv);
+            let cu = pick(&self.rows[s + qu][0][k].0, &mut tu);
+            let cv = pick(&self.rows[s + qv][1][k].0, &mut tv);
             qu = qu * B + cu;
             qv = qv * B + cv;
         }
@@ -278,28 +272,22 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
     }
 
     #[inline]
-    fn update(&mut self, i: usize, old: &Weights<R>, new: &Weights<R>) {
-        let mut d = [[0.0; R]; 2];
-        for p in 0..2 {
-            for k in 0..R {
-                d[p][k] = new[p][k] - old[p][k];
-            }
-        }
+    fn add(&mut self, i: usize, d: &Weights<R>, _leaf: &Weights<R>) {
         let mut idx = i;
         for l in 0..self.levels() {
             let (q, c) = (idx / B, idx % B);
             let node = &mut self.rows[self.start[l] + q];
-            // fixed-length masked add (vectorises; a variable-length tail loop does not)
-            let mask = &TAIL[c];
             for p in 0..2 {
                 for k in 0..R {
-                    let row = &mut node[p][k].0;
-                    for e in 0..B {
-                        row[e] += d[p][k] * mask[e];
-                    }
+                    node[p][k].0[c] += d[p][k];
                 }
             }
             idx = q;
+        }
+        for p in 0..2 {
+            for k in 0..R {
+                self.total[p][k] += d[p][k];
+            }
         }
         self.updates += 1;
     }
@@ -312,6 +300,11 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
                         *v *= 2.0;
                     }
                 }
+            }
+        }
+        for part in self.total.iter_mut() {
+            for v in part.iter_mut() {
+                *v *= 2.0;
             }
         }
     }
@@ -344,7 +337,13 @@ mod tests {
                 [(rng.next_u64() % 9) as f64, (rng.next_u64() % 3) as f64],
                 [1.0, (rng.next_u64() % 2) as f64],
             ];
-            t.update(i, &w[i], &new);
+            let mut d = [[0.0; 2]; 2];
+            for p in 0..2 {
+                for k in 0..2 {
+                    d[p][k] = new[p][k] - w[i][p][k];
+                }
+            }
+            t.add(i, &d, &new);
             w[i] = new;
         }
         // integer-valued weights add exactly: compare with a linear scan
@@ -376,7 +375,7 @@ mod tests {
 
     #[test]
     fn both_layouts_match_a_linear_scan() {
-        for m in [8, 16, 64, 128, 1024] {
+        for m in [64, 128, 1024, 4096] {
             check_same::<BinaryTree<2>>(m);
             check_same::<WideTree<2>>(m);
         }
