@@ -7,10 +7,13 @@
 //! are read between calls.
 //!
 //! Schemes:
+//! * [`massflow`] — the time-driven mass-flow scheme of Lécot et al. (2019): QMC, MC,
+//!   RQMC;
 //! * [`lowrank`] — Osinsky's low-rank Monte Carlo with segment trees, and the inverse and
 //!   acceptance–rejection baselines it is measured against (Osinsky 2023).
 
 pub mod lowrank;
+pub mod massflow;
 
 use crate::error::Result;
 use rand_core::Rng;
