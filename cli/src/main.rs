@@ -6,6 +6,9 @@ use coagula_core::kernel::{Coagulation, check_low_rank, check_majorant, log_grid
 use std::process::ExitCode;
 
 mod bench;
+mod lecot;
+mod plot;
+mod validate;
 
 #[derive(Parser)]
 #[command(
@@ -20,6 +23,55 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a case. With no options: Lécot et al.'s coagulation-fragmentation test (QMC,
+    /// N = 2^14, P = 400 steps to T = 1), printed against the exact moments.
+    Run {
+        /// log2 of the number of particles N.
+        #[arg(long, default_value_t = 14)]
+        m: u32,
+        /// Number of time steps P to T = 1.
+        #[arg(long, default_value_t = 400)]
+        steps: u32,
+        /// Point source.
+        #[arg(long, value_enum, default_value = "qmc")]
+        points: lecot::Points,
+        /// Seed (MC and RQMC).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Write t,M2,M2_exact,M3,M3_exact at the 100 checkpoints to this CSV file.
+        #[arg(long)]
+        csv: Option<String>,
+        /// Draw the moments against the exact solution (an .svg file).
+        #[arg(long)]
+        plot: Option<String>,
+    },
+    /// Rerun the reproduction cases and compare with exact or published values.
+    Validate {
+        /// A subset that runs in under 2 minutes.
+        #[arg(long)]
+        quick: bool,
+        /// Print a JSON array instead of the table.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Reproduce a paper's experiment: `lecot2019` (Figures 1-2).
+    Reproduce {
+        /// Which experiment.
+        #[arg(value_enum)]
+        which: Experiment,
+        /// Largest log2 N (the paper goes to 20).
+        #[arg(long, default_value_t = 20)]
+        m_max: u32,
+        /// MC seeds averaged per cell.
+        #[arg(long, default_value_t = 4)]
+        mc_seeds: u64,
+        /// RQMC randomisations per N (0 = none).
+        #[arg(long, default_value_t = 20)]
+        rqmc: u32,
+        /// Draw Figure 2 (an .svg file).
+        #[arg(long)]
+        plot: Option<String>,
+    },
     /// Print an exact solution (SPEC §3): moments, gel mass and n_k at given times.
     Exact {
         /// Which solution.
@@ -98,6 +150,11 @@ enum BenchKind {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum Experiment {
+    Lecot2019,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum Solution {
     Constant,
     Additive,
@@ -109,6 +166,45 @@ enum Solution {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Run {
+            m,
+            steps,
+            points,
+            seed,
+            csv,
+            plot,
+        } => {
+            return match lecot::run_default(m, steps, points, seed, csv.as_deref(), plot.as_deref())
+            {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+        Command::Validate { quick, json } => {
+            return if validate::run(quick, json) {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::FAILURE
+            };
+        }
+        Command::Reproduce {
+            which: Experiment::Lecot2019,
+            m_max,
+            mc_seeds,
+            rqmc,
+            plot,
+        } => {
+            return match lecot::reproduce(m_max, mc_seeds, rqmc, plot.as_deref()) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
         Command::Exact {
             solution,
             times,
