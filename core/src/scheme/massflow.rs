@@ -301,6 +301,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
 
     /// One step of length `h` into `self.next`; returns its report. `self.x` is not
     /// touched, so an error leaves the state as it was.
+    #[inline(never)]
     fn step<R: Rng + ?Sized>(&mut self, h: f64, rng: &mut R) -> Result<StepReport> {
         let n = self.x.len();
         let nf = n as f64;
@@ -368,6 +369,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
     }
 
     /// Sorts `next` (old order with some entries changed) ascending.
+    #[inline(never)]
     fn resort(&mut self) {
         match self.sorting {
             Sorting::Full => self.next.sort_unstable_by(f64::total_cmp),
