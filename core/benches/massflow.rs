@@ -11,14 +11,24 @@ fn step(c: &mut Criterion) {
     let mut g = c.benchmark_group("massflow-step-N2^20");
     g.sample_size(20);
     for (name, sorting, points) in [
-        ("qmc-adaptive-sort", Sorting::Adaptive, PointSource::niederreiter()),
+        (
+            "qmc-adaptive-sort",
+            Sorting::Adaptive,
+            PointSource::niederreiter(),
+        ),
         ("qmc-full-sort", Sorting::Full, PointSource::niederreiter()),
-        ("mc-adaptive-sort", Sorting::Adaptive, PointSource::monte_carlo()),
+        (
+            "mc-adaptive-sort",
+            Sorting::Adaptive,
+            PointSource::monte_carlo(),
+        ),
     ] {
         let k = Coagulation::constant(1.0).unwrap();
         let f = BinaryUniform::new(1.0).unwrap();
         let dt = 1.0 / 400.0;
-        let mut sim = MassFlow::new(k, f, &vec![1.0; 1 << 20], 1.0, dt, points).unwrap().with_sorting(sorting);
+        let mut sim = MassFlow::new(k, f, &vec![1.0; 1 << 20], 1.0, dt, points)
+            .unwrap()
+            .with_sorting(sorting);
         let mut rng = Pcg64Mcg::new(1);
         // a realistic, polydisperse state
         sim.advance_to(0.25, &mut rng).unwrap();

@@ -89,6 +89,11 @@ pub enum Error {
         /// What is missing.
         what: &'static str,
     },
+    /// A checkpoint buffer is malformed or belongs to another scheme or configuration.
+    Checkpoint {
+        /// What is wrong with it.
+        what: &'static str,
+    },
     /// Integer overflow of a size or a count.
     Overflow {
         /// What overflowed.
@@ -138,6 +143,7 @@ impl fmt::Display for Error {
                 "requested time {requested} lies before the current time {now}"
             ),
             Error::Unsupported { what } => write!(f, "not supported: {what}"),
+            Error::Checkpoint { what } => write!(f, "cannot restore checkpoint: {what}"),
             Error::Overflow { name } => write!(f, "integer overflow in {name}"),
         }
     }

@@ -7,6 +7,7 @@
 //! ([`Error`]), never panics.
 //!
 //! Modules:
+//! * [`checkpoint`] — save and restore a scheme's state into a caller buffer;
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
 //! * [`exact`] — exact solutions used as validation targets (SPEC §3);
 //! * [`tree`] — a flat-array sum tree for weighted sampling;
@@ -32,6 +33,7 @@ extern crate alloc;
 #[cfg(feature = "std")]
 extern crate std;
 
+pub mod checkpoint;
 pub mod error;
 pub mod exact;
 pub mod kernel;

@@ -158,6 +158,24 @@ impl<S: DigitalSequence> DigitalSequence for Scrambled<S> {
     }
 }
 
+impl<S: DigitalSequence> Scrambled<S> {
+    /// A fingerprint of the randomisation (kind, matrices and per-coordinate
+    /// parameters): equal fingerprints mean identical point sets.
+    pub fn fingerprint(&self) -> u64 {
+        let kind = match self.kind {
+            Randomization::None => 0,
+            Randomization::DigitalShift => 1,
+            Randomization::Matousek => 2,
+            Randomization::Owen => 3,
+        };
+        crate::checkpoint::fingerprint(
+            core::iter::once(kind)
+                .chain(self.cols.iter().map(|w| w.to_u64()))
+                .chain(self.param.iter().map(|w| w.to_u64())),
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -99,6 +99,20 @@ impl PointSource {
         PointSource::MonteCarlo
     }
 
+    /// Identifies the point set: kind, and for randomised sequences the fingerprint of
+    /// their random parameters.
+    pub fn fingerprint(&self) -> u64 {
+        match self {
+            PointSource::Niederreiter(_) => 1,
+            PointSource::Sobol(_) => 2,
+            PointSource::ScrambledNiederreiter(s) => {
+                crate::checkpoint::fingerprint([3, s.fingerprint()])
+            }
+            PointSource::ScrambledSobol(s) => crate::checkpoint::fingerprint([4, s.fingerprint()]),
+            PointSource::MonteCarlo => 5,
+        }
+    }
+
     fn block(&self, n: u64, m: u32, out: &mut [f64]) -> Result<()> {
         match self {
             PointSource::Niederreiter(s) => s.block(n, m, out),
@@ -443,6 +457,84 @@ impl<K: CoagulationKernel, F: FragmentationKernel> Scheme for MassFlow<K, F> {
         rep.time = self.time;
         self.totals.accumulate(&rep);
         Ok(rep)
+    }
+}
+
+impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
+    fn save(&self, w: &mut crate::checkpoint::Writer) {
+        use crate::checkpoint::{header, save_report, tag};
+        header(w, tag::MASSFLOW);
+        w.u64(self.points.fingerprint());
+        w.u64(match self.sorting {
+            Sorting::Adaptive => 0,
+            Sorting::Full => 1,
+        });
+        w.f64(self.mass);
+        w.f64(self.dt);
+        w.f64(self.time);
+        w.u64(self.steps);
+        save_report(w, &self.totals);
+        w.f64s(&self.x);
+    }
+
+    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report, tag};
+        check_header(r, tag::MASSFLOW)?;
+        if r.u64()? != self.points.fingerprint() {
+            return Err(Error::Checkpoint {
+                what: "the point source (or its randomisation) differs",
+            });
+        }
+        let sorting = match r.u64()? {
+            0 => Sorting::Adaptive,
+            1 => Sorting::Full,
+            _ => {
+                return Err(Error::Checkpoint {
+                    what: "unknown sorting",
+                });
+            }
+        };
+        let (mass, dt, time, steps) = (r.f64()?, r.f64()?, r.f64()?, r.u64()?);
+        let totals = read_report(r)?;
+        let x = r.f64s()?;
+        if x.len() != self.x.len() {
+            return Err(Error::Checkpoint {
+                what: "different number of particles",
+            });
+        }
+        if !(mass > 0.0 && dt > 0.0 && time >= 0.0)
+            || x.iter().any(|&v| !(v > 0.0 && v.is_finite()))
+        {
+            return Err(Error::Checkpoint {
+                what: "invalid values",
+            });
+        }
+        self.sorting = sorting;
+        self.mass = mass;
+        self.dt = dt;
+        self.time = time;
+        self.steps = steps;
+        self.totals = totals;
+        self.x = x;
+        Ok(())
+    }
+}
+
+impl<K, F> MassFlow<K, F> {
+    /// Replaces the coagulation kernel (e.g. new parameters between outer steps).
+    pub fn set_kernel(&mut self, kernel: K) {
+        self.kernel = kernel;
+    }
+
+    /// Replaces the fragmentation kernel.
+    pub fn set_fragmentation(&mut self, frag: F) {
+        self.frag = frag;
+    }
+
+    /// Changes the time step (finite and positive).
+    pub fn set_dt(&mut self, dt: f64) -> Result<()> {
+        self.dt = crate::error::positive("dt", dt)?;
+        Ok(())
     }
 }
 

@@ -330,3 +330,97 @@ impl<K: CoagulationKernel> Inverse<K> {
         Ok(())
     }
 }
+
+impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
+    fn save(&self, w: &mut crate::checkpoint::Writer) {
+        use crate::checkpoint::{header, save_report, tag};
+        header(w, tag::INVERSE);
+        w.u64(self.size_limit);
+        w.u64(self.n);
+        w.u64(self.n0);
+        w.f64(self.volume);
+        w.f64(self.time);
+        save_report(w, &self.totals);
+        w.u64s(&self.size);
+        w.u64s(&self.count);
+        w.f64s(&self.row);
+        w.f64s(&self.diag);
+    }
+
+    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report, tag};
+        check_header(r, tag::INVERSE)?;
+        let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
+        let (volume, time) = (r.f64()?, r.f64()?);
+        let totals = read_report(r)?;
+        let (size, count, row, diag) = (r.u64s()?, r.u64s()?, r.f64s()?, r.f64s()?);
+        let k = size.len();
+        if count.len() != k
+            || row.len() != k
+            || diag.len() != k
+            || size.iter().any(|&s| s == 0 || s > size_limit)
+        {
+            return Err(Error::Checkpoint {
+                what: "inconsistent occupied sizes",
+            });
+        }
+        if count.iter().try_fold(0u64, |a, &c| a.checked_add(c)) != Some(n) {
+            return Err(Error::Checkpoint {
+                what: "counts do not add up",
+            });
+        }
+        let max = size.iter().copied().max().unwrap_or(1) as usize;
+        let mut slot = vec![NONE; max.next_power_of_two()];
+        for (a, &s) in size.iter().enumerate() {
+            if slot[s as usize - 1] != NONE {
+                return Err(Error::Checkpoint {
+                    what: "a size occurs twice",
+                });
+            }
+            slot[s as usize - 1] = a as u32;
+        }
+        self.size_limit = size_limit;
+        self.n = n;
+        self.n0 = n0;
+        self.volume = volume;
+        self.time = time;
+        self.totals = totals;
+        self.size = size;
+        self.count = count;
+        self.row = row;
+        self.diag = diag;
+        self.slot = slot;
+        Ok(())
+    }
+}
+
+impl<K: CoagulationKernel> Inverse<K> {
+    /// Replaces the kernel; every row sum is recomputed (O(occupied²)). Errors leave
+    /// the scheme unchanged.
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        let counts = self.counts();
+        let fresh = Inverse::new(kernel, &counts, self.volume)?;
+        self.install(fresh);
+        Ok(())
+    }
+
+    /// Replaces the counts and the volume; the particle number becomes the reference
+    /// for particle doubling. Errors leave the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>
+    where
+        K: Clone,
+    {
+        let fresh = Inverse::new(self.kernel.clone(), counts, volume)?;
+        self.install(fresh);
+        Ok(())
+    }
+
+    /// Takes the state of `fresh`, keeping time, totals and the size limit.
+    fn install(&mut self, fresh: Inverse<K>) {
+        let (time, totals, limit) = (self.time, self.totals, self.size_limit);
+        *self = fresh;
+        self.time = time;
+        self.totals = totals;
+        self.size_limit = limit;
+    }
+}

@@ -383,5 +383,112 @@ fn scale<const R: usize>(w: &Weights<R>, c: f64) -> Weights<R> {
     out
 }
 
+impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> crate::checkpoint::Checkpoint
+    for LowRank<K, R, T>
+{
+    fn save(&self, w: &mut crate::checkpoint::Writer) {
+        use crate::checkpoint::{header, save_report, tag};
+        header(w, tag::LOWRANK);
+        w.u64(R as u64);
+        w.u64(self.m as u64);
+        w.u64(self.size_limit);
+        w.u64(self.n);
+        w.u64(self.n0);
+        w.f64(self.volume);
+        w.f64(self.time);
+        save_report(w, &self.totals);
+        w.u64s(&self.counts);
+        self.tree.save(w);
+    }
+
+    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report, tag};
+        check_header(r, tag::LOWRANK)?;
+        if r.u64()? != R as u64 {
+            return Err(Error::Checkpoint {
+                what: "different rank",
+            });
+        }
+        let m = r.usize()?;
+        if !m.is_power_of_two() || m < 64 {
+            return Err(Error::Checkpoint {
+                what: "invalid maximum size",
+            });
+        }
+        let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
+        let (volume, time) = (r.f64()?, r.f64()?);
+        let totals = read_report(r)?;
+        let counts = r.u64s()?;
+        if counts.len() != m || counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)) != Some(n) {
+            return Err(Error::Checkpoint {
+                what: "counts do not add up",
+            });
+        }
+        let tree = T::load(m, r)?;
+        if m > self.fab.len() {
+            self.extend_factors(m)?;
+        }
+        self.m = m;
+        self.size_limit = size_limit;
+        self.n = n;
+        self.n0 = n0;
+        self.volume = volume;
+        self.time = time;
+        self.totals = totals;
+        self.counts = counts;
+        self.tree = tree;
+        Ok(())
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> {
+    /// Replaces the kernel (e.g. new parameters between outer steps): the factor tables
+    /// and the tree are rebuilt. Errors (rank differs, invalid factors) leave the scheme
+    /// unchanged.
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        if kernel.rank() != R {
+            return Err(Error::Unsupported {
+                what: "kernel rank differs from the scheme's R",
+            });
+        }
+        let old = core::mem::replace(&mut self.kernel, kernel);
+        let old_fab = core::mem::take(&mut self.fab);
+        if let Err(e) = self.extend_factors(self.m) {
+            self.kernel = old;
+            self.fab = old_fab;
+            return Err(e);
+        }
+        self.exact_bound = self.kernel.low_rank_is_exact();
+        self.rebuild();
+        Ok(())
+    }
+
+    /// Replaces the counts `N_i = counts[i − 1]` and the volume (a host that applies
+    /// growth or nucleation between steps). The particle number becomes the new
+    /// reference for particle doubling. Errors leave the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+        crate::error::positive("volume", volume)?;
+        let n = check_counts(counts)?;
+        if counts.len() as u64 > self.size_limit {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: self.size_limit as usize,
+            });
+        }
+        let m = counts.len().next_power_of_two().max(self.m);
+        if m > self.fab.len() {
+            self.extend_factors(m)?;
+        }
+        self.m = m;
+        self.counts = vec![0; m];
+        self.counts[..counts.len()].copy_from_slice(counts);
+        self.n = n;
+        self.n0 = n;
+        self.volume = volume;
+        self.rebuild();
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests;

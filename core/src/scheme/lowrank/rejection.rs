@@ -207,3 +207,84 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
         result.map(|()| rep)
     }
 }
+
+impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection<K> {
+    fn save(&self, w: &mut crate::checkpoint::Writer) {
+        use crate::checkpoint::{header, save_report, tag};
+        header(w, tag::REJECTION);
+        w.u64(self.size_limit);
+        w.u64(self.n0);
+        w.f64(self.volume);
+        w.f64(self.time);
+        w.u64(self.max_present);
+        w.f64(self.cmax);
+        save_report(w, &self.totals);
+        w.u64s(&self.sizes);
+    }
+
+    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report, tag};
+        check_header(r, tag::REJECTION)?;
+        let (size_limit, n0) = (r.u64()?, r.u64()?);
+        let (volume, time) = (r.f64()?, r.f64()?);
+        let (max_present, cmax) = (r.u64()?, r.f64()?);
+        let totals = read_report(r)?;
+        let sizes = r.u64s()?;
+        if sizes.iter().any(|&s| s == 0 || s > max_present) || !(cmax >= 0.0 && volume > 0.0) {
+            return Err(Error::Checkpoint {
+                what: "inconsistent particle sizes",
+            });
+        }
+        self.size_limit = size_limit;
+        self.n0 = n0;
+        self.volume = volume;
+        self.time = time;
+        self.max_present = max_present;
+        self.cmax = cmax;
+        self.totals = totals;
+        self.sizes = sizes;
+        Ok(())
+    }
+}
+
+impl<K: CoagulationKernel> AcceptanceRejection<K> {
+    /// Replaces the kernel (its supremum is recomputed). Errors leave the scheme
+    /// unchanged.
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        let old = core::mem::replace(&mut self.kernel, kernel);
+        match self.sup(self.max_present) {
+            Ok(c) => {
+                self.cmax = c;
+                Ok(())
+            }
+            Err(e) => {
+                self.kernel = old;
+                Err(e)
+            }
+        }
+    }
+
+    /// Replaces the counts and the volume; the particle number becomes the reference
+    /// for particle doubling. Errors leave the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+        crate::error::positive("volume", volume)?;
+        let n = check_counts(counts)?;
+        let max = counts
+            .iter()
+            .rposition(|&c| c > 0)
+            .map_or(1, |i| i as u64 + 1);
+        let cmax = self.sup(max)?;
+        let mut sizes = Vec::with_capacity(n as usize);
+        for (i, &c) in counts.iter().enumerate() {
+            for _ in 0..c {
+                sizes.push(i as u64 + 1);
+            }
+        }
+        self.sizes = sizes;
+        self.n0 = n;
+        self.volume = volume;
+        self.max_present = max;
+        self.cmax = cmax;
+        Ok(())
+    }
+}

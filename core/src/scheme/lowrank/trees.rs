@@ -18,6 +18,8 @@
 //!   size whose count is zero can then carry a ghost weight of that order; the scheme
 //!   rejects a proposal that lands on it, which is exact thinning.
 
+use crate::checkpoint::{Reader, Writer};
+use crate::error::{Error, Result};
 use alloc::vec;
 use alloc::vec::Vec;
 
@@ -47,6 +49,16 @@ pub trait ProposalTree<const R: usize>: Sized {
     /// True when the tree has drifted enough to want a rebuild.
     fn wants_rebuild(&self) -> bool {
         false
+    }
+    /// Writes the exact contents (for a bit-identical restore).
+    fn save(&self, w: &mut Writer);
+    /// Reads contents written by [`save`](Self::save) for a tree over `m` leaves.
+    fn load(m: usize, r: &mut Reader) -> Result<Self>;
+}
+
+fn bad_tree() -> Error {
+    Error::Checkpoint {
+        what: "tree contents do not match the sizes",
     }
 }
 
@@ -117,6 +129,31 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
                 }
             }
         }
+    }
+
+    fn save(&self, w: &mut Writer) {
+        let flat: Vec<f64> = self
+            .nodes
+            .iter()
+            .flat_map(|n| n.iter().flat_map(|p| p.iter().copied()))
+            .collect();
+        w.f64s(&flat);
+    }
+
+    fn load(m: usize, r: &mut Reader) -> Result<Self> {
+        let flat = r.f64s()?;
+        if flat.len() != 2 * m * 2 * R {
+            return Err(bad_tree());
+        }
+        let mut t = Self::build(m, |_| [[0.0; R]; 2]);
+        for (i, node) in t.nodes.iter_mut().enumerate() {
+            for p in 0..2 {
+                for k in 0..R {
+                    node[p][k] = flat[(i * 2 + p) * R + k];
+                }
+            }
+        }
+        Ok(t)
     }
 }
 
@@ -311,6 +348,48 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
 
     fn wants_rebuild(&self) -> bool {
         self.updates >= REBUILD
+    }
+
+    fn save(&self, w: &mut Writer) {
+        let flat: Vec<f64> = self
+            .rows
+            .iter()
+            .flat_map(|n| {
+                n.iter()
+                    .flat_map(|p| p.iter().flat_map(|row| row.0.iter().copied()))
+            })
+            .collect();
+        w.f64s(&flat);
+        let tot: Vec<f64> = self.total.iter().flat_map(|p| p.iter().copied()).collect();
+        w.f64s(&tot);
+        w.u64(self.updates);
+    }
+
+    fn load(m: usize, r: &mut Reader) -> Result<Self> {
+        let flat = r.f64s()?;
+        let tot = r.f64s()?;
+        let updates = r.u64()?;
+        let mut t = Self::build(m, |_| [[0.0; R]; 2]);
+        if flat.len() != t.rows.len() * 2 * R * B || tot.len() != 2 * R {
+            return Err(bad_tree());
+        }
+        let mut it = flat.into_iter();
+        for node in t.rows.iter_mut() {
+            for part in node.iter_mut() {
+                for row in part.iter_mut() {
+                    for v in row.0.iter_mut() {
+                        *v = it.next().unwrap_or(0.0);
+                    }
+                }
+            }
+        }
+        for p in 0..2 {
+            for k in 0..R {
+                t.total[p][k] = tot[p * R + k];
+            }
+        }
+        t.updates = updates;
+        Ok(t)
     }
 }
 
