@@ -41,7 +41,7 @@ where
     assert!(c.restore_from(&wrong).is_err());
     assert_eq!(observe(&c), before);
     // too small a buffer for saving is an error
-    assert!(a.save_to(&mut vec![0u8; 10]).is_err());
+    assert!(a.save_to(&mut [0u8; 10]).is_err());
 }
 
 fn bits(v: &[f64]) -> Vec<u64> {
