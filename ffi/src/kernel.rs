@@ -1,0 +1,394 @@
+//! Kernel and fragmentation handles: the built-in kernels, and user kernels from C
+//! function pointers with their bound information.
+
+use crate::{COAG_INVALID_ARGUMENT, Fail, fail, guard, non_null, write};
+use coagula_core::kernel::{
+    BinaryUniform, Coagulation, CoagulationKernel, FragmentationKernel, MAX_RANK,
+};
+use std::ffi::c_void;
+
+/// `K(x, y)` from C.
+pub type coag_rate_fn = Option<unsafe extern "C" fn(x: f64, y: f64, user_data: *mut c_void) -> f64>;
+/// `h(x)` (product majorant) or `Ḟ(x)` (fragmentation rate) from C.
+pub type coag_unary_fn = Option<unsafe extern "C" fn(x: f64, user_data: *mut c_void) -> f64>;
+/// Low-rank factors from C: write `a_k(x)` to `a[k]` and `b_k(x)` to `b[k]`, `k < rank`.
+pub type coag_factors_fn =
+    Option<unsafe extern "C" fn(x: f64, a: *mut f64, b: *mut f64, user_data: *mut c_void)>;
+/// `sup K(x, y)` over `lo ≤ x, y ≤ hi` from C (acceptance–rejection).
+pub type coag_sup_fn =
+    Option<unsafe extern "C" fn(lo: f64, hi: f64, user_data: *mut c_void) -> f64>;
+/// `F̂_x⁻¹(u)` (size of the followed piece after a break-up of x) from C.
+pub type coag_piece_fn =
+    Option<unsafe extern "C" fn(x: f64, u: f64, user_data: *mut c_void) -> f64>;
+
+/// A user coagulation kernel: the rate and whichever bounds the chosen scheme needs.
+/// Unused bounds may be NULL (0 for `rank`). A bound violated at run time is counted in
+/// the step report (`bound_violations`), never silently ignored.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct coag_user_kernel {
+    /// `K(x, y) ≥ 0`, symmetric. Required.
+    pub rate: coag_rate_fn,
+    /// Product majorant `h(x)`, `K ≤ h(x) h(y)`, `h(x)/x` non-increasing (optional).
+    pub majorant: coag_unary_fn,
+    /// Rank R of the low-rank bound (0 = none, at most 8).
+    pub rank: u32,
+    /// Low-rank factors, `K ≤ A + Aᵀ`, `A(i, j) = Σ_k a_k(i) b_k(j)` (needed by the
+    /// low-rank scheme when `rank > 0`).
+    pub factors: coag_factors_fn,
+    /// Non-zero when `K = A + Aᵀ` exactly (no acceptance test is then needed).
+    pub low_rank_exact: i32,
+    /// `sup K` on a square (needed by acceptance–rejection; optional otherwise).
+    pub sup: coag_sup_fn,
+    /// Passed to every callback; never dereferenced by coagula.
+    pub user_data: *mut c_void,
+}
+
+/// A user fragmentation kernel.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct coag_user_fragmentation {
+    /// Total break-up rate `Ḟ(x) ≥ 0`. Required.
+    pub rate: coag_unary_fn,
+    /// Inverse of the size-biased piece distribution, `u ∈ (0, 1]`. Required.
+    pub inverse_piece: coag_piece_fn,
+    /// `sup Ḟ` if known, or a negative value if not.
+    pub sup_rate: f64,
+    /// Passed to every callback.
+    pub user_data: *mut c_void,
+}
+
+/// What a `coag_kernel` handle holds.
+#[derive(Clone, Copy, Debug)]
+pub enum Kernel {
+    Builtin(Coagulation),
+    User(coag_user_kernel),
+}
+
+/// Opaque kernel handle (`coag_kernel` in C).
+#[derive(Debug)]
+pub struct coag_kernel {
+    pub(crate) k: Kernel,
+}
+
+impl CoagulationKernel for Kernel {
+    #[inline]
+    fn rate(&self, x: f64, y: f64) -> f64 {
+        match self {
+            Kernel::Builtin(k) => k.rate(x, y),
+            // SAFETY: validated non-null at construction; the host keeps the function
+            // and its user_data valid (documented contract).
+            Kernel::User(u) => u.rate.map_or(f64::NAN, |f| unsafe { f(x, y, u.user_data) }),
+        }
+    }
+    fn majorant(&self, x: f64) -> Option<f64> {
+        match self {
+            Kernel::Builtin(k) => k.majorant(x),
+            // SAFETY: as for `rate`.
+            Kernel::User(u) => u.majorant.map(|f| unsafe { f(x, u.user_data) }),
+        }
+    }
+    fn rank(&self) -> usize {
+        match self {
+            Kernel::Builtin(k) => k.rank(),
+            Kernel::User(u) => {
+                if u.factors.is_some() {
+                    u.rank as usize
+                } else {
+                    0
+                }
+            }
+        }
+    }
+    fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+        match self {
+            Kernel::Builtin(k) => k.factors(x, a, b),
+            Kernel::User(u) => {
+                if let Some(f) = u.factors {
+                    // the callback writes `rank` values into each buffer; give it
+                    // full-size scratch so a sloppy callback cannot overrun
+                    let (mut sa, mut sb) = ([f64::NAN; MAX_RANK], [f64::NAN; MAX_RANK]);
+                    // SAFETY: scratch buffers of MAX_RANK ≥ rank elements; contract as
+                    // for `rate`.
+                    unsafe { f(x, sa.as_mut_ptr(), sb.as_mut_ptr(), u.user_data) };
+                    let r = a.len().min(b.len());
+                    a[..r].copy_from_slice(&sa[..r]);
+                    b[..r].copy_from_slice(&sb[..r]);
+                }
+            }
+        }
+    }
+    fn low_rank_is_exact(&self) -> bool {
+        match self {
+            Kernel::Builtin(k) => k.low_rank_is_exact(),
+            Kernel::User(u) => u.low_rank_exact != 0,
+        }
+    }
+    fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
+        match self {
+            Kernel::Builtin(k) => k.sup_rate(lo, hi),
+            // SAFETY: as for `rate`.
+            Kernel::User(u) => u.sup.map(|f| unsafe { f(lo, hi, u.user_data) }),
+        }
+    }
+    fn min_size(&self) -> f64 {
+        match self {
+            Kernel::Builtin(k) => k.min_size(),
+            Kernel::User(_) => 0.0,
+        }
+    }
+}
+
+/// What a `coag_fragmentation` handle holds.
+#[derive(Clone, Copy, Debug)]
+pub enum Fragmentation {
+    None,
+    Binary(BinaryUniform),
+    User(coag_user_fragmentation),
+}
+
+/// Opaque fragmentation handle (`coag_fragmentation` in C).
+#[derive(Debug)]
+pub struct coag_fragmentation {
+    pub(crate) f: Fragmentation,
+}
+
+impl FragmentationKernel for Fragmentation {
+    fn total_rate(&self, x: f64) -> f64 {
+        match self {
+            Fragmentation::None => 0.0,
+            Fragmentation::Binary(b) => b.total_rate(x),
+            // SAFETY: validated non-null at construction; host keeps them valid.
+            Fragmentation::User(u) => u.rate.map_or(f64::NAN, |f| unsafe { f(x, u.user_data) }),
+        }
+    }
+    fn inverse_piece(&self, x: f64, u: f64) -> f64 {
+        match self {
+            Fragmentation::None => x,
+            Fragmentation::Binary(b) => b.inverse_piece(x, u),
+            // SAFETY: as above.
+            Fragmentation::User(d) => d
+                .inverse_piece
+                .map_or(f64::NAN, |f| unsafe { f(x, u, d.user_data) }),
+        }
+    }
+    fn sup_rate(&self) -> Option<f64> {
+        match self {
+            Fragmentation::None => Some(0.0),
+            Fragmentation::Binary(b) => b.sup_rate(),
+            Fragmentation::User(u) => (u.sup_rate >= 0.0).then_some(u.sup_rate),
+        }
+    }
+    fn is_none(&self) -> bool {
+        matches!(self, Fragmentation::None)
+    }
+}
+
+fn new_kernel(k: Kernel, out: *mut *mut coag_kernel) -> Result<(), Fail> {
+    write(out, Box::into_raw(Box::new(coag_kernel { k })));
+    Ok(())
+}
+
+fn builtin(make: coagula_core::Result<Coagulation>, out: *mut *mut coag_kernel) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        new_kernel(Kernel::Builtin(make?), out)
+    })
+}
+
+/// Constant kernel `K = k0` (k0 > 0).
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_constant(k0: f64, out: *mut *mut coag_kernel) -> i32 {
+    builtin(Coagulation::constant(k0), out)
+}
+
+/// Additive kernel `K = x + y`; bounds valid for sizes `≥ min_size` (0: all sizes,
+/// 1: integer sizes, with a tighter majorant).
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_additive(
+    min_size: f64,
+    out: *mut *mut coag_kernel,
+) -> i32 {
+    builtin(Coagulation::additive().with_min_size(min_size), out)
+}
+
+/// Multiplicative kernel `K = x y`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_multiplicative(out: *mut *mut coag_kernel) -> i32 {
+    builtin(Ok(Coagulation::multiplicative()), out)
+}
+
+/// Product kernel `K = (x y)^a`, `0 < a ≤ 1`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_product(a: f64, out: *mut *mut coag_kernel) -> i32 {
+    builtin(Coagulation::product(a), out)
+}
+
+/// Homogeneous kernel of Eibeck & Wagner eq. 6.6, `1 < gamma ≤ 2`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_homogeneous(
+    gamma: f64,
+    out: *mut *mut coag_kernel,
+) -> i32 {
+    builtin(Coagulation::homogeneous(gamma), out)
+}
+
+/// Free-molecular (ballistic) kernel; bounds valid for sizes `≥ min_size` (0: all
+/// sizes, 1: integer sizes).
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_free_molecular(
+    min_size: f64,
+    out: *mut *mut coag_kernel,
+) -> i32 {
+    builtin(Coagulation::free_molecular().with_min_size(min_size), out)
+}
+
+/// Brownian (continuum) kernel.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_brownian(out: *mut *mut coag_kernel) -> i32 {
+    builtin(Ok(Coagulation::brownian()), out)
+}
+
+/// A user kernel from C callbacks (see `coag_user_kernel`). Errors: `rate` NULL,
+/// `rank` above 8, `rank > 0` without `factors`.
+///
+/// # Safety
+/// `desc` and `out` must be NULL or valid; the callbacks and `user_data` must stay
+/// valid while any handle made from this kernel is alive.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new_user(
+    desc: *const coag_user_kernel,
+    out: *mut *mut coag_kernel,
+) -> i32 {
+    guard(|| {
+        non_null(desc, "desc")?;
+        non_null(out, "out")?;
+        // SAFETY: checked non-null; the caller guarantees it points to a descriptor.
+        let d = unsafe { *desc };
+        if d.rate.is_none() {
+            return fail(COAG_INVALID_ARGUMENT, "user kernel: rate is NULL");
+        }
+        if d.rank as usize > MAX_RANK || (d.rank > 0 && d.factors.is_none()) {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "user kernel: rank above 8, or rank > 0 without factors",
+            );
+        }
+        new_kernel(Kernel::User(d), out)
+    })
+}
+
+/// Evaluates `K(x, y)` of a kernel handle.
+///
+/// # Safety
+/// `kernel` must be NULL or a live handle; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_rate(
+    kernel: *const coag_kernel,
+    x: f64,
+    y: f64,
+    out: *mut f64,
+) -> i32 {
+    guard(|| {
+        non_null(kernel, "kernel")?;
+        non_null(out, "out")?;
+        // SAFETY: checked non-null; a live handle from coag_kernel_new_*.
+        let k = unsafe { &(*kernel).k };
+        let v = coagula_core::kernel::checked_rate(k, x, y)?;
+        write(out, v);
+        Ok(())
+    })
+}
+
+/// Releases a kernel handle (NULL is a no-op).
+///
+/// # Safety
+/// `kernel` must be NULL or a handle from `coag_kernel_new_*` not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_free(kernel: *mut coag_kernel) {
+    if !kernel.is_null() {
+        // SAFETY: created by Box::into_raw in new_kernel, freed once (caller contract).
+        drop(unsafe { Box::from_raw(kernel) });
+    }
+}
+
+fn new_frag(f: Fragmentation, out: *mut *mut coag_fragmentation) -> Result<(), Fail> {
+    write(out, Box::into_raw(Box::new(coag_fragmentation { f })));
+    Ok(())
+}
+
+/// Binary break-up into two uniform pieces at rate `lambda` per particle:
+/// `F(x, y) = 2 lambda / (x + y)` (Lécot et al. §4 with lambda = 1).
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one pointer.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_fragmentation_new_binary_uniform(
+    lambda: f64,
+    out: *mut *mut coag_fragmentation,
+) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        new_frag(Fragmentation::Binary(BinaryUniform::new(lambda)?), out)
+    })
+}
+
+/// A user fragmentation kernel from C callbacks (`rate` and `inverse_piece` required).
+///
+/// # Safety
+/// As for `coag_kernel_new_user`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_fragmentation_new_user(
+    desc: *const coag_user_fragmentation,
+    out: *mut *mut coag_fragmentation,
+) -> i32 {
+    guard(|| {
+        non_null(desc, "desc")?;
+        non_null(out, "out")?;
+        // SAFETY: checked non-null; the caller guarantees a valid descriptor.
+        let d = unsafe { *desc };
+        if d.rate.is_none() || d.inverse_piece.is_none() {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "user fragmentation: rate or inverse_piece is NULL",
+            );
+        }
+        if d.sup_rate.is_nan() {
+            return fail(COAG_INVALID_ARGUMENT, "user fragmentation: sup_rate is NaN");
+        }
+        new_frag(Fragmentation::User(d), out)
+    })
+}
+
+/// Releases a fragmentation handle (NULL is a no-op).
+///
+/// # Safety
+/// `frag` must be NULL or a handle from `coag_fragmentation_new_*` not yet freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_fragmentation_free(frag: *mut coag_fragmentation) {
+    if !frag.is_null() {
+        // SAFETY: created by Box::into_raw in new_frag, freed once (caller contract).
+        drop(unsafe { Box::from_raw(frag) });
+    }
+}

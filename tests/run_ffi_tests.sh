@@ -1,0 +1,29 @@
+#!/usr/bin/env bash
+# Builds libcoagula and runs the C, C++ and Fortran clients against it.
+# C programs: -Wall -Wextra -Wpedantic -Werror, AddressSanitizer + UBSan.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+root=$(pwd)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+cargo build --release -q -p coagula-ffi
+lib="$root/target/release/libcoagula.a"
+libs="-lpthread -ldl -lm"
+san="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
+export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+
+for t in test_schemes test_misuse; do
+    gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
+        "tests/c/$t.c" "$lib" $libs -o "$out/$t"
+    "$out/$t"
+done
+
+g++ -std=c++17 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
+    tests/cpp/test_cpp.cpp "$lib" $libs -o "$out/test_cpp"
+"$out/test_cpp"
+
+gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
+    include/coagula.f90 tests/fortran/test_fortran.f90 "$lib" $libs -o "$out/test_fortran"
+"$out/test_fortran"
