@@ -289,18 +289,23 @@ fn kernels(min: f64, max: f64, points: usize) -> Result<(), coagula_core::Error>
     ];
     println!("grid {min:e}..{max:e}, {points} points; bounds for sizes >= {narrow}");
     println!(
-        "{:<18} {:>10} {:>12} {:>10} {:>12}",
-        "kernel", "maj.viol", "maj.worst", "lr.viol", "lr.worst"
+        "{:<18} {:>9} {:>11} {:>11} {:>9} {:>11} {:>11}",
+        "kernel", "maj.viol", "maj.max", "maj.worst", "lr.viol", "lr.max", "lr.worst"
+    );
+    println!(
+        "(max = largest K/bound, 1 when tight; worst = smallest K/bound, the worst acceptance)"
     );
     for (name, k) in all {
         let k = k.with_min_size(narrow)?;
         let m = check_majorant(&k, &grid)?;
         let l = check_low_rank(&k, &grid)?;
         println!(
-            "{name:<18} {:>10} {:>12.6} {:>10} {:>12.6}",
+            "{name:<18} {:>9} {:>11.6} {:>11.3e} {:>9} {:>11.6} {:>11.3e}",
             m.violations + m.monotonicity_violations,
+            m.max_ratio,
             m.worst_acceptance,
             l.violations,
+            l.max_ratio,
             l.worst_acceptance
         );
     }
