@@ -84,10 +84,15 @@ pub fn trajectory<K: CoagulationKernel, F: FragmentationKernel>(
     Ok(out)
 }
 
-/// Lécot's case: trajectory at the 100 checkpoints hT/100.
-pub fn lecot_case(m: u32, steps: u32, points: Points, seed: u64) -> Vec<(f64, f64, f64)> {
-    let k = Coagulation::constant(1.0).expect("valid");
-    let f = BinaryUniform::new(1.0).expect("valid");
+/// Lécot's case (K = 1, F = 2/(x+y), T = 1): trajectory at the 100 checkpoints hT/100.
+pub fn try_lecot_case(
+    m: u32,
+    steps: u32,
+    points: Points,
+    seed: u64,
+) -> Result<Vec<(f64, f64, f64)>, coagula_core::Error> {
+    let k = Coagulation::constant(1.0)?;
+    let f = BinaryUniform::new(1.0)?;
     let spec = Spec {
         m,
         steps,
@@ -96,7 +101,12 @@ pub fn lecot_case(m: u32, steps: u32, points: Points, seed: u64) -> Vec<(f64, f6
         points,
         seed,
     };
-    trajectory(k, f, spec).expect("Lécot's case runs")
+    trajectory(k, f, spec)
+}
+
+/// [`try_lecot_case`] for parameters known to be valid (the reproduction grids).
+pub fn lecot_case(m: u32, steps: u32, points: Points, seed: u64) -> Vec<(f64, f64, f64)> {
+    try_lecot_case(m, steps, points, seed).expect("Lécot's case runs")
 }
 
 /// Errors of one trajectory: at T/100, T/10, T, and the mean over the 100 checkpoints,
@@ -152,17 +162,7 @@ pub fn run_default(
         return Err("--steps must be at least 1".into());
     }
     let start = std::time::Instant::now();
-    let k = Coagulation::constant(1.0).expect("valid");
-    let f = BinaryUniform::new(1.0).expect("valid");
-    let spec = Spec {
-        m,
-        steps,
-        t_end: 1.0,
-        checkpoints: 100,
-        points,
-        seed,
-    };
-    let traj = trajectory(k, f, spec).map_err(|e| e.to_string())?;
+    let traj = try_lecot_case(m, steps, points, seed).map_err(|e| e.to_string())?;
     let secs = start.elapsed().as_secs_f64();
     let exact = Exact::coagulation_fragmentation();
     println!(

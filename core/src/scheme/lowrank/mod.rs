@@ -193,7 +193,11 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
     #[inline]
     fn change(&mut self, idx: usize, delta: i64) {
         self.counts[idx] = (self.counts[idx] as i64 + delta) as u64;
-        let leaf = self.leaf_value(idx);
+        let leaf = if T::NEEDS_LEAF {
+            self.leaf_value(idx)
+        } else {
+            [[0.0; R]; 2]
+        };
         self.tree
             .add(idx, &scale(&self.fab[idx], delta as f64), &leaf);
     }

@@ -40,8 +40,12 @@ pub trait ProposalTree<const R: usize>: Sized {
     fn descend_pair(&self, k: usize, tu: f64, tv: f64) -> (usize, usize) {
         (self.descend(0, k, tu), self.descend(1, k, tv))
     }
-    /// Adds `delta` to the weights of leaf `i`, whose new exact value is `leaf` (layouts
-    /// that recompute from children store `leaf`; the others add `delta`).
+    /// Whether [`add`](Self::add) needs the leaf's new exact value (layouts that
+    /// recompute from children); others only add the difference, and the caller skips
+    /// computing the leaf.
+    const NEEDS_LEAF: bool;
+    /// Adds `delta` to the weights of leaf `i`, whose new exact value is `leaf` (only
+    /// meaningful when [`NEEDS_LEAF`](Self::NEEDS_LEAF)).
     fn add(&mut self, i: usize, delta: &Weights<R>, leaf: &Weights<R>);
 
     /// Doubles every weight (exact in floating point).
@@ -81,6 +85,8 @@ fn add<const R: usize>(a: &Weights<R>, b: &Weights<R>) -> Weights<R> {
 }
 
 impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
+    const NEEDS_LEAF: bool = true;
+
     fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
         let mut nodes = vec![[[0.0; R]; 2]; 2 * m];
         for i in 0..m {
@@ -223,6 +229,8 @@ impl<const R: usize> WideTree<R> {
 }
 
 impl<const R: usize> ProposalTree<R> for WideTree<R> {
+    const NEEDS_LEAF: bool = false;
+
     fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
         debug_assert!(m.is_power_of_two() && m >= B);
         // level sizes: m/8, m/64, ... down to 1 (the root may have fewer than 8 children)
