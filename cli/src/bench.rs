@@ -3,7 +3,7 @@
 use coagula_core::kernel::{Coagulation, CoagulationKernel};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::{
-    AcceptanceRejection, BinaryTree, Inverse, LowRank, ProposalTree, WideTree,
+    AcceptanceRejection, BinaryTree, Bucketed, Inverse, LowRank, ProposalTree, WideTree,
 };
 use rand_pcg::Pcg64Mcg;
 use std::time::{Duration, Instant};
@@ -250,21 +250,39 @@ fn bench_kernel<K: CoagulationKernel + Copy, const R: usize>(
 }
 
 /// Low-rank only, one kernel, to one time: for profiling.
-pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool) {
+pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool, bucketed: bool) {
     let start = Instant::now();
     let fm = Coagulation::free_molecular()
         .with_min_size(1.0)
         .expect("valid");
-    let (events, m) = match (name, binary) {
-        ("brownian", false) => single::<_, 2, WideTree<2>>(Coagulation::brownian(), n0, t, seed),
-        ("brownian", true) => single::<_, 2, BinaryTree<2>>(Coagulation::brownian(), n0, t, seed),
-        ("ballistic", false) => single::<_, 3, WideTree<3>>(fm, n0, t, seed),
-        ("ballistic", true) => single::<_, 3, BinaryTree<3>>(fm, n0, t, seed),
-        (_, false) => single::<_, 1, WideTree<1>>(Coagulation::additive(), n0, t, seed),
-        (_, true) => single::<_, 1, BinaryTree<1>>(Coagulation::additive(), n0, t, seed),
+    let (events, m) = if bucketed {
+        match name {
+            "brownian" => single_b::<_, 2, 4>(Coagulation::brownian(), n0, t, seed),
+            "ballistic" => single_b::<_, 3, 6>(fm, n0, t, seed),
+            _ => single_b::<_, 1, 2>(Coagulation::additive(), n0, t, seed),
+        }
+    } else {
+        match (name, binary) {
+            ("brownian", false) => {
+                single::<_, 2, WideTree<2>>(Coagulation::brownian(), n0, t, seed)
+            }
+            ("brownian", true) => {
+                single::<_, 2, BinaryTree<2>>(Coagulation::brownian(), n0, t, seed)
+            }
+            ("ballistic", false) => single::<_, 3, WideTree<3>>(fm, n0, t, seed),
+            ("ballistic", true) => single::<_, 3, BinaryTree<3>>(fm, n0, t, seed),
+            (_, false) => single::<_, 1, WideTree<1>>(Coagulation::additive(), n0, t, seed),
+            (_, true) => single::<_, 1, BinaryTree<1>>(Coagulation::additive(), n0, t, seed),
+        }
     };
     let s = start.elapsed().as_secs_f64();
-    let tree = if binary { "binary" } else { "wide" };
+    let tree = if bucketed {
+        "bucketed"
+    } else if binary {
+        "binary"
+    } else {
+        "wide"
+    };
     println!(
         "{name} t={t} ({tree} tree): {events} collisions, M={m}, {s:.3} s, {:.3e} coll/s",
         events as f64 / s
@@ -280,5 +298,21 @@ fn single<K: CoagulationKernel, const R: usize, T: ProposalTree<R>>(
     let mut sim = LowRank::<K, R, T>::monodisperse(k, n0).expect("valid");
     let mut rng = Pcg64Mcg::new(u128::from(seed));
     let rep = sim.advance_to(t, &mut rng).expect("runs");
+    (rep.events, sim.max_size())
+}
+
+fn single_b<K: CoagulationKernel, const R: usize, const W: usize>(
+    k: K,
+    n0: u64,
+    t: f64,
+    seed: u64,
+) -> (u64, usize) {
+    let mut sim = Bucketed::<K, R, W>::monodisperse(k, n0).expect("valid");
+    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let rep = sim.advance_to(t, &mut rng).expect("runs");
+    eprintln!(
+        "proposals {} rejections {} violations {}",
+        rep.proposals, rep.rejections, rep.bound_violations
+    );
     (rep.events, sim.max_size())
 }

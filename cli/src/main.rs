@@ -146,6 +146,9 @@ enum BenchKind {
         /// Use the binary tree layout instead of the 8-ary one.
         #[arg(long)]
         binary: bool,
+        /// Use the bucketed layout.
+        #[arg(long)]
+        bucketed: bool,
     },
 }
 
@@ -233,9 +236,10 @@ fn main() -> ExitCode {
                     t,
                     seed,
                     binary,
+                    bucketed,
                 },
         } => {
-            bench::lowrank_single(&kernel, n0, t, seed, binary);
+            bench::lowrank_single(&kernel, n0, t, seed, binary, bucketed);
             Ok(())
         }
     };

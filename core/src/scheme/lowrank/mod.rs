@@ -41,10 +41,12 @@
 //! assert!((m0 - 1.0 / 1.5).abs() < 0.02);
 //! ```
 
+mod bucketed;
 mod inverse;
 mod rejection;
 pub mod trees;
 
+pub use bucketed::Bucketed;
 pub use inverse::Inverse;
 pub use rejection::AcceptanceRejection;
 pub use trees::{BinaryTree, ProposalTree, WideTree};

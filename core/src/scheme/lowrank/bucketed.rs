@@ -1,0 +1,842 @@
+//! Low-rank Monte Carlo over size *buckets*: the default, fastest layout.
+//!
+//! The paper's algorithm keeps one weight per integer size in segment trees of M leaves;
+//! at M = 2^22 those trees (and the factor tables beside them) are hundreds of
+//! megabytes, and every collision walks three root-to-leaf paths of 2R rows through
+//! them. This layout keeps the same proposal scheme but coarsens the *bound*:
+//!
+//! * Sizes are grouped into log-linear buckets: every size below 64 is its own bucket;
+//!   above, each octave `[2^g, 2^{g+1})` is cut into 32 buckets of equal width, so a
+//!   bucket spans at most 1/32 of its lower end. 2^32 sizes need 897 buckets.
+//! * The bound uses each bucket's largest factor, `â_k(x) = max_{y ∈ bucket(x)} a_k(y)`
+//!   (and likewise b̂), so `Â = Σ_k â_k b̂_kᵀ ≥ A` is still rank R and `K ≤ Â + Âᵀ`. The
+//!   acceptance `K/(Â + Âᵀ)` absorbs the coarsening; a bucket is at most 3 % wide, so
+//!   for power-law factors the acceptance drops by a few per cent at most. For kernels
+//!   whose bound is exact (`K = A + Aᵀ`), a squeeze with the buckets' smallest factors
+//!   decides almost every proposal without evaluating K.
+//! * The factors are quantised upwards to integers, `â = q · s_row`, so every weight and
+//!   partial sum `Σ q n_bucket` is an exact `u64`: no rounding drift, no rebuilds, no
+//!   ghost weights. The proposal tree is B-ary over the buckets (≤ ~1000 leaves), so it
+//!   sits in L1/L2 whatever M is.
+//! * A bucket of one size needs only its count. A wider bucket keeps a list of its
+//!   particles (their offsets within the bucket); a proposal picks a uniform position in
+//!   the list (one cache line), a collision swap-removes two entries and pushes one.
+//!
+//! A proposal thus costs two descents of a small integer tree, two list reads and a
+//! squeeze; a collision adds three leaf updates of that tree and O(1) list work —
+//! independent of M. The state is still the counts `N_i` (see [`Bucketed::counts`]); M
+//! doubling and particle doubling work as in [`super::LowRank`].
+
+use super::super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
+use super::check_counts;
+use crate::error::{Error, Result};
+use crate::kernel::CoagulationKernel;
+use alloc::vec;
+use alloc::vec::Vec;
+use rand_core::Rng;
+
+/// log2 of the buckets per octave.
+const SUB_BITS: u32 = 5;
+const SUB: u64 = 1 << SUB_BITS;
+/// Sizes below this are their own bucket.
+const SINGLE: u64 = 2 * SUB;
+/// Branching factor of the proposal tree.
+const B: usize = 8;
+
+/// The bucket of size `x ≥ 1`.
+#[inline]
+fn bucket_of(x: u64) -> usize {
+    if x < SINGLE {
+        x as usize
+    } else {
+        let g = 63 - x.leading_zeros();
+        let sh = g - SUB_BITS;
+        (sh as u64 * SUB + (x >> sh)) as usize
+    }
+}
+
+/// The sizes `lo..=hi` of bucket `b ≥ 1`.
+#[inline]
+fn bucket_range(b: usize) -> (u64, u64) {
+    let b = b as u64;
+    if b < SINGLE {
+        (b, b)
+    } else {
+        let sh = b / SUB - 1;
+        let m = b - sh * SUB;
+        (m << sh, ((m + 1) << sh) - 1)
+    }
+}
+
+/// A uniform integer in `[0, n)`, exactly (Lemire's multiply-and-reject), `n ≥ 1`.
+#[inline]
+fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
+    let mut m = u128::from(rng.next_u64()) * u128::from(n);
+    if (m as u64) < n {
+        let threshold = n.wrapping_neg() % n;
+        while (m as u64) < threshold {
+            m = u128::from(rng.next_u64()) * u128::from(n);
+        }
+    }
+    (m >> 64) as u64
+}
+
+/// The child of a node row (inclusive running sums) holding `target`, which must be
+/// below the row's last entry, and the target within it: independent comparisons, no
+/// data-dependent branch; a child of zero weight is never chosen.
+#[inline(always)]
+fn pick(row: &[u64; B], target: &mut u64) -> usize {
+    let mut c = 0;
+    for &p in &row[..B - 1] {
+        c += usize::from(p <= *target);
+    }
+    if c > 0 {
+        *target -= row[c - 1];
+    }
+    c
+}
+
+/// B-ary tree over the buckets, `W` rows per node; each row holds the inclusive running
+/// sums of its children's totals (exact `u64`).
+#[derive(Clone, Debug)]
+struct IntTree<const W: usize> {
+    /// Level by level, bottom first; node q of level l is `nodes[start[l] + q]`.
+    nodes: Vec<[[u64; B]; W]>,
+    start: Vec<usize>,
+    leaves: usize,
+}
+
+impl<const W: usize> IntTree<W> {
+    fn new(leaves: usize) -> Self {
+        let mut start = Vec::new();
+        let mut count = 0;
+        let mut n = leaves.max(1);
+        loop {
+            let nodes = n.div_ceil(B);
+            start.push(count);
+            count += nodes;
+            if nodes == 1 {
+                break;
+            }
+            n = nodes;
+        }
+        IntTree {
+            nodes: vec![[[0u64; B]; W]; count],
+            start,
+            leaves,
+        }
+    }
+
+    /// Sets every leaf to `leaf(i, r)` and recomputes the sums (no allocation).
+    fn refill(&mut self, leaf: impl Fn(usize, usize) -> u64) {
+        for n in self.nodes.iter_mut() {
+            *n = [[0; B]; W];
+        }
+        for i in 0..self.leaves {
+            for r in 0..W {
+                self.nodes[i / B][r][i % B] = leaf(i, r);
+            }
+        }
+        let levels = self.start.len();
+        for l in 0..levels {
+            let end = if l + 1 < levels {
+                self.start[l + 1]
+            } else {
+                self.nodes.len()
+            };
+            for q in self.start[l]..end {
+                for r in 0..W {
+                    let row = &mut self.nodes[q][r];
+                    for c in 1..B {
+                        row[c] += row[c - 1];
+                    }
+                    if l + 1 < levels {
+                        let total = row[B - 1];
+                        let pos = q - self.start[l];
+                        self.nodes[self.start[l + 1] + pos / B][r][pos % B] = total;
+                    }
+                }
+            }
+        }
+    }
+
+    #[inline]
+    fn total(&self, r: usize) -> u64 {
+        self.nodes[self.nodes.len() - 1][r][B - 1]
+    }
+
+    /// The leaf holding `target ∈ [0, total(r))` in row r, and the target within it.
+    #[inline]
+    fn descend(&self, r: usize, mut target: u64) -> usize {
+        let mut q = 0;
+        for l in (0..self.start.len()).rev() {
+            let c = pick(&self.nodes[self.start[l] + q][r], &mut target);
+            q = q * B + c;
+        }
+        q
+    }
+
+    /// Adds `d · w[r]` to every row of leaf `i`.
+    #[inline]
+    fn add(&mut self, i: usize, d: u64, w: &[u64; W]) {
+        let mut delta = [0u64; W];
+        for r in 0..W {
+            delta[r] = w[r] * d;
+        }
+        let mut idx = i;
+        for l in 0..self.start.len() {
+            let node = &mut self.nodes[self.start[l] + idx / B];
+            let c = idx % B;
+            for r in 0..W {
+                for v in &mut node[r][c..] {
+                    *v += delta[r];
+                }
+            }
+            idx /= B;
+        }
+    }
+
+    fn double(&mut self) {
+        for n in &mut self.nodes {
+            for row in n.iter_mut() {
+                for v in row.iter_mut() {
+                    *v *= 2;
+                }
+            }
+        }
+    }
+}
+
+/// Per-bucket bound data for the `2R` factor rows `[a_0 .. a_{R−1}, b_0 .. b_{R−1}]`.
+#[derive(Clone, Copy, Debug)]
+struct BucketBound<const W: usize> {
+    /// Quantised largest factor (tree weight of one particle).
+    q: [u64; W],
+    /// `q · scale`: the bound's factor as a double.
+    hi: [f64; W],
+    /// Smallest factor over the bucket (for the squeeze).
+    lo: [f64; W],
+}
+
+/// Low-rank Monte Carlo over size buckets (see the module docs). `W` must be `2R`.
+pub struct Bucketed<K, const R: usize, const W: usize> {
+    kernel: K,
+    exact_bound: bool,
+    /// Exact factor extremes per bucket, before quantisation: `[max, min]`.
+    raw: Vec<[[f64; W]; 2]>,
+    bounds: Vec<BucketBound<W>>,
+    scale: [f64; W],
+    /// Largest quantised factor: `qmax · n0 ≤ 2^60`, so the slots' weight (at most a few
+    /// times the particles') cannot overflow.
+    qmax: u64,
+    /// `counts[x] = N_x` for sizes `x = 1..=M` (`counts[0]` unused).
+    counts: Vec<u32>,
+    /// Particles per bucket.
+    n_b: Vec<u64>,
+    /// Slots per bucket (`≥ n_b`); the tree's weights are `q · slots`. A proposal picks a
+    /// uniform slot of the chosen bucket and is rejected when the slot is empty — exact
+    /// thinning, since every real pair keeps its proposal rate `Â/V`.
+    ///
+    /// A bucket is either in *grid* mode — its slots are `width × cap` pairs (size x,
+    /// level ℓ) and slot (x, ℓ) holds a particle iff `ℓ < N_x` — or in *list* mode, where
+    /// slot s holds the particle `lists[..][s]` if `s < len`. Removals never touch the
+    /// tree (the slot empties); an addition takes a free slot or grows the bucket.
+    slots: Vec<u64>,
+    /// Grid mode: the level count `cap ≥ max N_x` of the bucket; `0` = list mode.
+    cap: Vec<u64>,
+    /// Offsets `x − lo` of the particles of list-mode buckets `≥ SINGLE` (index
+    /// `b − SINGLE`).
+    lists: Vec<Vec<u32>>,
+    /// `Σ_b q_r(b) n_b` per row: the weight of the real particles.
+    live: [u64; W],
+    /// Empty-slot weight per row right after the last resync.
+    base_slack: [u64; W],
+    tree: IntTree<W>,
+    /// The tree changed since `S_A` was last computed.
+    rates_stale: bool,
+    /// Current maximum size M (a power of two).
+    m: u64,
+    size_limit: u64,
+    n: u64,
+    n0: u64,
+    volume: f64,
+    time: f64,
+    totals: StepReport,
+    zig: Ziggurat,
+}
+
+impl<K, const R: usize, const W: usize> core::fmt::Debug for Bucketed<K, R, W> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Bucketed")
+            .field("rank", &R)
+            .field("max_size", &self.m)
+            .field("particles", &self.n)
+            .field("volume", &self.volume)
+            .field("time", &self.time)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Largest number of initial particles (counts are stored as `u32`).
+pub const MAX_PARTICLES: u64 = u32::MAX as u64;
+
+/// Length of the count array for maximum size m: it covers the whole bucket of m.
+fn count_len(m: u64) -> usize {
+    bucket_range(bucket_of(m)).1 as usize + 1
+}
+
+/// log2 of the width of bucket b.
+#[inline]
+fn width_bits(b: usize) -> u32 {
+    if (b as u64) < SINGLE {
+        0
+    } else {
+        (b as u64 / SUB - 1) as u32
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
+    /// Starts from `n0` monomers in volume `V = n0` (so `n_1(0) = 1`).
+    pub fn monodisperse(kernel: K, n0: u64) -> Result<Self> {
+        Self::new(kernel, &[n0], n0 as f64)
+    }
+
+    /// Starts from `counts[i − 1] = N_i` in volume `volume`.
+    ///
+    /// Errors: the kernel's rank is not `R` (or `W ≠ 2R`), a factor is negative or not
+    /// finite, the counts are all zero or add up to more than [`MAX_PARTICLES`], the
+    /// volume is not positive.
+    pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
+        if kernel.rank() != R || R == 0 || W != 2 * R {
+            return Err(Error::Unsupported {
+                what: "kernel rank differs from the scheme's R (or the kernel has no low-rank bound)",
+            });
+        }
+        crate::error::positive("volume", volume)?;
+        let n = check_counts(counts)?;
+        if n > MAX_PARTICLES {
+            return Err(Error::OutOfRange {
+                name: "initial particle number",
+                value: n as f64,
+                range: "[1, 2^32 - 1]",
+            });
+        }
+        let m = (counts.len() as u64).next_power_of_two().max(64);
+        let mut s = Bucketed {
+            exact_bound: kernel.low_rank_is_exact(),
+            kernel,
+            raw: Vec::new(),
+            bounds: Vec::new(),
+            scale: [1.0; W],
+            qmax: ((1u64 << 60) / n).min(1 << 53),
+            counts: vec![0; count_len(m)],
+            n_b: Vec::new(),
+            slots: Vec::new(),
+            cap: Vec::new(),
+            lists: Vec::new(),
+            live: [0; W],
+            base_slack: [0; W],
+            tree: IntTree::new(1),
+            rates_stale: true,
+            m,
+            size_limit: super::DEFAULT_SIZE_LIMIT,
+            n,
+            n0: n,
+            volume,
+            time: 0.0,
+            totals: StepReport::default(),
+            zig: Ziggurat::new(),
+        };
+        s.extend_buckets(m)?;
+        for (i, &c) in counts.iter().enumerate() {
+            s.counts[i + 1] = c as u32;
+            s.n_b[bucket_of(i as u64 + 1)] += c;
+        }
+        s.requantise();
+        Ok(s)
+    }
+
+    /// Sets the largest particle size allowed (default
+    /// [`DEFAULT_SIZE_LIMIT`](super::DEFAULT_SIZE_LIMIT)); a collision that would pass it
+    /// makes `advance_to` fail with [`Error::Capacity`].
+    pub fn with_size_limit(mut self, limit: u64) -> Self {
+        self.size_limit = limit;
+        self
+    }
+
+    /// Computes the exact factor extremes of the buckets needed for sizes up to `m`
+    /// (all sizes of a bucket are evaluated: no monotonicity is assumed).
+    fn extend_buckets(&mut self, m: u64) -> Result<()> {
+        let nb = bucket_of(m) + 1;
+        let mut raw = Vec::with_capacity(nb.saturating_sub(self.raw.len()));
+        for b in self.raw.len()..nb {
+            let mut ext = [[0.0; W], [f64::INFINITY; W]];
+            if b == 0 {
+                ext[1] = [0.0; W];
+            } else {
+                let (lo, hi) = bucket_range(b);
+                let (mut a, mut bb) = ([0.0; R], [0.0; R]);
+                for x in lo..=hi {
+                    self.kernel.factors(x as f64, &mut a, &mut bb);
+                    for (r, &v) in a.iter().chain(&bb).enumerate() {
+                        if !(v >= 0.0 && v.is_finite()) {
+                            return Err(Error::InvalidRate {
+                                name: "low-rank factor",
+                                value: v,
+                            });
+                        }
+                        ext[0][r] = ext[0][r].max(v);
+                        ext[1][r] = ext[1][r].min(v);
+                    }
+                }
+            }
+            raw.push(ext);
+        }
+        self.raw.extend(raw);
+        self.n_b.resize(nb, 0);
+        self.slots.resize(nb, 0);
+        self.cap.resize(nb, 0);
+        self.lists
+            .resize_with(nb.saturating_sub(SINGLE as usize), Vec::new);
+        Ok(())
+    }
+
+    /// Re-derives the quantised bounds from `raw` and rebuilds the tree.
+    fn requantise(&mut self) {
+        let mut fmax = [0.0f64; W];
+        for ext in &self.raw {
+            for r in 0..W {
+                fmax[r] = fmax[r].max(ext[0][r]);
+            }
+        }
+        for r in 0..W {
+            self.scale[r] = if fmax[r] > 0.0 {
+                fmax[r] / self.qmax as f64
+            } else {
+                1.0
+            };
+        }
+        self.bounds = self
+            .raw
+            .iter()
+            .map(|ext| {
+                let mut bb = BucketBound {
+                    q: [0; W],
+                    hi: [0.0; W],
+                    lo: ext[1],
+                };
+                for r in 0..W {
+                    let mut q = libm::ceil(ext[0][r] / self.scale[r]) as u64;
+                    while (q as f64) * self.scale[r] < ext[0][r] {
+                        q += 1;
+                    }
+                    bb.q[r] = q;
+                    bb.hi[r] = q as f64 * self.scale[r];
+                }
+                bb
+            })
+            .collect();
+        self.tree = IntTree::new(self.n_b.len());
+        self.resync();
+    }
+
+    /// Rebuilds the buckets from the counts: each bucket takes grid mode when at least
+    /// half of its `width × max N_x` slots are full, list mode otherwise; the empty slots
+    /// of lazy removals are dropped. O(M + particles in lists).
+    fn resync(&mut self) {
+        for b in 1..self.n_b.len() {
+            let (lo, hi) = bucket_range(b);
+            let cs = &self.counts[lo as usize..=hi as usize];
+            let n: u64 = cs.iter().map(|&c| u64::from(c)).sum();
+            let mx = u64::from(cs.iter().copied().max().unwrap_or(0));
+            let width = 1u64 << width_bits(b);
+            debug_assert_eq!(n, self.n_b[b]);
+            if b < SINGLE as usize || (n > 0 && 2 * n >= width * mx) {
+                self.cap[b] = mx.max(1);
+                self.slots[b] = width * self.cap[b];
+            } else {
+                self.cap[b] = 0;
+                let list = &mut self.lists[b - SINGLE as usize];
+                list.clear();
+                for (off, &c) in cs.iter().enumerate() {
+                    list.extend(core::iter::repeat_n(off as u32, c as usize));
+                }
+                self.slots[b] = n;
+            }
+        }
+        let (bounds, slots, n_b) = (&self.bounds, &self.slots, &self.n_b);
+        self.tree.refill(|b, r| bounds[b].q[r] * slots[b]);
+        for r in 0..W {
+            self.live[r] = n_b.iter().zip(bounds).map(|(&n, bb)| n * bb.q[r]).sum();
+            self.base_slack[r] = self.tree.total(r) - self.live[r];
+        }
+        self.rates_stale = true;
+    }
+
+    fn double_particles(&mut self) {
+        for c in &mut self.counts {
+            *c *= 2;
+        }
+        for c in self
+            .n_b
+            .iter_mut()
+            .chain(self.slots.iter_mut())
+            .chain(self.cap.iter_mut())
+        {
+            *c *= 2;
+        }
+        for l in &mut self.lists {
+            l.extend_from_within(..);
+        }
+        for v in self.live.iter_mut().chain(self.base_slack.iter_mut()) {
+            *v *= 2;
+        }
+        self.tree.double();
+        self.rates_stale = true;
+        self.n *= 2;
+        self.volume *= 2.0;
+    }
+
+    /// `S_A` and the per-component weights.
+    #[inline]
+    fn rate_weights(&self) -> ([f64; R], f64) {
+        let mut w = [0.0; R];
+        let mut sa = 0.0;
+        for k in 0..R {
+            let (tu, tv) = (self.tree.total(k), self.tree.total(R + k));
+            w[k] = (tu as f64 * self.scale[k]) * (tv as f64 * self.scale[R + k]);
+            sa += w[k];
+        }
+        (w, sa)
+    }
+
+    /// The size held by slot `s` of bucket `b`, if the slot is full.
+    #[inline]
+    fn occupant(&self, b: usize, s: u64) -> Option<u64> {
+        let lo = bucket_range(b).0;
+        if self.cap[b] > 0 {
+            let sh = width_bits(b);
+            let x = lo + (s & ((1 << sh) - 1));
+            let level = s >> sh;
+            (level < u64::from(self.counts[x as usize])).then_some(x)
+        } else {
+            let list = &self.lists[b - SINGLE as usize];
+            list.get(s as usize).map(|&off| lo + u64::from(off))
+        }
+    }
+
+    /// One proposal; returns whether it was accepted.
+    #[inline]
+    fn propose<Rn: Rng + ?Sized>(
+        &mut self,
+        weights: &[f64; R],
+        sa: f64,
+        rng: &mut Rn,
+        rep: &mut StepReport,
+    ) -> Result<bool> {
+        let mut k = R - 1;
+        if R > 1 {
+            let mut r = sa * open_unit(rng);
+            for (kk, &w) in weights.iter().enumerate() {
+                r -= w;
+                if r <= 0.0 && w > 0.0 {
+                    k = kk;
+                    break;
+                }
+            }
+        }
+        let bu = self.tree.descend(k, below(rng, self.tree.total(k)));
+        let bv = self.tree.descend(R + k, below(rng, self.tree.total(R + k)));
+        // a singleton bucket without free slots needs no slot unless both sides share it
+        let su = if bu < SINGLE as usize && bu != bv && self.slots[bu] == self.n_b[bu] {
+            0
+        } else {
+            below(rng, self.slots[bu])
+        };
+        let sv = if bv < SINGLE as usize && bu != bv && self.slots[bv] == self.n_b[bv] {
+            0
+        } else {
+            below(rng, self.slots[bv])
+        };
+        let (Some(xu), Some(xv)) = (self.occupant(bu, su), self.occupant(bv, sv)) else {
+            rep.rejections += 1;
+            return Ok(false);
+        };
+        if bu == bv && su == sv {
+            // the particle with itself
+            rep.rejections += 1;
+            return Ok(false);
+        }
+        let (gu, gv) = (&self.bounds[bu], &self.bounds[bv]);
+        let mut bound = 0.0;
+        let mut low = 0.0;
+        for kk in 0..R {
+            bound += gu.hi[kk] * gv.hi[R + kk] + gv.hi[kk] * gu.hi[R + kk];
+            low += gu.lo[kk] * gv.lo[R + kk] + gv.lo[kk] * gu.lo[R + kk];
+        }
+        let u = bound * open_unit(rng);
+        if !(self.exact_bound && u <= low) {
+            let c = self.kernel.rate(xu as f64, xv as f64);
+            if !(c >= 0.0 && c.is_finite()) {
+                return Err(Error::InvalidRate {
+                    name: "coagulation kernel",
+                    value: c,
+                });
+            }
+            if c > bound * (1.0 + 1e-12) {
+                rep.bound_violations += 1;
+            } else if u > c {
+                rep.rejections += 1;
+                return Ok(false);
+            }
+        }
+        let x = xu + xv;
+        if x > self.size_limit {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: self.size_limit as usize,
+            });
+        }
+        let grows = x > self.m;
+        if grows {
+            // the fallible part first (new buckets' factors), so an error changes nothing
+            self.extend_buckets(2 * self.m)?;
+        }
+        // list removals: the higher position first, so a swap-remove cannot move the other
+        let ((b1, s1, x1), (b2, s2, x2)) = if bu == bv && su < sv {
+            ((bv, sv, xv), (bu, su, xu))
+        } else {
+            ((bu, su, xu), (bv, sv, xv))
+        };
+        self.remove(b1, s1, x1);
+        self.remove(b2, s2, x2);
+        if grows {
+            self.m *= 2;
+            self.counts.resize(count_len(self.m), 0);
+            self.requantise();
+        }
+        self.insert(x);
+        self.n -= 1;
+        if self.n < self.n0 / 2 {
+            self.double_particles();
+            rep.doublings += 1;
+        }
+        if self.n & 63 == 0 {
+            for r in 0..W {
+                let total = self.tree.total(r);
+                if total.saturating_sub(self.live[r] + self.base_slack[r]) > total >> 4 {
+                    self.resync();
+                    break;
+                }
+            }
+        }
+        Ok(true)
+    }
+
+    /// Removes the particle of size x in slot s of bucket b (its slot stays, empty).
+    #[inline]
+    fn remove(&mut self, b: usize, s: u64, x: u64) {
+        self.counts[x as usize] -= 1;
+        self.n_b[b] -= 1;
+        if self.cap[b] == 0 {
+            self.lists[b - SINGLE as usize].swap_remove(s as usize);
+        }
+        let q = &self.bounds[b].q;
+        for r in 0..W {
+            self.live[r] -= q[r];
+        }
+    }
+
+    /// Adds a particle of size x, growing its bucket's slots when none is free.
+    #[inline]
+    fn insert(&mut self, x: u64) {
+        let b = bucket_of(x);
+        let c = self.counts[x as usize] + 1;
+        self.counts[x as usize] = c;
+        self.n_b[b] += 1;
+        let q = self.bounds[b].q;
+        for r in 0..W {
+            self.live[r] += q[r];
+        }
+        // a full bucket grows by about 1/32, so growing buckets rarely touch the tree
+        let extra = if self.cap[b] > 0 {
+            if u64::from(c) <= self.cap[b] {
+                return;
+            }
+            let more = 1 + (self.cap[b] >> 5);
+            self.cap[b] += more;
+            more << width_bits(b)
+        } else {
+            let list = &mut self.lists[b - SINGLE as usize];
+            list.push((x - bucket_range(b).0) as u32);
+            if list.len() as u64 <= self.slots[b] {
+                return;
+            }
+            1 + (self.slots[b] >> 5)
+        };
+        self.slots[b] += extra;
+        self.tree.add(b, extra, &q);
+        self.rates_stale = true;
+    }
+
+    /// The counts: `counts()[i − 1] = N_i`, for `i = 1..=M`.
+    pub fn counts(&self) -> Vec<u64> {
+        self.counts[1..=self.m as usize]
+            .iter()
+            .map(|&c| u64::from(c))
+            .collect()
+    }
+
+    /// The simulation volume V.
+    pub fn volume(&self) -> f64 {
+        self.volume
+    }
+
+    /// Current number of simulation particles N.
+    pub fn particles(&self) -> u64 {
+        self.n
+    }
+
+    /// Current maximum size M.
+    pub fn max_size(&self) -> usize {
+        self.m as usize
+    }
+
+    /// The moment `Σ_i i^m N_i / V`.
+    pub fn moment(&self, m: f64) -> f64 {
+        crate::observe::moment_of_counts(&self.counts(), self.volume, m)
+    }
+
+    /// Totals over the whole run.
+    pub fn totals(&self) -> StepReport {
+        self.totals
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K, R, W> {
+    fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn advance_to<Rn: Rng + ?Sized>(&mut self, t: f64, rng: &mut Rn) -> Result<StepReport> {
+        check_target(self.time, t)?;
+        let mut rep = StepReport::default();
+        let (mut weights, mut sa) = self.rate_weights();
+        self.rates_stale = false;
+        loop {
+            if sa.is_nan() || sa <= 0.0 || self.n < 2 {
+                self.time = t;
+                break;
+            }
+            let dt = self.zig.sample(rng) * self.volume / sa;
+            if self.time + dt > t {
+                self.time = t;
+                break;
+            }
+            let before = self.time;
+            self.time += dt;
+            rep.proposals += 1;
+            match self.propose(&weights, sa, rng, &mut rep) {
+                Ok(true) => {
+                    rep.events += 1;
+                    if self.rates_stale {
+                        (weights, sa) = self.rate_weights();
+                        self.rates_stale = false;
+                    }
+                }
+                Ok(false) => {}
+                Err(e) => {
+                    self.time = before;
+                    rep.time = self.time;
+                    self.totals.accumulate(&rep);
+                    return Err(e);
+                }
+            }
+        }
+        rep.time = self.time;
+        self.totals.accumulate(&rep);
+        Ok(rep)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
+        /// Every redundant piece of state agrees with the counts.
+        pub(crate) fn check_invariants(&self) {
+            let n: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
+            assert_eq!(n, self.n, "particle number");
+            assert!(self.counts[self.m as usize + 1..].iter().all(|&c| c == 0));
+            for b in 1..self.n_b.len() {
+                let (lo, hi) = bucket_range(b);
+                let cs = &self.counts[lo as usize..=hi as usize];
+                let nb: u64 = cs.iter().map(|&c| u64::from(c)).sum();
+                assert_eq!(nb, self.n_b[b], "bucket {b} count");
+                assert!(self.slots[b] >= nb, "bucket {b} slots");
+                if self.cap[b] > 0 {
+                    assert!(
+                        cs.iter().all(|&c| u64::from(c) <= self.cap[b]),
+                        "bucket {b} cap"
+                    );
+                    assert_eq!(
+                        self.slots[b],
+                        self.cap[b] << width_bits(b),
+                        "bucket {b} grid"
+                    );
+                } else {
+                    let mut c2 = vec![0u64; cs.len()];
+                    for &off in &self.lists[b - SINGLE as usize] {
+                        c2[off as usize] += 1;
+                    }
+                    let c1: Vec<u64> = cs.iter().map(|&c| u64::from(c)).collect();
+                    assert_eq!(c1, c2, "bucket {b} list");
+                }
+            }
+            for r in 0..W {
+                let t: u64 = (0..self.n_b.len())
+                    .map(|b| self.bounds[b].q[r] * self.slots[b])
+                    .sum();
+                assert_eq!(t, self.tree.total(r), "tree row {r}");
+                let l: u64 = (0..self.n_b.len())
+                    .map(|b| self.bounds[b].q[r] * self.n_b[b])
+                    .sum();
+                assert_eq!(l, self.live[r], "live row {r}");
+            }
+        }
+    }
+
+    #[test]
+    fn invariants_hold_through_growth_doubling_and_resyncs() {
+        use crate::kernel::Coagulation;
+        let mut init = vec![4u64; 3000];
+        for c in &mut init[699..720] {
+            *c = 200;
+        }
+        let v = init.iter().sum::<u64>() as f64;
+        let mut s = Bucketed::<_, 1, 2>::new(Coagulation::additive(), &init, v).unwrap();
+        let mut rng = rand_pcg::Pcg64Mcg::new(3);
+        for i in 1..=300 {
+            s.advance_to(f64::from(i) * 5e-6, &mut rng).unwrap();
+            s.check_invariants();
+        }
+        assert!(s.totals().doublings > 0);
+    }
+
+    #[test]
+    fn buckets_tile_the_sizes() {
+        let mut next = 1u64;
+        for b in 1..bucket_of(1 << 32) + 1 {
+            let (lo, hi) = bucket_range(b);
+            assert_eq!(lo, next, "bucket {b}");
+            assert!(hi >= lo);
+            assert_eq!(bucket_of(lo), b);
+            assert_eq!(bucket_of(hi), b);
+            // width at most 1/32 of the lower end beyond the singletons
+            assert!(lo < SINGLE || (hi - lo + 1) * SUB <= lo);
+            next = hi + 1;
+        }
+        assert_eq!(bucket_range(bucket_of(1 << 32)).0, 1 << 32);
+    }
+}
