@@ -130,13 +130,16 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
         "Osinsky (2023) tables 1-3 from {n0:.0e} monomers; baselines stopped after {budget_s} s (\"-\")."
     );
     println!("coll/s and ratios are ours; \"paper\" columns are the paper's low-rank figures.");
+    println!(
+        "LR = bucketed low-rank (the default layout); tree = low-rank with per-size 8-ary trees."
+    );
     for (name, rows) in tables {
         if only.as_deref().is_some_and(|o| o != name) {
             continue;
         }
         let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
-        let (lr, ar, inv) = match name {
-            "brownian" => bench_kernel::<_, 2>(
+        let (lr, tree, ar, inv) = match name {
+            "brownian" => bench_kernel::<_, 2, 4>(
                 Coagulation::brownian(),
                 n0,
                 &times,
@@ -144,7 +147,7 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
                 skip_baselines,
                 seed,
             ),
-            "ballistic" => bench_kernel::<_, 3>(
+            "ballistic" => bench_kernel::<_, 3, 6>(
                 Coagulation::free_molecular()
                     .with_min_size(1.0)
                     .expect("valid"),
@@ -154,7 +157,7 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
                 skip_baselines,
                 seed,
             ),
-            _ => bench_kernel::<_, 1>(
+            _ => bench_kernel::<_, 1, 2>(
                 Coagulation::additive(),
                 n0,
                 &times,
@@ -166,12 +169,13 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
         println!();
         println!("{name}");
         println!(
-            "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>10} {:>10} {:>7} | {:>7} {:>7} | {:>9} {:>9}",
+            "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>10} {:>10} {:>7} | {:>7} {:>7} | {:>9} {:>9}",
             "t",
             "M",
             "coll",
             "inv s",
             "AR s",
+            "tree s",
             "LR s",
             "LR coll/s",
             "paper c/s",
@@ -203,12 +207,13 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
                 .map_or("-".into(), |a| format!("{:.1}", a / r.lowrank));
             let _ = r.inverse;
             println!(
-                "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>10.3e} {:>10.3e} {:>7.2} | {:>7} {:>7} | {:>9} {:>9}",
+                "{:>8} {:>9} {:>9} | {:>8} {:>8} {:>8} {:>8} | {:>10.3e} {:>10.3e} {:>7.2} | {:>7} {:>7} | {:>9} {:>9}",
                 r.t,
                 m,
                 lrc,
                 fmt(inv[i]),
                 fmt(ar[i]),
+                fmt(tree[i]),
                 lrs,
                 cps,
                 paper_cps,
@@ -225,28 +230,31 @@ pub fn lowrank(n0: u64, budget_s: f64, only: Option<String>, skip_baselines: boo
 
 type Cells = Vec<Option<Cell>>;
 
-fn bench_kernel<K: CoagulationKernel + Copy, const R: usize>(
+fn bench_kernel<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
     kernel: K,
     n0: u64,
     times: &[f64],
     budget: Duration,
     skip_baselines: bool,
     seed: u64,
-) -> (Cells, Cells, Cells) {
-    let mut lr = LowRank::<K, R>::monodisperse(kernel, n0).expect("valid low-rank set-up");
-    let lr_cells = run_checkpoints(&mut lr, times, Duration::from_secs(24 * 3600), seed, |s| {
-        s.max_size() as u64
-    });
+) -> (Cells, Cells, Cells, Cells) {
+    let day = Duration::from_secs(24 * 3600);
+    let mut lr = Bucketed::<K, R, W>::monodisperse(kernel, n0).expect("valid low-rank set-up");
+    let lr_cells = run_checkpoints(&mut lr, times, day, seed, |s| s.max_size() as u64);
+    drop(lr);
+    let mut tree = LowRank::<K, R>::monodisperse(kernel, n0).expect("valid low-rank set-up");
+    let tree_cells = run_checkpoints(&mut tree, times, day, seed + 3, |s| s.max_size() as u64);
+    drop(tree);
     let none = vec![None; times.len()];
     if skip_baselines {
-        return (lr_cells, none.clone(), none);
+        return (lr_cells, tree_cells, none.clone(), none);
     }
     let mut ar = AcceptanceRejection::monodisperse(kernel, n0).expect("valid AR set-up");
     let ar_cells = run_checkpoints(&mut ar, times, budget, seed + 1, |s| s.max_size());
     drop(ar);
     let mut inv = Inverse::monodisperse(kernel, n0).expect("valid inverse set-up");
     let inv_cells = run_checkpoints(&mut inv, times, budget, seed + 2, |s| s.max_size());
-    (lr_cells, ar_cells, inv_cells)
+    (lr_cells, tree_cells, ar_cells, inv_cells)
 }
 
 /// Low-rank only, one kernel, to one time: for profiling.

@@ -4,7 +4,7 @@ use coagula_core::exact::Exact;
 use coagula_core::kernel::{Coagulation, CoagulationKernel};
 use coagula_core::observe::{Replicas, moment_of_counts};
 use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Inverse, LowRank};
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
 use rand_pcg::Pcg64Mcg;
 use rayon::prelude::*;
 use serde::Serialize;
@@ -64,6 +64,7 @@ pub fn run(quick: bool, json: bool) -> bool {
 #[derive(Clone, Copy)]
 enum Method {
     LowRank,
+    Bucketed,
     Rejection,
     Inverse,
 }
@@ -72,6 +73,7 @@ impl Method {
     fn name(self) -> &'static str {
         match self {
             Method::LowRank => "lowrank",
+            Method::Bucketed => "lowrank-bucketed",
             Method::Rejection => "rejection",
             Method::Inverse => "inverse",
         }
@@ -79,7 +81,7 @@ impl Method {
 }
 
 /// `(n_1, M0)` at time t from `n0` monomers, one replica.
-fn one<K: CoagulationKernel + Copy, const R: usize>(
+fn one<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
     method: Method,
     k: K,
     n0: u64,
@@ -92,6 +94,11 @@ fn one<K: CoagulationKernel + Copy, const R: usize>(
             let mut s = LowRank::<K, R>::monodisperse(k, n0).expect("valid");
             s.advance_to(t, &mut rng).expect("runs");
             (s.counts().to_vec(), s.volume())
+        }
+        Method::Bucketed => {
+            let mut s = Bucketed::<K, R, W>::monodisperse(k, n0).expect("valid");
+            s.advance_to(t, &mut rng).expect("runs");
+            (s.counts(), s.volume())
         }
         Method::Rejection => {
             let mut s = AcceptanceRejection::monodisperse(k, n0).expect("valid");
@@ -129,10 +136,15 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
         ),
     ];
     for (name, k, e, t) in setups {
-        for method in [Method::LowRank, Method::Rejection, Method::Inverse] {
+        for method in [
+            Method::LowRank,
+            Method::Bucketed,
+            Method::Rejection,
+            Method::Inverse,
+        ] {
             let vals: Vec<(f64, f64)> = (0..reps)
                 .into_par_iter()
-                .map(|s| one::<_, 1>(method, k, n0, t, s * 7919 + 1))
+                .map(|s| one::<_, 1, 2>(method, k, n0, t, s * 7919 + 1))
                 .collect();
             for (q, idx, exact) in [
                 ("n_1", 0, e.number_density(1, t).expect("valid")),
@@ -170,35 +182,56 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
         for (name, t, paper) in rows {
             let mut rng = Pcg64Mcg::new(99);
             let n0 = 10_000_000;
-            let events = match name {
-                "brownian" => {
-                    let mut s =
-                        LowRank::<_, 2>::monodisperse(Coagulation::brownian(), n0).expect("valid");
-                    s.advance_to(t, &mut rng).expect("runs").events
-                }
-                "ballistic" => {
-                    let k = Coagulation::free_molecular()
-                        .with_min_size(1.0)
-                        .expect("valid");
-                    let mut s = LowRank::<_, 3>::monodisperse(k, n0).expect("valid");
-                    s.advance_to(t, &mut rng).expect("runs").events
-                }
-                _ => {
-                    let mut s =
-                        LowRank::<_, 1>::monodisperse(Coagulation::additive(), n0).expect("valid");
-                    s.advance_to(t, &mut rng).expect("runs").events
-                }
-            } as f64;
-            let tol = 0.05 * 10f64.powf(paper.log10().floor());
-            out.push(Case {
-                case: format!("osinsky2023/lowrank-{name}-table-t={t}"),
-                quantity: "collisions from 1e7 monomers (reference: paper, 2 digits)".into(),
-                reference: paper,
-                value: events,
-                error: (events - paper).abs(),
-                tolerance: tol,
-                pass: (events - paper).abs() <= tol,
-            });
+            let fm = Coagulation::free_molecular()
+                .with_min_size(1.0)
+                .expect("valid");
+            for bucketed in [false, true] {
+                let events = match (name, bucketed) {
+                    ("brownian", false) => {
+                        let mut s = LowRank::<_, 2>::monodisperse(Coagulation::brownian(), n0)
+                            .expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                    ("brownian", true) => {
+                        let mut s = Bucketed::<_, 2, 4>::monodisperse(Coagulation::brownian(), n0)
+                            .expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                    ("ballistic", false) => {
+                        let mut s = LowRank::<_, 3>::monodisperse(fm, n0).expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                    ("ballistic", true) => {
+                        let mut s = Bucketed::<_, 3, 6>::monodisperse(fm, n0).expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                    (_, false) => {
+                        let mut s = LowRank::<_, 1>::monodisperse(Coagulation::additive(), n0)
+                            .expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                    (_, true) => {
+                        let mut s = Bucketed::<_, 1, 2>::monodisperse(Coagulation::additive(), n0)
+                            .expect("valid");
+                        s.advance_to(t, &mut rng).expect("runs").events
+                    }
+                } as f64;
+                let tol = 0.05 * 10f64.powf(paper.log10().floor());
+                let method = if bucketed {
+                    "lowrank-bucketed"
+                } else {
+                    "lowrank"
+                };
+                out.push(Case {
+                    case: format!("osinsky2023/{method}-{name}-table-t={t}"),
+                    quantity: "collisions from 1e7 monomers (reference: paper, 2 digits)".into(),
+                    reference: paper,
+                    value: events,
+                    error: (events - paper).abs(),
+                    tolerance: tol,
+                    pass: (events - paper).abs() <= tol,
+                });
+            }
         }
     }
 }

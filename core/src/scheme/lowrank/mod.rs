@@ -19,10 +19,16 @@
 //! module's tests decides for `V / S_A`.)
 //!
 //! **Trees.** All 2R vectors live in *one* tree, so a count change walks a single path
-//! and updates every component at once. The default layout is 8-ary with cumulative
-//! child sums in one cache line per node and component ([`WideTree`]); the paper's
-//! binary layout is kept as [`BinaryTree`] for comparison (see [`trees`] for the
+//! and updates every component at once. [`LowRank`] keeps the paper's per-size weights,
+//! 8-ary with child sums in one cache line per node and component ([`WideTree`]), or the
+//! paper's binary layout ([`BinaryTree`]) for comparison (see [`trees`] for the
 //! measurements and the drift control).
+//!
+//! **Buckets (fastest).** [`Bucketed`] runs the same proposal scheme against a bound
+//! coarsened to log-linear size buckets (≤ 1/32 wide): its tree is an exact integer tree
+//! over ≤ ~1000 buckets that stays in cache whatever M is, removals are lazy (an empty
+//! slot is rejected — exact thinning), and a bucket picks its particle from a count grid
+//! or a list in O(1). `coagula bench lowrank` times both against the paper.
 //!
 //! **Growth.** When `i + j > M`, M doubles (arrays and tree grow; the only allocation,
 //! bounded by a caller-set size limit). When fewer than `N0/2` particles remain, every
