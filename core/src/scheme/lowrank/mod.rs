@@ -47,7 +47,7 @@
 //! assert!((m0 - 1.0 / 1.5).abs() < 0.02);
 //! ```
 
-mod bucketed;
+pub mod bucketed;
 mod inverse;
 mod rejection;
 pub mod trees;
