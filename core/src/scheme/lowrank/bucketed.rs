@@ -403,16 +403,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 ext[1] = [0.0; W];
             } else {
                 let (lo, hi) = bucket_range(b);
-                let (mut a, mut bb) = ([0.0; R], [0.0; R]);
                 for x in lo..=hi {
-                    self.kernel.factors(x as f64, &mut a, &mut bb);
+                    let (a, bb) = super::factors_at::<K, R>(&self.kernel, x as f64)?;
                     for (r, &v) in a.iter().chain(&bb).enumerate() {
-                        if !(v >= 0.0 && v.is_finite()) {
-                            return Err(Error::InvalidRate {
-                                name: "low-rank factor",
-                                value: v,
-                            });
-                        }
                         ext[0][r] = ext[0][r].max(v);
                         ext[1][r] = ext[1][r].min(v);
                     }

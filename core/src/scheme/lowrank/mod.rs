@@ -105,6 +105,25 @@ impl<K, const R: usize, T> core::fmt::Debug for LowRank<K, R, T> {
     }
 }
 
+/// The low-rank factors `(a(x), b(x))` of size x; a negative or non-finite one is an
+/// error.
+pub(crate) fn factors_at<K: CoagulationKernel, const R: usize>(
+    kernel: &K,
+    x: f64,
+) -> Result<([f64; R], [f64; R])> {
+    let (mut a, mut b) = ([0.0; R], [0.0; R]);
+    kernel.factors(x, &mut a, &mut b);
+    for &v in a.iter().chain(&b) {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(Error::InvalidRate {
+                name: "low-rank factor",
+                value: v,
+            });
+        }
+    }
+    Ok((a, b))
+}
+
 /// Validates an initial count vector and returns its particle number.
 pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
     let mut n: u64 = 0;
@@ -171,16 +190,7 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         let start = self.fab.len();
         let (mut na, mut nb) = (Vec::with_capacity(m - start), Vec::with_capacity(m - start));
         for i in start + 1..=m {
-            let (mut a, mut b) = ([0.0; R], [0.0; R]);
-            self.kernel.factors(i as f64, &mut a, &mut b);
-            for &v in a.iter().chain(&b) {
-                if !(v >= 0.0 && v.is_finite()) {
-                    return Err(Error::InvalidRate {
-                        name: "low-rank factor",
-                        value: v,
-                    });
-                }
-            }
+            let (a, b) = factors_at::<K, R>(&self.kernel, i as f64)?;
             na.push(a);
             nb.push(b);
         }
