@@ -124,6 +124,12 @@ impl CoagulationKernel for Kernel {
             Kernel::User(u) => u.low_rank_exact != 0,
         }
     }
+    fn low_rank_floor(&self) -> f64 {
+        match self {
+            Kernel::Builtin(k) => k.low_rank_floor(),
+            Kernel::User(u) => f64::from(u8::from(u.low_rank_exact != 0)),
+        }
+    }
     fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
         match self {
             Kernel::Builtin(k) => k.sup_rate(lo, hi),

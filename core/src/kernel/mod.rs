@@ -78,6 +78,15 @@ pub trait CoagulationKernel {
         false
     }
 
+    /// A floor `ρ ∈ [0, 1]` of the acceptance: `K(x, y) ≥ ρ (A(x, y) + A(y, x))` for all
+    /// sizes (≥ [`min_size`](Self::min_size)). Low-rank schemes accept a proposal whose
+    /// uniform falls below `ρ` times a cheap lower bound of `A + Aᵀ` without evaluating
+    /// K. The default is 1 when the bound is exact and 0 (no floor) otherwise; a floor
+    /// that is too high biases the results.
+    fn low_rank_floor(&self) -> f64 {
+        if self.low_rank_is_exact() { 1.0 } else { 0.0 }
+    }
+
     /// `sup K(x, y)` over `lo ≤ x, y ≤ hi`, if known (acceptance–rejection needs it).
     fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
         None
