@@ -121,7 +121,7 @@ impl Ziggurat {
     }
 
     /// An exponential variate with mean 1.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         loop {
             let bits = rng.next_u64();

@@ -66,10 +66,10 @@ use rand_core::Rng;
 /// log2 of the buckets per octave.
 const SUB_BITS: u32 = 5;
 const SUB: u64 = 1 << SUB_BITS;
+/// A full bucket grows by 1/2^GROW of its slots.
+const GROW: u32 = 3;
 /// Sizes below this are their own bucket.
 const SINGLE: u64 = 2 * SUB;
-/// Branching factor of the proposal tree.
-const B: usize = 8;
 
 /// The bucket of size `x ≥ 1`.
 #[inline]
@@ -109,128 +109,111 @@ fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
     (m >> 64) as u64
 }
 
-/// The child of a node row (inclusive running sums) holding `target`, which must be
-/// below the row's last entry, and the target within it: independent comparisons, no
-/// data-dependent branch; a child of zero weight is never chosen.
-#[inline(always)]
-fn pick(row: &[u64; B], target: &mut u64) -> usize {
-    let mut c = 0;
-    for &p in &row[..B - 1] {
-        c += usize::from(p <= *target);
-    }
-    if c > 0 {
-        *target -= row[c - 1];
-    }
-    c
-}
-
-/// B-ary tree over the buckets, `W` rows per node; each row holds the inclusive running
-/// sums of its children's totals (exact `u64`).
+/// Walker alias tables over the buckets, one per factor row: O(1) sampling with one
+/// random word, rebuilt (O(buckets) per row) whenever a weight changes — which happens
+/// only when a bucket's slots grow, about once per thousand collisions.
+///
+/// The table is built exactly in integers (Vose's method on `w_i · n` against the
+/// column capacity `T = Σ w`); only the keep-thresholds are rounded, to 63-bit
+/// fractions, so each bucket's probability is within `2^-52` (relative) of `w_i / T`.
 #[derive(Clone, Debug)]
-struct IntTree<const W: usize> {
-    /// Level by level, bottom first; node q of level l is `nodes[start[l] + q]`.
-    nodes: Vec<[[u64; B]; W]>,
-    start: Vec<usize>,
-    leaves: usize,
+struct AliasRows<const W: usize> {
+    /// Columns per row (buckets, including the unused bucket 0).
+    n: usize,
+    /// Row r, column c at `entries[r * n + c]`: `(keep threshold as a 63-bit fraction,
+    /// alias)`; a column whose own weight fills it has threshold `2^63` and itself as
+    /// alias, a zero-weight column threshold 0.
+    entries: Vec<(u64, u64)>,
+    totals: [u64; W],
+    /// Build scratch (kept to avoid allocating per rebuild): scaled weights, and the
+    /// small (from the front) and large (from the back) work stacks.
+    scaled: Vec<u128>,
+    work: Vec<usize>,
 }
 
-impl<const W: usize> IntTree<W> {
-    fn new(leaves: usize) -> Self {
-        let mut start = Vec::new();
-        let mut count = 0;
-        let mut n = leaves.max(1);
-        loop {
-            let nodes = n.div_ceil(B);
-            start.push(count);
-            count += nodes;
-            if nodes == 1 {
-                break;
-            }
-            n = nodes;
-        }
-        IntTree {
-            nodes: vec![[[0u64; B]; W]; count],
-            start,
-            leaves,
+impl<const W: usize> AliasRows<W> {
+    fn new() -> Self {
+        AliasRows {
+            n: 0,
+            entries: Vec::new(),
+            totals: [0; W],
+            scaled: Vec::new(),
+            work: Vec::new(),
         }
     }
 
-    /// Sets every leaf to `leaf(i, r)` and recomputes the sums (no allocation).
-    fn refill(&mut self, leaf: impl Fn(usize, usize) -> u64) {
-        for n in self.nodes.iter_mut() {
-            *n = [[0; B]; W];
-        }
-        for i in 0..self.leaves {
-            for r in 0..W {
-                self.nodes[i / B][r][i % B] = leaf(i, r);
+    /// Rebuilds every row from the weights `weight(i, r)` of the `n` columns; each
+    /// row's total must be below 2^63.
+    fn rebuild(&mut self, n: usize, weight: impl Fn(usize, usize) -> u64) {
+        self.n = n;
+        self.entries.resize(W * n, (0, 0));
+        self.scaled.resize(n, 0);
+        self.work.resize(n, 0);
+        for r in 0..W {
+            let mut total = 0u64;
+            for (i, s) in self.scaled.iter_mut().enumerate() {
+                let w = weight(i, r);
+                total += w;
+                *s = u128::from(w) * n as u128;
             }
-        }
-        let levels = self.start.len();
-        for l in 0..levels {
-            let end = if l + 1 < levels {
-                self.start[l + 1]
-            } else {
-                self.nodes.len()
-            };
-            for q in self.start[l]..end {
-                for r in 0..W {
-                    let row = &mut self.nodes[q][r];
-                    for c in 1..B {
-                        row[c] += row[c - 1];
-                    }
-                    if l + 1 < levels {
-                        let total = row[B - 1];
-                        let pos = q - self.start[l];
-                        self.nodes[self.start[l + 1] + pos / B][r][pos % B] = total;
-                    }
+            debug_assert!(total < 1 << 63);
+            self.totals[r] = total;
+            let row = &mut self.entries[r * n..(r + 1) * n];
+            if total == 0 {
+                row.fill((0, 0));
+                continue;
+            }
+            let cap = u128::from(total);
+            let to_frac = 9_223_372_036_854_775_808.0 / total as f64;
+            // small columns fill work[..ns], large ones work[nl..]
+            let (mut ns, mut nl) = (0, n);
+            for (i, &s) in self.scaled.iter().enumerate() {
+                if s < cap {
+                    self.work[ns] = i;
+                    ns += 1;
+                } else {
+                    nl -= 1;
+                    self.work[nl] = i;
                 }
+            }
+            while ns > 0 && nl < n {
+                ns -= 1;
+                let l = self.work[ns];
+                let g = self.work[nl];
+                let sl = self.scaled[l];
+                // sl < cap < 2^63: exact as i64, and the fraction stays below 2^63
+                row[l] = ((sl as i64 as f64 * to_frac) as i64 as u64, g as u64);
+                self.scaled[g] -= cap - sl;
+                if self.scaled[g] < cap {
+                    // g turns small: it leaves the large stack for the small one
+                    nl += 1;
+                    self.work[ns] = g;
+                    ns += 1;
+                }
+            }
+            // what is left is full (exactly so in exact arithmetic: the capacities add
+            // up to the weights)
+            for &i in self.work[..ns].iter().chain(&self.work[nl..]) {
+                row[i] = (1 << 63, i as u64);
             }
         }
     }
 
     #[inline]
     fn total(&self, r: usize) -> u64 {
-        self.nodes[self.nodes.len() - 1][r][B - 1]
+        self.totals[r]
     }
 
-    /// The leaf holding `target ∈ [0, total(r))` in row r, and the target within it.
-    #[inline]
-    fn descend(&self, r: usize, mut target: u64) -> usize {
-        let mut q = 0;
-        for l in (0..self.start.len()).rev() {
-            let c = pick(&self.nodes[self.start[l] + q][r], &mut target);
-            q = q * B + c;
-        }
-        q
-    }
-
-    /// Adds `d · w[r]` to every row of leaf `i`.
-    #[inline]
-    fn add(&mut self, i: usize, d: u64, w: &[u64; W]) {
-        let mut delta = [0u64; W];
-        for r in 0..W {
-            delta[r] = w[r] * d;
-        }
-        let mut idx = i;
-        for l in 0..self.start.len() {
-            let node = &mut self.nodes[self.start[l] + idx / B];
-            let c = idx % B;
-            for r in 0..W {
-                for v in &mut node[r][c..] {
-                    *v += delta[r];
-                }
-            }
-            idx /= B;
-        }
-    }
-
-    fn double(&mut self) {
-        for n in &mut self.nodes {
-            for row in n.iter_mut() {
-                for v in row.iter_mut() {
-                    *v *= 2;
-                }
-            }
+    /// A column of row r with probability `weight / total`, from one random word.
+    #[inline(always)]
+    fn sample(&self, r: usize, word: u64) -> usize {
+        let m = u128::from(word) * self.n as u128;
+        let c = (m >> 64) as usize;
+        let (keep, alias) = self.entries[r * self.n + c];
+        if (m as u64 >> 1) < keep {
+            c
+        } else {
+            alias as usize
         }
     }
 }
@@ -249,7 +232,8 @@ struct BucketBound<const W: usize> {
 /// Low-rank Monte Carlo over size buckets (see the module docs). `W` must be `2R`.
 pub struct Bucketed<K, const R: usize, const W: usize> {
     kernel: K,
-    exact_bound: bool,
+    /// Acceptance floor ρ of the kernel (`K ≥ ρ (A + Aᵀ)`), for the squeeze.
+    floor: f64,
     /// Exact factor extremes per bucket, before quantisation: `[max, min]`.
     raw: Vec<[[f64; W]; 2]>,
     bounds: Vec<BucketBound<W>>,
@@ -279,8 +263,9 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     live: [u64; W],
     /// Empty-slot weight per row right after the last resync.
     base_slack: [u64; W],
-    tree: IntTree<W>,
-    /// The tree changed since `S_A` was last computed.
+    /// Proposal tables over the buckets; `alias.totals` is kept current on every change.
+    alias: AliasRows<W>,
+    /// Weights changed since the tables and `S_A` were last built.
     rates_stale: bool,
     /// Current maximum size M (a power of two).
     m: u64,
@@ -351,7 +336,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         let m = (counts.len() as u64).next_power_of_two().max(64);
         let mut s = Bucketed {
-            exact_bound: kernel.low_rank_is_exact(),
+            floor: kernel.low_rank_floor().clamp(0.0, 1.0),
             kernel,
             raw: Vec::new(),
             bounds: Vec::new(),
@@ -364,7 +349,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             lists: Vec::new(),
             live: [0; W],
             base_slack: [0; W],
-            tree: IntTree::new(1),
+            alias: AliasRows::new(),
             rates_stale: true,
             m,
             size_limit: super::DEFAULT_SIZE_LIMIT,
@@ -422,7 +407,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         Ok(())
     }
 
-    /// Re-derives the quantised bounds from `raw` and rebuilds the tree.
+    /// Re-derives the quantised bounds from `raw` and resyncs the buckets.
     fn requantise(&mut self) {
         let mut fmax = [0.0f64; W];
         for ext in &self.raw {
@@ -457,7 +442,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 bb
             })
             .collect();
-        self.tree = IntTree::new(self.n_b.len());
         self.resync();
     }
 
@@ -486,10 +470,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             }
         }
         let (bounds, slots, n_b) = (&self.bounds, &self.slots, &self.n_b);
-        self.tree.refill(|b, r| bounds[b].q[r] * slots[b]);
         for r in 0..W {
+            self.alias.totals[r] = slots.iter().zip(bounds).map(|(&n, bb)| n * bb.q[r]).sum();
             self.live[r] = n_b.iter().zip(bounds).map(|(&n, bb)| n * bb.q[r]).sum();
-            self.base_slack[r] = self.tree.total(r) - self.live[r];
+            self.base_slack[r] = self.alias.totals[r] - self.live[r];
         }
         self.rates_stale = true;
     }
@@ -512,19 +496,29 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         for v in self.live.iter_mut().chain(self.base_slack.iter_mut()) {
             *v *= 2;
         }
-        self.tree.double();
+        for t in &mut self.alias.totals {
+            *t *= 2;
+        }
         self.rates_stale = true;
         self.n *= 2;
         self.volume *= 2.0;
     }
 
-    /// `S_A` and the per-component weights.
-    #[inline]
-    fn rate_weights(&self) -> ([f64; R], f64) {
+    /// Rebuilds the proposal tables if a weight changed; returns `S_A` and the
+    /// per-component weights.
+    fn refresh(&mut self) -> ([f64; R], f64) {
+        if self.rates_stale {
+            let (bounds, slots) = (&self.bounds, &self.slots);
+            let before = self.alias.totals;
+            self.alias
+                .rebuild(slots.len(), |b, r| bounds[b].q[r] * slots[b]);
+            debug_assert_eq!(before, self.alias.totals);
+            self.rates_stale = false;
+        }
         let mut w = [0.0; R];
         let mut sa = 0.0;
         for k in 0..R {
-            let (tu, tv) = (self.tree.total(k), self.tree.total(R + k));
+            let (tu, tv) = (self.alias.total(k), self.alias.total(R + k));
             w[k] = (tu as f64 * self.scale[k]) * (tv as f64 * self.scale[R + k]);
             sa += w[k];
         }
@@ -532,7 +526,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     }
 
     /// The size held by slot `s` of bucket `b`, if the slot is full.
-    #[inline]
+    #[inline(always)]
     fn occupant(&self, b: usize, s: u64) -> Option<u64> {
         let lo = bucket_range(b).0;
         if self.cap[b] > 0 {
@@ -566,23 +560,36 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 }
             }
         }
-        let bu = self.tree.descend(k, below(rng, self.tree.total(k)));
-        let bv = self.tree.descend(R + k, below(rng, self.tree.total(R + k)));
-        // a singleton bucket without free slots needs no slot unless both sides share it
-        let su = if bu < SINGLE as usize && bu != bv && self.slots[bu] == self.n_b[bu] {
-            0
+        // side u first: an empty slot rejects before side v is drawn. A full singleton
+        // bucket holds only its size, so its slot is drawn only if side v lands in the
+        // same bucket (for the same-particle test); deferring that draw keeps the two
+        // slots independent and uniform.
+        let bu = self.alias.sample(k, rng.next_u64());
+        let full_single = |s: &Self, b: usize| b < SINGLE as usize && s.slots[b] == s.n_b[b];
+        let mut su = u64::MAX;
+        let xu = if full_single(self, bu) {
+            bu as u64
         } else {
-            below(rng, self.slots[bu])
+            su = below(rng, self.slots[bu]);
+            let Some(x) = self.occupant(bu, su) else {
+                rep.rejections += 1;
+                return Ok(false);
+            };
+            x
         };
-        let sv = if bv < SINGLE as usize && bu != bv && self.slots[bv] == self.n_b[bv] {
+        let bv = self.alias.sample(R + k, rng.next_u64());
+        let sv = if bu != bv && full_single(self, bv) {
             0
         } else {
             below(rng, self.slots[bv])
         };
-        let (Some(xu), Some(xv)) = (self.occupant(bu, su), self.occupant(bv, sv)) else {
+        let Some(xv) = self.occupant(bv, sv) else {
             rep.rejections += 1;
             return Ok(false);
         };
+        if bu == bv && su == u64::MAX {
+            su = below(rng, self.slots[bu]);
+        }
         if bu == bv && su == sv {
             // the particle with itself
             rep.rejections += 1;
@@ -596,7 +603,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             low += gu.lo[kk] * gv.lo[R + kk] + gv.lo[kk] * gu.lo[R + kk];
         }
         let u = bound * open_unit(rng);
-        if !(self.exact_bound && u <= low) {
+        if u > self.floor * low {
             let c = self.kernel.rate(xu as f64, xv as f64);
             if !(c >= 0.0 && c.is_finite()) {
                 return Err(Error::InvalidRate {
@@ -644,7 +651,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         if self.n & 63 == 0 {
             for r in 0..W {
-                let total = self.tree.total(r);
+                let total = self.alias.total(r);
                 if total.saturating_sub(self.live[r] + self.base_slack[r]) > total >> 4 {
                     self.resync();
                     break;
@@ -655,7 +662,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     }
 
     /// Removes the particle of size x in slot s of bucket b (its slot stays, empty).
-    #[inline]
+    #[inline(always)]
     fn remove(&mut self, b: usize, s: u64, x: u64) {
         self.counts[x as usize] -= 1;
         self.n_b[b] -= 1;
@@ -679,12 +686,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         for r in 0..W {
             self.live[r] += q[r];
         }
-        // a full bucket grows by about 1/32, so growing buckets rarely touch the tree
+        // a full bucket grows by about 1/32, so the tables are rarely rebuilt
         let extra = if self.cap[b] > 0 {
             if u64::from(c) <= self.cap[b] {
                 return;
             }
-            let more = 1 + (self.cap[b] >> 5);
+            let more = 1 + (self.cap[b] >> GROW);
             self.cap[b] += more;
             more << width_bits(b)
         } else {
@@ -693,10 +700,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             if list.len() as u64 <= self.slots[b] {
                 return;
             }
-            1 + (self.slots[b] >> 5)
+            1 + (self.slots[b] >> GROW)
         };
         self.slots[b] += extra;
-        self.tree.add(b, extra, &q);
+        for r in 0..W {
+            self.alias.totals[r] += q[r] * extra;
+        }
         self.rates_stale = true;
     }
 
@@ -742,8 +751,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
     fn advance_to<Rn: Rng + ?Sized>(&mut self, t: f64, rng: &mut Rn) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
-        let (mut weights, mut sa) = self.rate_weights();
-        self.rates_stale = false;
+        let (mut weights, mut sa) = self.refresh();
         loop {
             if sa.is_nan() || sa <= 0.0 || self.n < 2 {
                 self.time = t;
@@ -761,8 +769,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
                 Ok(true) => {
                     rep.events += 1;
                     if self.rates_stale {
-                        (weights, sa) = self.rate_weights();
-                        self.rates_stale = false;
+                        (weights, sa) = self.refresh();
                     }
                 }
                 Ok(false) => {}
@@ -819,7 +826,7 @@ mod tests {
                 let t: u64 = (0..self.n_b.len())
                     .map(|b| self.bounds[b].q[r] * self.slots[b])
                     .sum();
-                assert_eq!(t, self.tree.total(r), "tree row {r}");
+                assert_eq!(t, self.alias.total(r), "table row {r}");
                 let l: u64 = (0..self.n_b.len())
                     .map(|b| self.bounds[b].q[r] * self.n_b[b])
                     .sum();
