@@ -703,8 +703,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             1 + (self.slots[b] >> GROW)
         };
         self.slots[b] += extra;
+        // the new headroom is planned slack: only empties left by removals count
+        // towards a resync
         for r in 0..W {
             self.alias.totals[r] += q[r] * extra;
+            self.base_slack[r] += q[r] * (extra - 1);
         }
         self.rates_stale = true;
     }
