@@ -6,6 +6,7 @@ use coagula_core::scheme::lowrank::{
     AcceptanceRejection, BinaryTree, Bucketed, Inverse, LowRank, ProposalTree, WideTree,
 };
 use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
 use std::time::{Duration, Instant};
 
 /// One row of the paper's tables: time, max size M, seconds (inverse, AR, low-rank;
@@ -79,7 +80,7 @@ where
     S: Scheme,
     F: Fn(&S) -> u64,
 {
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let start = Instant::now();
     let mut collisions = 0u64;
     let mut out = Vec::new();
@@ -304,7 +305,7 @@ fn single<K: CoagulationKernel, const R: usize, T: ProposalTree<R>>(
     seed: u64,
 ) -> (u64, usize) {
     let mut sim = LowRank::<K, R, T>::monodisperse(k, n0).expect("valid");
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let rep = sim.advance_to(t, &mut rng).expect("runs");
     (rep.events, sim.max_size())
 }
@@ -316,7 +317,7 @@ fn single_b<K: CoagulationKernel, const R: usize, const W: usize>(
     seed: u64,
 ) -> (u64, usize) {
     let mut sim = Bucketed::<K, R, W>::monodisperse(k, n0).expect("valid");
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let rep = sim.advance_to(t, &mut rng).expect("runs");
     eprintln!(
         "proposals {} rejections {} violations {}",

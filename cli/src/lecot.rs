@@ -11,6 +11,7 @@ use coagula_core::qmc::Randomization;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
 use rayon::prelude::*;
 
 /// Which points drive the scheme.
@@ -28,7 +29,7 @@ pub enum Points {
 
 impl Points {
     pub fn source(self, seed: u64) -> PointSource {
-        let mut rng = Pcg64Mcg::new(u128::from(seed) ^ 0x5eed_0000_0000_0000_0000_0000_0000_0001);
+        let mut rng = Pcg64Mcg::seed_from_u64(seed ^ 0x5eed_0000_0000_0001);
         match self {
             Points::Qmc => PointSource::niederreiter(),
             Points::Sobol => PointSource::sobol(),
@@ -74,7 +75,7 @@ pub fn trajectory<K: CoagulationKernel, F: FragmentationKernel>(
         t_end / f64::from(steps),
         points.source(seed),
     )?;
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let mut out = Vec::with_capacity(checkpoints as usize);
     for h in 1..=checkpoints {
         let t = t_end * f64::from(h) / f64::from(checkpoints);

@@ -6,6 +6,7 @@ use coagula_core::observe::{Replicas, moment_of_counts};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
 use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -88,7 +89,7 @@ fn one<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
     t: f64,
     seed: u64,
 ) -> (f64, f64) {
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let (counts, v) = match method {
         Method::LowRank => {
             let mut s = LowRank::<K, R>::monodisperse(k, n0).expect("valid");

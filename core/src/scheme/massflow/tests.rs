@@ -7,6 +7,7 @@ use crate::observe::Replicas;
 use alloc::format;
 use alloc::string::String;
 use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
 
 const M: u32 = 12;
 const STEPS: u32 = 100;
@@ -29,7 +30,7 @@ fn coag_frag(points: PointSource, sorting: Sorting) -> MassFlow<Coagulation, Bin
 fn lecot_errors(points: PointSource, seed: u64) -> ([f64; 2], [f64; 2]) {
     let exact = Exact::coagulation_fragmentation();
     let mut sim = coag_frag(points, Sorting::Adaptive);
-    let mut rng = Pcg64Mcg::new(u128::from(seed));
+    let mut rng = Pcg64Mcg::seed_from_u64(seed);
     let mut err = [0.0; 2];
     for h in 1..=100 {
         let t = f64::from(h) / 100.0;
