@@ -218,15 +218,33 @@ impl<const W: usize> AliasRows<W> {
     }
 }
 
-/// Per-bucket bound data for the `2R` factor rows `[a_0 .. a_{R−1}, b_0 .. b_{R−1}]`.
+/// One bucket: its particles, slots and bound data for the `2R` factor rows
+/// `[a_0 .. a_{R−1}, b_0 .. b_{R−1}]`, kept together so a proposal touches one record.
+///
+/// A bucket is either in *grid* mode — its slots are `width × cap` pairs (size x, level
+/// ℓ) and slot (x, ℓ) holds a particle iff `ℓ < N_x` — or in *list* mode, where slot s
+/// holds the particle `lists[..][s]` if `s < len`. Removals never touch the tables (the
+/// slot empties); an addition takes a free slot or grows the bucket.
 #[derive(Clone, Copy, Debug)]
-struct BucketBound<const W: usize> {
-    /// Quantised largest factor (tree weight of one particle).
+struct Bucket<const W: usize> {
+    /// Slots (`≥ n`); the tables' weights are `q · slots`. A proposal picks a uniform
+    /// slot of the chosen bucket and is rejected when the slot is empty — exact
+    /// thinning, since every real pair keeps its proposal rate `Â/V`.
+    slots: u64,
+    /// Particles.
+    n: u64,
+    /// Grid mode: the level count `cap ≥ max N_x`; `0` = list mode.
+    cap: u64,
+    /// Smallest size of the bucket.
+    lo: u64,
+    /// log2 of the bucket's width.
+    sh: u32,
+    /// Quantised largest factor (table weight of one particle).
     q: [u64; W],
     /// `q · scale`: the bound's factor as a double.
     hi: [f64; W],
     /// Smallest factor over the bucket (for the squeeze).
-    lo: [f64; W],
+    min: [f64; W],
 }
 
 /// Low-rank Monte Carlo over size buckets (see the module docs). `W` must be `2R`.
@@ -236,26 +254,13 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     floor: f64,
     /// Exact factor extremes per bucket, before quantisation: `[max, min]`.
     raw: Vec<[[f64; W]; 2]>,
-    bounds: Vec<BucketBound<W>>,
+    buckets: Vec<Bucket<W>>,
     scale: [f64; W],
     /// Largest quantised factor: `qmax · n0 ≤ 2^60`, so the slots' weight (at most a few
     /// times the particles') cannot overflow.
     qmax: u64,
     /// `counts[x] = N_x` for sizes `x = 1..=M` (`counts[0]` unused).
     counts: Vec<u32>,
-    /// Particles per bucket.
-    n_b: Vec<u64>,
-    /// Slots per bucket (`≥ n_b`); the tree's weights are `q · slots`. A proposal picks a
-    /// uniform slot of the chosen bucket and is rejected when the slot is empty — exact
-    /// thinning, since every real pair keeps its proposal rate `Â/V`.
-    ///
-    /// A bucket is either in *grid* mode — its slots are `width × cap` pairs (size x,
-    /// level ℓ) and slot (x, ℓ) holds a particle iff `ℓ < N_x` — or in *list* mode, where
-    /// slot s holds the particle `lists[..][s]` if `s < len`. Removals never touch the
-    /// tree (the slot empties); an addition takes a free slot or grows the bucket.
-    slots: Vec<u64>,
-    /// Grid mode: the level count `cap ≥ max N_x` of the bucket; `0` = list mode.
-    cap: Vec<u64>,
     /// Offsets `x − lo` of the particles of list-mode buckets `≥ SINGLE` (index
     /// `b − SINGLE`).
     lists: Vec<Vec<u32>>,
@@ -339,13 +344,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             floor: kernel.low_rank_floor().clamp(0.0, 1.0),
             kernel,
             raw: Vec::new(),
-            bounds: Vec::new(),
+            buckets: Vec::new(),
             scale: [1.0; W],
             qmax: ((1u64 << 60) / n).min(1 << 53),
             counts: vec![0; count_len(m)],
-            n_b: Vec::new(),
-            slots: Vec::new(),
-            cap: Vec::new(),
             lists: Vec::new(),
             live: [0; W],
             base_slack: [0; W],
@@ -363,7 +365,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         s.extend_buckets(m)?;
         for (i, &c) in counts.iter().enumerate() {
             s.counts[i + 1] = c as u32;
-            s.n_b[bucket_of(i as u64 + 1)] += c;
+            s.buckets[bucket_of(i as u64 + 1)].n += c;
         }
         s.requantise();
         Ok(s)
@@ -399,9 +401,18 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             raw.push(ext);
         }
         self.raw.extend(raw);
-        self.n_b.resize(nb, 0);
-        self.slots.resize(nb, 0);
-        self.cap.resize(nb, 0);
+        for b in self.buckets.len()..nb {
+            self.buckets.push(Bucket {
+                slots: 0,
+                n: 0,
+                cap: 0,
+                lo: if b == 0 { 0 } else { bucket_range(b).0 },
+                sh: width_bits(b),
+                q: [0; W],
+                hi: [0.0; W],
+                min: [0.0; W],
+            });
+        }
         self.lists
             .resize_with(nb.saturating_sub(SINGLE as usize), Vec::new);
         Ok(())
@@ -422,26 +433,17 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 1.0
             };
         }
-        self.bounds = self
-            .raw
-            .iter()
-            .map(|ext| {
-                let mut bb = BucketBound {
-                    q: [0; W],
-                    hi: [0.0; W],
-                    lo: ext[1],
-                };
-                for r in 0..W {
-                    let mut q = libm::ceil(ext[0][r] / self.scale[r]) as u64;
-                    while (q as f64) * self.scale[r] < ext[0][r] {
-                        q += 1;
-                    }
-                    bb.q[r] = q;
-                    bb.hi[r] = q as f64 * self.scale[r];
+        for (bk, ext) in self.buckets.iter_mut().zip(&self.raw) {
+            bk.min = ext[1];
+            for r in 0..W {
+                let mut q = libm::ceil(ext[0][r] / self.scale[r]) as u64;
+                while (q as f64) * self.scale[r] < ext[0][r] {
+                    q += 1;
                 }
-                bb
-            })
-            .collect();
+                bk.q[r] = q;
+                bk.hi[r] = q as f64 * self.scale[r];
+            }
+        }
         self.resync();
     }
 
@@ -449,30 +451,30 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// half of its `width × max N_x` slots are full, list mode otherwise; the empty slots
     /// of lazy removals are dropped. O(M + particles in lists).
     fn resync(&mut self) {
-        for b in 1..self.n_b.len() {
+        for b in 1..self.buckets.len() {
             let (lo, hi) = bucket_range(b);
             let cs = &self.counts[lo as usize..=hi as usize];
             let n: u64 = cs.iter().map(|&c| u64::from(c)).sum();
             let mx = u64::from(cs.iter().copied().max().unwrap_or(0));
             let width = 1u64 << width_bits(b);
-            debug_assert_eq!(n, self.n_b[b]);
+            let bk = &mut self.buckets[b];
+            debug_assert_eq!(n, bk.n);
             if b < SINGLE as usize || (n > 0 && 2 * n >= width * mx) {
-                self.cap[b] = mx.max(1);
-                self.slots[b] = width * self.cap[b];
+                bk.cap = mx.max(1);
+                bk.slots = width * bk.cap;
             } else {
-                self.cap[b] = 0;
+                bk.cap = 0;
                 let list = &mut self.lists[b - SINGLE as usize];
                 list.clear();
                 for (off, &c) in cs.iter().enumerate() {
                     list.extend(core::iter::repeat_n(off as u32, c as usize));
                 }
-                self.slots[b] = n;
+                bk.slots = n;
             }
         }
-        let (bounds, slots, n_b) = (&self.bounds, &self.slots, &self.n_b);
         for r in 0..W {
-            self.alias.totals[r] = slots.iter().zip(bounds).map(|(&n, bb)| n * bb.q[r]).sum();
-            self.live[r] = n_b.iter().zip(bounds).map(|(&n, bb)| n * bb.q[r]).sum();
+            self.alias.totals[r] = self.buckets.iter().map(|bk| bk.slots * bk.q[r]).sum();
+            self.live[r] = self.buckets.iter().map(|bk| bk.n * bk.q[r]).sum();
             self.base_slack[r] = self.alias.totals[r] - self.live[r];
         }
         self.rates_stale = true;
@@ -482,13 +484,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         for c in &mut self.counts {
             *c *= 2;
         }
-        for c in self
-            .n_b
-            .iter_mut()
-            .chain(self.slots.iter_mut())
-            .chain(self.cap.iter_mut())
-        {
-            *c *= 2;
+        for bk in &mut self.buckets {
+            bk.n *= 2;
+            bk.slots *= 2;
+            bk.cap *= 2;
         }
         for l in &mut self.lists {
             l.extend_from_within(..);
@@ -508,10 +507,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// per-component weights.
     fn refresh(&mut self) -> ([f64; R], f64) {
         if self.rates_stale {
-            let (bounds, slots) = (&self.bounds, &self.slots);
+            let buckets = &self.buckets;
             let before = self.alias.totals;
             self.alias
-                .rebuild(slots.len(), |b, r| bounds[b].q[r] * slots[b]);
+                .rebuild(buckets.len(), |b, r| buckets[b].q[r] * buckets[b].slots);
             debug_assert_eq!(before, self.alias.totals);
             self.rates_stale = false;
         }
@@ -528,15 +527,14 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// The size held by slot `s` of bucket `b`, if the slot is full.
     #[inline(always)]
     fn occupant(&self, b: usize, s: u64) -> Option<u64> {
-        let lo = bucket_range(b).0;
-        if self.cap[b] > 0 {
-            let sh = width_bits(b);
-            let x = lo + (s & ((1 << sh) - 1));
-            let level = s >> sh;
+        let bk = &self.buckets[b];
+        if bk.cap > 0 {
+            let x = bk.lo + (s & ((1 << bk.sh) - 1));
+            let level = s >> bk.sh;
             (level < u64::from(self.counts[x as usize])).then_some(x)
         } else {
             let list = &self.lists[b - SINGLE as usize];
-            list.get(s as usize).map(|&off| lo + u64::from(off))
+            list.get(s as usize).map(|&off| bk.lo + u64::from(off))
         }
     }
 
@@ -565,12 +563,15 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // same bucket (for the same-particle test); deferring that draw keeps the two
         // slots independent and uniform.
         let bu = self.alias.sample(k, rng.next_u64());
-        let full_single = |s: &Self, b: usize| b < SINGLE as usize && s.slots[b] == s.n_b[b];
+        let full_single = |s: &Self, b: usize| {
+            let bk = &s.buckets[b];
+            b < SINGLE as usize && bk.slots == bk.n
+        };
         let mut su = u64::MAX;
         let xu = if full_single(self, bu) {
             bu as u64
         } else {
-            su = below(rng, self.slots[bu]);
+            su = below(rng, self.buckets[bu].slots);
             let Some(x) = self.occupant(bu, su) else {
                 rep.rejections += 1;
                 return Ok(false);
@@ -581,26 +582,26 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         let sv = if bu != bv && full_single(self, bv) {
             0
         } else {
-            below(rng, self.slots[bv])
+            below(rng, self.buckets[bv].slots)
         };
         let Some(xv) = self.occupant(bv, sv) else {
             rep.rejections += 1;
             return Ok(false);
         };
         if bu == bv && su == u64::MAX {
-            su = below(rng, self.slots[bu]);
+            su = below(rng, self.buckets[bu].slots);
         }
         if bu == bv && su == sv {
             // the particle with itself
             rep.rejections += 1;
             return Ok(false);
         }
-        let (gu, gv) = (&self.bounds[bu], &self.bounds[bv]);
+        let (gu, gv) = (&self.buckets[bu], &self.buckets[bv]);
         let mut bound = 0.0;
         let mut low = 0.0;
         for kk in 0..R {
             bound += gu.hi[kk] * gv.hi[R + kk] + gv.hi[kk] * gu.hi[R + kk];
-            low += gu.lo[kk] * gv.lo[R + kk] + gv.lo[kk] * gu.lo[R + kk];
+            low += gu.min[kk] * gv.min[R + kk] + gv.min[kk] * gu.min[R + kk];
         }
         let u = bound * open_unit(rng);
         if u > self.floor * low {
@@ -665,11 +666,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     #[inline(always)]
     fn remove(&mut self, b: usize, s: u64, x: u64) {
         self.counts[x as usize] -= 1;
-        self.n_b[b] -= 1;
-        if self.cap[b] == 0 {
+        let bk = &mut self.buckets[b];
+        bk.n -= 1;
+        if bk.cap == 0 {
             self.lists[b - SINGLE as usize].swap_remove(s as usize);
         }
-        let q = &self.bounds[b].q;
+        let q = &bk.q;
         for r in 0..W {
             self.live[r] -= q[r];
         }
@@ -681,28 +683,29 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         let b = bucket_of(x);
         let c = self.counts[x as usize] + 1;
         self.counts[x as usize] = c;
-        self.n_b[b] += 1;
-        let q = self.bounds[b].q;
+        let bk = &mut self.buckets[b];
+        bk.n += 1;
+        let q = bk.q;
         for r in 0..W {
             self.live[r] += q[r];
         }
         // a full bucket grows by about 1/32, so the tables are rarely rebuilt
-        let extra = if self.cap[b] > 0 {
-            if u64::from(c) <= self.cap[b] {
+        let extra = if bk.cap > 0 {
+            if u64::from(c) <= bk.cap {
                 return;
             }
-            let more = 1 + (self.cap[b] >> GROW);
-            self.cap[b] += more;
-            more << width_bits(b)
+            let more = 1 + (bk.cap >> GROW);
+            bk.cap += more;
+            more << bk.sh
         } else {
             let list = &mut self.lists[b - SINGLE as usize];
-            list.push((x - bucket_range(b).0) as u32);
-            if list.len() as u64 <= self.slots[b] {
+            list.push((x - bk.lo) as u32);
+            if list.len() as u64 <= bk.slots {
                 return;
             }
-            1 + (self.slots[b] >> GROW)
+            1 + (bk.slots >> GROW)
         };
-        self.slots[b] += extra;
+        bk.slots += extra;
         // the new headroom is planned slack: only empties left by removals count
         // towards a resync
         for r in 0..W {
@@ -800,22 +803,17 @@ mod tests {
             let n: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
             assert_eq!(n, self.n, "particle number");
             assert!(self.counts[self.m as usize + 1..].iter().all(|&c| c == 0));
-            for b in 1..self.n_b.len() {
+            for b in 1..self.buckets.len() {
+                let bk = &self.buckets[b];
                 let (lo, hi) = bucket_range(b);
+                assert_eq!((bk.lo, bk.sh), (lo, width_bits(b)), "bucket {b} range");
                 let cs = &self.counts[lo as usize..=hi as usize];
                 let nb: u64 = cs.iter().map(|&c| u64::from(c)).sum();
-                assert_eq!(nb, self.n_b[b], "bucket {b} count");
-                assert!(self.slots[b] >= nb, "bucket {b} slots");
-                if self.cap[b] > 0 {
-                    assert!(
-                        cs.iter().all(|&c| u64::from(c) <= self.cap[b]),
-                        "bucket {b} cap"
-                    );
-                    assert_eq!(
-                        self.slots[b],
-                        self.cap[b] << width_bits(b),
-                        "bucket {b} grid"
-                    );
+                assert_eq!(nb, bk.n, "bucket {b} count");
+                assert!(bk.slots >= nb, "bucket {b} slots");
+                if bk.cap > 0 {
+                    assert!(cs.iter().all(|&c| u64::from(c) <= bk.cap), "bucket {b} cap");
+                    assert_eq!(bk.slots, bk.cap << width_bits(b), "bucket {b} grid");
                 } else {
                     let mut c2 = vec![0u64; cs.len()];
                     for &off in &self.lists[b - SINGLE as usize] {
@@ -826,13 +824,9 @@ mod tests {
                 }
             }
             for r in 0..W {
-                let t: u64 = (0..self.n_b.len())
-                    .map(|b| self.bounds[b].q[r] * self.slots[b])
-                    .sum();
+                let t: u64 = self.buckets.iter().map(|bk| bk.q[r] * bk.slots).sum();
                 assert_eq!(t, self.alias.total(r), "table row {r}");
-                let l: u64 = (0..self.n_b.len())
-                    .map(|b| self.bounds[b].q[r] * self.n_b[b])
-                    .sum();
+                let l: u64 = self.buckets.iter().map(|bk| bk.q[r] * bk.n).sum();
                 assert_eq!(l, self.live[r], "live row {r}");
             }
         }
