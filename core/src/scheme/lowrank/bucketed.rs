@@ -295,6 +295,17 @@ impl<K, const R: usize, const W: usize> core::fmt::Debug for Bucketed<K, R, W> {
     }
 }
 
+/// The proposal process between weight changes.
+#[derive(Clone, Copy, Debug)]
+struct Rates<const R: usize> {
+    /// Proposals can happen (`S_A > 0` and two particles or more).
+    live: bool,
+    /// Mean time between proposals, `V / S_A`.
+    mean_dt: f64,
+    /// Cumulative component fractions `Σ_{j ≤ k} w_j / S_A` (the last is 1).
+    frac: [f64; R],
+}
+
 /// Largest number of initial particles (counts are stored as `u32`).
 pub const MAX_PARTICLES: u64 = u32::MAX as u64;
 
@@ -503,9 +514,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.volume *= 2.0;
     }
 
-    /// Rebuilds the proposal tables if a weight changed; returns `S_A` and the
-    /// per-component weights.
-    fn refresh(&mut self) -> ([f64; R], f64) {
+    /// Rebuilds the proposal tables if a weight changed; returns the proposal rates.
+    fn refresh(&mut self) -> Rates<R> {
         if self.rates_stale {
             let buckets = &self.buckets;
             let before = self.alias.totals;
@@ -521,7 +531,18 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             w[k] = (tu as f64 * self.scale[k]) * (tv as f64 * self.scale[R + k]);
             sa += w[k];
         }
-        (w, sa)
+        // cumulative fractions: the last one is exactly 1 (same additions as `sa`)
+        let mut frac = [1.0; R];
+        let mut cum = 0.0;
+        for k in 0..R {
+            cum += w[k];
+            frac[k] = cum / sa;
+        }
+        Rates {
+            live: sa > 0.0 && self.n >= 2,
+            mean_dt: self.volume / sa,
+            frac,
+        }
     }
 
     /// The size held by slot `s` of bucket `b`, if the slot is full.
@@ -542,20 +563,17 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     #[inline]
     fn propose<Rn: Rng + ?Sized>(
         &mut self,
-        weights: &[f64; R],
-        sa: f64,
+        rates: &Rates<R>,
         rng: &mut Rn,
         rep: &mut StepReport,
     ) -> Result<bool> {
-        let mut k = R - 1;
+        // component k ∝ its weight, without branches: u ∈ (0, 1] passes the cumulative
+        // fractions below k (a zero-weight component has an empty interval)
+        let mut k = 0;
         if R > 1 {
-            let mut r = sa * open_unit(rng);
-            for (kk, &w) in weights.iter().enumerate() {
-                r -= w;
-                if r <= 0.0 && w > 0.0 {
-                    k = kk;
-                    break;
-                }
+            let u = open_unit(rng);
+            for &f in &rates.frac[..R - 1] {
+                k += usize::from(u > f);
             }
         }
         // side u first: an empty slot rejects before side v is drawn. A full singleton
@@ -757,13 +775,13 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
     fn advance_to<Rn: Rng + ?Sized>(&mut self, t: f64, rng: &mut Rn) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
-        let (mut weights, mut sa) = self.refresh();
+        let mut rates = self.refresh();
         loop {
-            if sa.is_nan() || sa <= 0.0 || self.n < 2 {
+            if !rates.live {
                 self.time = t;
                 break;
             }
-            let dt = self.zig.sample(rng) * self.volume / sa;
+            let dt = self.zig.sample(rng) * rates.mean_dt;
             if self.time + dt > t {
                 self.time = t;
                 break;
@@ -771,11 +789,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
             let before = self.time;
             self.time += dt;
             rep.proposals += 1;
-            match self.propose(&weights, sa, rng, &mut rep) {
+            match self.propose(&rates, rng, &mut rep) {
                 Ok(true) => {
                     rep.events += 1;
-                    if self.rates_stale {
-                        (weights, sa) = self.refresh();
+                    if self.rates_stale || self.n < 2 {
+                        rates = self.refresh();
                     }
                 }
                 Ok(false) => {}
