@@ -25,7 +25,7 @@
 //!   by ~1/32), and the slots are reset to the particles (a *resync*, O(M)) when the
 //!   empty ones pass 1/16 of a row's weight.
 //! * A bucket is in *grid* mode (slot = (size x, level ℓ), full iff ℓ < N_x, read from a
-//!   `u32` count array — right when the bucket is at least half full) or in *list* mode
+//!   `u32` count array — right when at least 3/4 of its slots are full) or in *list* mode
 //!   (slot s = the s-th entry of a list of its particles' offsets — right for sparse
 //!   buckets in the tail). The mode is chosen at each resync.
 //!
@@ -448,7 +448,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     }
 
     /// Rebuilds the buckets from the counts: each bucket takes grid mode when at least
-    /// half of its `width × max N_x` slots are full, list mode otherwise; the empty slots
+    /// 3/4 of its `width × max N_x` slots are full, list mode otherwise; the empty slots
     /// of lazy removals are dropped. O(M + particles in lists).
     fn resync(&mut self) {
         for b in 1..self.buckets.len() {
@@ -459,7 +459,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             let width = 1u64 << width_bits(b);
             let bk = &mut self.buckets[b];
             debug_assert_eq!(n, bk.n);
-            if b < SINGLE as usize || (n > 0 && 2 * n >= width * mx) {
+            if b < SINGLE as usize || (n > 0 && 4 * n >= 3 * width * mx) {
                 bk.cap = mx.max(1);
                 bk.slots = width * bk.cap;
             } else {
