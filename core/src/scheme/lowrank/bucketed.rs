@@ -14,30 +14,44 @@
 //!   for power-law factors the acceptance drops by a few per cent at most. For kernels
 //!   whose bound is exact (`K = A + Aᵀ`), a squeeze with the buckets' smallest factors
 //!   decides almost every proposal without evaluating K.
-//! * The factors are quantised upwards to integers, `â = q · s_row`, so every weight and
-//!   partial sum `Σ q n_bucket` is an exact `u64`: no rounding drift, no rebuilds, no
-//!   ghost weights. The proposal tree is B-ary over the buckets (≤ ~1000 leaves), so it
-//!   sits in L1/L2 whatever M is.
-//! * The tree holds *slots*, at least as many as particles per bucket. A proposal picks a
+//! * The factors are quantised upwards to integers, `â = q · s_row`, so every weight
+//!   `q · slots` and every row total is an exact `u64`: no rounding drift and no ghost
+//!   weights.
+//! * Proposals come from Walker alias tables over the buckets (≤ ~900 columns, so they
+//!   sit in L1/L2 whatever M is): one random word picks the component k *and* side u's
+//!   bucket from a joint table over (k, bucket) pairs, a second picks side v's bucket
+//!   from component k's table. The tables are rebuilt, O(buckets), only when a weight
+//!   changes — which thanks to the lazy slots below happens about once per thousand
+//!   collisions.
+//! * A bucket holds *slots*, at least as many as its particles. A proposal picks a
 //!   uniform slot of the chosen bucket and is rejected when the slot is empty; every real
 //!   pair keeps its proposal rate `Â/V`, so this is exact thinning. Removals therefore
-//!   never touch the tree, a new particle usually fills a free slot (a full bucket grows
-//!   by ~1/32), and the slots are reset to the particles (a *resync*, O(M)) when the
-//!   empty ones pass 1/16 of a row's weight.
+//!   never change a weight, a new particle usually fills a free slot (a full bucket grows
+//!   by 1/8), and the slots are reset to the particles (a *resync*, O(M)) when the
+//!   empties left by removals pass 1/16 of a row's weight.
 //! * A bucket is in *grid* mode (slot = (size x, level ℓ), full iff ℓ < N_x, read from a
 //!   `u32` count array — right when at least 3/4 of its slots are full) or in *list* mode
 //!   (slot s = the s-th entry of a list of its particles' offsets — right for sparse
 //!   buckets in the tail). The mode is chosen at each resync.
+//! * The acceptance `K/(Â + Âᵀ)` is squeezed with the kernel's
+//!   [floor](crate::kernel::CoagulationKernel::low_rank_floor) ρ (`K ≥ ρ (A + Aᵀ)`): a
+//!   uniform below ρ times the bound built from the buckets' smallest factors accepts
+//!   without evaluating K (ρ = 1 for exact bounds, 1/√2 for the ballistic kernel).
 //!
-//! A proposal costs two descents of a small integer tree, two slot reads and a squeeze;
-//! a collision adds O(1) count/list work and rarely a tree update — independent of M.
+//! A proposal costs two alias draws, up to two slot draws and reads and a squeeze; a
+//! collision adds O(1) count/list work — independent of M.
 //!
-//! Measured on this workload (callgrind, Brownian from 10^6 monomers to t = 1, M = 64):
-//! the first version with eager tree updates and lists took 938 instructions per
-//! collision, the per-size wide tree 714, lazy slots with running-sum nodes 755. On the
-//! paper's large-M rows lists alone were slower than the wide tree (a cache miss per
-//! read in 40 MB of lists: Brownian t = 1e4 in 22.7 s against 14.6 s); grid mode fixed
-//! that (see `coagula bench lowrank` for the table).
+//! How the design was chosen (callgrind instructions per collision, Brownian from 10^6
+//! monomers to t = 1, M = 64; `coagula bench lowrank-single --bucketed`): the per-size
+//! 8-ary tree 714; buckets with eager tree updates and lists 938; lazy slots with a
+//! running-sum integer tree 755; alias tables instead of the tree 700 (the rebuilds cost
+//! ~100 of those at this small N); cheaper rebuilds and growth by 1/8 instead of 1/32,
+//! 615; side v drawn only after side u is found full, 553; one record per bucket 508;
+//! branch-free component choice and a precomputed mean time step 499; the joint (k, u)
+//! table and on-demand live weights cut another 3–9 % of wall time at N = 10^7. On the
+//! paper's large-M rows lists alone were slower than the per-size tree (a cache miss
+//! per read in 40 MB of lists); grid mode fixed that. See `coagula bench lowrank` for
+//! the tables.
 //!
 //! The state is the counts `N_i` (see [`Bucketed::counts`]); M doubling and particle
 //! doubling work as in [`super::LowRank`]. Allocation happens when M doubles, when the
@@ -850,6 +864,56 @@ mod tests {
             s.check_invariants();
         }
         assert!(s.totals().doublings > 0);
+    }
+
+    /// The probabilities an alias table implies (column c uniform, kept with
+    /// `keep / 2^63`) equal `w_i / Σ w` to rounding, zero weights included; and
+    /// `sample` follows the table.
+    #[test]
+    fn alias_tables_reproduce_their_weights() {
+        let mut rng = rand_pcg::Pcg64Mcg::new(9);
+        let cases: [alloc::vec::Vec<u64>; 4] = [
+            alloc::vec![5],
+            alloc::vec![0, 3, 0, 1, 0],
+            alloc::vec![1 << 62, 1, 0, 1, 2],
+            // totals must stay below 2^63: 700 weights below 2^51
+            (0..700).map(|i| rng.next_u64() >> (13 + i % 40)).collect(),
+        ];
+        let mut sc = AliasScratch::default();
+        for w in cases {
+            let total: u64 = w.iter().sum();
+            sc.weights = w.clone();
+            let mut t = Alias::default();
+            t.rebuild(&mut sc);
+            let n = w.len();
+            let mut p = alloc::vec![0.0f64; n];
+            for (c, &(keep, alias)) in t.entries.iter().enumerate() {
+                let k = keep as f64 / 9_223_372_036_854_775_808.0;
+                p[c] += k / n as f64;
+                p[alias as usize] += (1.0 - k) / n as f64;
+            }
+            for i in 0..n {
+                let want = w[i] as f64 / total as f64;
+                assert!(
+                    (p[i] - want).abs() <= 1e-12 * want + 1e-18,
+                    "column {i}: {} vs {want}",
+                    p[i]
+                );
+                if w[i] == 0 {
+                    assert_eq!(p[i], 0.0, "zero-weight column {i}");
+                }
+            }
+            // sample: the column is the word's top part; low bits decide keep/alias
+            for _ in 0..1000 {
+                let word = rng.next_u64();
+                let c = ((u128::from(word) * n as u128) >> 64) as usize;
+                let (keep, alias) = t.entries[c];
+                let low = (u128::from(word) * n as u128) as u64 >> 1;
+                let want = if low < keep { c } else { alias as usize };
+                assert_eq!(t.sample(word), want);
+                assert!(w[want] > 0);
+            }
+        }
     }
 
     #[test]

@@ -25,10 +25,11 @@
 //! measurements and the drift control).
 //!
 //! **Buckets (fastest).** [`Bucketed`] runs the same proposal scheme against a bound
-//! coarsened to log-linear size buckets (≤ 1/32 wide): its tree is an exact integer tree
-//! over ≤ ~1000 buckets that stays in cache whatever M is, removals are lazy (an empty
-//! slot is rejected — exact thinning), and a bucket picks its particle from a count grid
-//! or a list in O(1). `coagula bench lowrank` times both against the paper.
+//! coarsened to log-linear size buckets (≤ 1/32 wide): integer weights, O(1) alias
+//! tables over ≤ ~900 buckets that stay in cache whatever M is, lazy removals (an empty
+//! slot is rejected — exact thinning), a squeeze with the kernel's acceptance floor, and
+//! a bucket picks its particle from a count grid or a list in O(1). `coagula bench
+//! lowrank` times both against the paper.
 //!
 //! **Growth.** When `i + j > M`, M doubles (arrays and tree grow; the only allocation,
 //! bounded by a caller-set size limit). When fewer than `N0/2` particles remain, every
