@@ -272,6 +272,10 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     /// Column stride of `joint` (a power of two ≥ buckets).
     stride: usize,
     scratch: AliasScratch,
+    /// Side u of the next proposal, drawn ahead so its memory can be prefetched.
+    next_u: Option<(usize, usize, u64)>,
+    /// Draw side u ahead (the count array is at least [`PIPELINE_COUNTS`] long).
+    pipeline: bool,
     /// Weights changed since the tables and `S_A` were last built.
     rates_stale: bool,
     /// Current maximum size M (a power of two).
@@ -295,6 +299,26 @@ impl<K, const R: usize, const W: usize> core::fmt::Debug for Bucketed<K, R, W> {
             .field("time", &self.time)
             .finish_non_exhaustive()
     }
+}
+
+/// Count-array length (1 MiB of `u32`) from which side u is drawn a proposal ahead and
+/// prefetched: below it the counts stay in cache and the extra bookkeeping costs ~4 %;
+/// above it the prefetch saved 4–10 % (Brownian t = 1e4, 1e5; ballistic t = 5000).
+const PIPELINE_COUNTS: usize = 1 << 18;
+
+/// Hints the cache to fetch `r` (no effect on the program's meaning).
+#[inline(always)]
+fn prefetch<T>(r: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is only a hint — it never faults and reads nothing the program
+    // sees; the pointer comes from a live reference.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(
+            (r as *const T).cast::<i8>(),
+        );
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = r;
 }
 
 /// The proposal process between weight changes.
@@ -366,6 +390,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             side_v: vec![Alias::default(); R],
             stride: 1,
             scratch: AliasScratch::default(),
+            next_u: None,
+            pipeline: false,
             rates_stale: true,
             m,
             size_limit: super::DEFAULT_SIZE_LIMIT,
@@ -551,11 +577,39 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 self.side_v[k].rebuild(sc);
             }
             self.rates_stale = false;
+            // a side-u draw made against the old tables is void
+            self.next_u = None;
+            self.pipeline = self.counts.len() >= PIPELINE_COUNTS;
         }
         Rates {
             live,
             mean_dt: self.volume / sa,
         }
+    }
+
+    /// Draws side u of a proposal — component k, bucket and slot — and prefetches the
+    /// slot's count or list entry.
+    #[inline(always)]
+    fn draw_u<Rn: Rng + ?Sized>(&self, rng: &mut Rn, fetch: bool) -> (usize, usize, u64) {
+        let col = self.joint.sample(rng.next_u64());
+        let (k, bu) = (col >> self.stride.trailing_zeros(), col & (self.stride - 1));
+        let bk = &self.buckets[bu];
+        let su = below(rng, bk.slots);
+        if fetch {
+            if bk.cap > 0 {
+                let x = bk.lo + (su & ((1 << bk.sh) - 1));
+                if let Some(c) = self.counts.get(x as usize) {
+                    prefetch(c);
+                }
+            } else if let Some(e) = self
+                .lists
+                .get(bu.wrapping_sub(SINGLE as usize))
+                .and_then(|l| l.get(su as usize))
+            {
+                prefetch(e);
+            }
+        }
+        (k, bu, su)
     }
 
     /// `Σ_b q_r(b) n_b`: the weight of the real particles in row r.
@@ -584,23 +638,27 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // bucket holds only its size, so its slot is drawn only if side v lands in the
         // same bucket (for the same-particle test); deferring that draw keeps the two
         // slots independent and uniform.
-        let col = self.joint.sample(rng.next_u64());
-        let (k, bu) = (col >> self.stride.trailing_zeros(), col & (self.stride - 1));
+        // With a count array beyond the caches, side u is drawn one proposal ahead and
+        // its slot prefetched: the draw depends only on the tables, which stay fixed
+        // until a refresh discards it.
+        let (k, bu, su) = if self.pipeline {
+            let d = match self.next_u.take() {
+                Some(d) => d,
+                None => self.draw_u(rng, true),
+            };
+            self.next_u = Some(self.draw_u(rng, true));
+            d
+        } else {
+            self.draw_u(rng, false)
+        };
         // (a width-1 bucket is a singleton: `sh == 0`)
         let full_single = |s: &Self, b: usize| {
             let bk = &s.buckets[b];
             bk.sh == 0 && bk.slots == bk.n
         };
-        let mut su = u64::MAX;
-        let xu = if full_single(self, bu) {
-            bu as u64
-        } else {
-            su = below(rng, self.buckets[bu].slots);
-            let Some(x) = self.occupant(bu, su) else {
-                rep.rejections += 1;
-                return Ok(false);
-            };
-            x
+        let Some(xu) = self.occupant(bu, su) else {
+            rep.rejections += 1;
+            return Ok(false);
         };
         let bv = self.side_v[k].sample(rng.next_u64());
         let sv = if bu != bv && full_single(self, bv) {
@@ -612,9 +670,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             rep.rejections += 1;
             return Ok(false);
         };
-        if bu == bv && su == u64::MAX {
-            su = below(rng, self.buckets[bu].slots);
-        }
         if bu == bv && su == sv {
             // the particle with itself
             rep.rejections += 1;
