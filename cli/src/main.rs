@@ -128,6 +128,10 @@ enum BenchKind {
         /// Time only the low-rank method.
         #[arg(long)]
         skip_baselines: bool,
+        /// Run the bucketed low-rank column this many times (fresh seeds) and keep each
+        /// cell's fastest time: on a shared machine the minimum is the least disturbed.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+        repeat: u32,
         /// Seed of the random streams.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -222,10 +226,11 @@ fn main() -> ExitCode {
                     budget,
                     only,
                     skip_baselines,
+                    repeat,
                     seed,
                 },
         } => {
-            bench::lowrank(n0, budget, only, skip_baselines, seed);
+            bench::lowrank(n0, budget, only, skip_baselines, repeat, seed);
             Ok(())
         }
         Command::Bench {

@@ -276,6 +276,8 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     next_u: Option<(usize, usize, u64)>,
     /// Draw side u ahead (the count array is at least [`PIPELINE_COUNTS`] long).
     pipeline: bool,
+    /// Events since the last resync.
+    since_resync: u64,
     /// Weights changed since the tables and `S_A` were last built.
     rates_stale: bool,
     /// Current maximum size M (a power of two).
@@ -392,6 +394,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             scratch: AliasScratch::default(),
             next_u: None,
             pipeline: false,
+            since_resync: 0,
             rates_stale: true,
             m,
             size_limit: super::DEFAULT_SIZE_LIMIT,
@@ -491,6 +494,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// 3/4 of its `width × max N_x` slots are full, list mode otherwise; the empty slots
     /// of lazy removals are dropped. O(M + particles in lists).
     fn resync(&mut self) {
+        self.since_resync = 0;
         for b in 1..self.buckets.len() {
             let (lo, hi) = bucket_range(b);
             let cs = &self.counts[lo as usize..=hi as usize];
@@ -730,8 +734,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             rep.doublings += 1;
         }
         // every 256 events (the live weight costs O(buckets)): resync once the empties
-        // left by removals pass 1/16 of a row's weight
-        if self.n & 255 == 0 {
+        // left by removals pass 1/16 of a row's weight — but no sooner than M/64 events
+        // after the last one, so the O(M) resync stays O(1) per event when M ≫ N
+        self.since_resync += 1;
+        if self.n & 255 == 0 && self.since_resync >= self.counts.len() as u64 >> 6 {
             for r in 0..W {
                 let total = self.row_total[r];
                 if total.saturating_sub(self.live(r) + self.base_slack[r]) > total >> 4 {
@@ -762,20 +768,23 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.counts[x as usize] = c;
         let bk = &mut self.buckets[b];
         bk.n += 1;
-        // a full bucket grows by 1/8, so the tables are rarely rebuilt
-        let extra = if bk.cap > 0 {
+        if bk.cap > 0 {
             if u64::from(c) <= bk.cap {
                 return;
             }
-            let more = 1 + (bk.cap >> GROW);
-            bk.cap += more;
-            more << bk.sh
         } else {
             let list = &mut self.lists[b - SINGLE as usize];
             list.push((x - bk.lo) as u32);
             if list.len() as u64 <= bk.slots {
                 return;
             }
+        }
+        // a full bucket grows by 1/8, so the tables are rarely rebuilt
+        let extra = if bk.cap > 0 {
+            let more = 1 + (bk.cap >> GROW);
+            bk.cap += more;
+            more << bk.sh
+        } else {
             1 + (bk.slots >> GROW)
         };
         bk.slots += extra;
