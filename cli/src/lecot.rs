@@ -177,7 +177,7 @@ pub fn run_default(
     );
     for &(t, m2, m3) in &traj {
         let h = (t * 100.0).round() as u32;
-        if h == 1 || h % 10 == 0 {
+        if h == 1 || h.is_multiple_of(10) {
             let (e2, e3) = (exact.moment(2, t).unwrap(), exact.moment(3, t).unwrap());
             println!(
                 "{t:>6.2} {m2:>12.6} {e2:>12.6} {:>10.2e} {m3:>12.6} {e3:>12.6} {:>10.2e}",

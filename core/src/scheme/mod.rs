@@ -12,6 +12,7 @@
 //! * [`lowrank`] — Osinsky's low-rank Monte Carlo with segment trees, and the inverse and
 //!   acceptance–rejection baselines it is measured against (Osinsky 2023).
 
+pub(crate) mod clock;
 pub mod lowrank;
 pub mod massflow;
 

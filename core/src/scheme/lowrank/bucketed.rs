@@ -69,6 +69,7 @@
 //! assert!((sim.moment(0.0) - (-1.0f64).exp()).abs() < 0.01);
 //! ```
 
+use super::super::clock::Batch;
 use super::super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
 use super::check_counts;
 use crate::error::{Error, Result};
@@ -205,11 +206,8 @@ impl Alias {
         let m = u128::from(word) * self.n as u128;
         let c = (m >> 64) as usize;
         let (keep, alias) = self.entries[c];
-        if (m as u64 >> 1) < keep {
-            c
-        } else {
-            alias as usize
-        }
+        // the keep/alias choice is a coin flip to the branch predictor
+        core::hint::select_unpredictable((m as u64 >> 1) < keep, c, alias as usize)
     }
 }
 
@@ -798,6 +796,14 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.rates_stale = true;
     }
 
+    /// Books a failed call's report (the state and time are already those before the
+    /// failing proposal) and passes the error on.
+    fn fail(&mut self, e: Error, rep: &mut StepReport) -> Error {
+        rep.time = self.time;
+        self.totals.accumulate(rep);
+        e
+    }
+
     /// The counts: `counts()[i − 1] = N_i`, for `i = 1..=M`.
     pub fn counts(&self) -> Vec<u64> {
         self.counts[1..=self.m as usize]
@@ -841,11 +847,41 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let mut rates = self.refresh();
-        loop {
+        'epoch: loop {
             if !rates.live {
                 self.time = t;
                 break;
             }
+            // the rate is constant until the tables change: proposals in batches, with
+            // no clock per proposal (see `clock`)
+            if let Some(batch) = Batch::plan(self.time, rates.mean_dt, t, rng) {
+                let mut k = 0;
+                while k < batch.len {
+                    k += 1;
+                    rep.proposals += 1;
+                    match self.propose(rng, &mut rep) {
+                        Ok(true) => {
+                            rep.events += 1;
+                            if self.rates_stale || self.n < 2 {
+                                self.time = batch.time_of(k, rng);
+                                rates = self.refresh();
+                                continue 'epoch;
+                            }
+                        }
+                        Ok(false) => {}
+                        Err(e) => {
+                            self.time = batch.time_of(k - 1, rng);
+                            return Err(self.fail(e, &mut rep));
+                        }
+                    }
+                }
+                self.time = batch.end;
+                if batch.last {
+                    break;
+                }
+                continue;
+            }
+            // few proposals left before t: one exponential each
             let dt = self.zig.sample(rng) * rates.mean_dt;
             if self.time + dt > t {
                 self.time = t;
@@ -864,9 +900,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
                 Ok(false) => {}
                 Err(e) => {
                     self.time = before;
-                    rep.time = self.time;
-                    self.totals.accumulate(&rep);
-                    return Err(e);
+                    return Err(self.fail(e, &mut rep));
                 }
             }
         }
