@@ -634,7 +634,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     }
 
     /// One proposal; returns whether it was accepted.
-    #[inline]
+    #[inline(always)]
     fn propose<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn, rep: &mut StepReport) -> Result<bool> {
         // side u first: an empty slot rejects before side v is drawn. A full singleton
         // bucket holds only its size, so its slot is drawn only if side v lands in the
