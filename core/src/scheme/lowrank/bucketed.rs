@@ -252,7 +252,9 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     /// Largest quantised factor: `qmax · n0 ≤ 2^60`, so the slots' weight (at most a few
     /// times the particles') cannot overflow.
     qmax: u64,
-    /// `counts[x] = N_x` for sizes `x = 1..=M` (`counts[0]` unused).
+    /// `counts[x] = N_x` for the sizes `x` of grid-mode buckets (`counts[0]` unused).
+    /// A list-mode bucket's particles live only in its list (one memory access less
+    /// per event at large M); its entries here are stale until a resync restores them.
     counts: Vec<u32>,
     /// Offsets `x − lo` of the particles of list-mode buckets `≥ SINGLE` (index
     /// `b − SINGLE`).
@@ -444,9 +446,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.raw.extend(raw);
         for b in self.buckets.len()..nb {
             self.buckets.push(Bucket {
+                // grid mode (its counts are valid) until the resync that always
+                // follows
                 slots: 0,
                 n: 0,
-                cap: 0,
+                cap: 1,
                 lo: if b == 0 { 0 } else { bucket_range(b).0 },
                 sh: width_bits(b),
                 q: [0; W],
@@ -493,6 +497,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// of lazy removals are dropped. O(M + particles in lists).
     fn resync(&mut self) {
         self.since_resync = 0;
+        self.restore_list_counts();
         for b in 1..self.buckets.len() {
             let (lo, hi) = bucket_range(b);
             let cs = &self.counts[lo as usize..=hi as usize];
@@ -519,6 +524,22 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             self.base_slack[r] = self.row_total[r] - self.live(r);
         }
         self.rates_stale = true;
+    }
+
+    /// Rewrites the count entries of the list-mode buckets from their lists.
+    fn restore_list_counts(&mut self) {
+        for (b, list) in self.lists.iter().enumerate() {
+            let b = b + SINGLE as usize;
+            if self.buckets[b].cap > 0 {
+                continue;
+            }
+            let (lo, hi) = bucket_range(b);
+            let cs = &mut self.counts[lo as usize..=hi as usize];
+            cs.fill(0);
+            for &off in list {
+                cs[off as usize] += 1;
+            }
+        }
     }
 
     fn double_particles(&mut self) {
@@ -750,10 +771,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// Removes the particle of size x in slot s of bucket b (its slot stays, empty).
     #[inline(always)]
     fn remove(&mut self, b: usize, s: u64, x: u64) {
-        self.counts[x as usize] -= 1;
         let bk = &mut self.buckets[b];
         bk.n -= 1;
-        if bk.cap == 0 {
+        if bk.cap > 0 {
+            self.counts[x as usize] -= 1;
+        } else {
             self.lists[b - SINGLE as usize].swap_remove(s as usize);
         }
     }
@@ -762,11 +784,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     #[inline]
     fn insert(&mut self, x: u64) {
         let b = bucket_of(x);
-        let c = self.counts[x as usize] + 1;
-        self.counts[x as usize] = c;
         let bk = &mut self.buckets[b];
         bk.n += 1;
         if bk.cap > 0 {
+            let c = self.counts[x as usize] + 1;
+            self.counts[x as usize] = c;
             if u64::from(c) <= bk.cap {
                 return;
             }
@@ -806,10 +828,27 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
 
     /// The counts: `counts()[i − 1] = N_i`, for `i = 1..=M`.
     pub fn counts(&self) -> Vec<u64> {
-        self.counts[1..=self.m as usize]
+        let mut out: Vec<u64> = self.counts[1..=self.m as usize]
             .iter()
             .map(|&c| u64::from(c))
-            .collect()
+            .collect();
+        for (b, list) in self.lists.iter().enumerate() {
+            let b = b + SINGLE as usize;
+            if self.buckets[b].cap > 0 {
+                continue;
+            }
+            let (lo, hi) = bucket_range(b);
+            let hi = hi.min(self.m);
+            if lo > hi {
+                continue;
+            }
+            let cs = &mut out[lo as usize - 1..hi as usize];
+            cs.fill(0);
+            for &off in list {
+                cs[off as usize] += 1;
+            }
+        }
+        out
     }
 
     /// The simulation volume V.
@@ -917,14 +956,26 @@ mod tests {
     impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         /// Every redundant piece of state agrees with the counts.
         pub(crate) fn check_invariants(&self) {
-            let n: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
+            let counts = self.counts();
+            let n: u64 = counts.iter().sum();
             assert_eq!(n, self.n, "particle number");
-            assert!(self.counts[self.m as usize + 1..].iter().all(|&c| c == 0));
+            // the whole bucket of M, with the list buckets' counts restored
+            let mut all = alloc::vec![0u32];
+            all.extend(counts.iter().map(|&c| c as u32));
+            all.resize(self.counts.len(), 0);
             for b in 1..self.buckets.len() {
                 let bk = &self.buckets[b];
                 let (lo, hi) = bucket_range(b);
                 assert_eq!((bk.lo, bk.sh), (lo, width_bits(b)), "bucket {b} range");
-                let cs = &self.counts[lo as usize..=hi as usize];
+                if bk.cap == 0 {
+                    assert!(
+                        self.lists[b - SINGLE as usize]
+                            .iter()
+                            .all(|&off| lo + u64::from(off) <= self.m),
+                        "bucket {b}: no particle above M"
+                    );
+                }
+                let cs = &all[lo as usize..=hi as usize];
                 let nb: u64 = cs.iter().map(|&c| u64::from(c)).sum();
                 assert_eq!(nb, bk.n, "bucket {b} count");
                 assert!(bk.slots >= nb, "bucket {b} slots");
