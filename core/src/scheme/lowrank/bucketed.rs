@@ -124,43 +124,47 @@ fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
     (m >> 64) as u64
 }
 
-/// A Walker alias table: O(1) sampling of a column with probability `w_i / Σ w` from
-/// one random word. Rebuilt (O(columns)) whenever a weight changes — which happens only
-/// when a bucket's slots grow, about once per thousand collisions.
+/// A Walker alias table: O(1) sampling of an item with probability `w_i / Σ w` from
+/// one random word. Rebuilt (O(items)) whenever a weight changes — which happens only
+/// when a bucket's slots grow, about once per thousand collisions. Items of weight zero
+/// are left out of the table, and each column names its items by their `u32` ids.
 ///
 /// The table is built exactly in integers (Vose's method on `w_i · n` against the
 /// column capacity `T = Σ w`); only the keep-thresholds are rounded, to 63-bit
-/// fractions, so each column's probability is within `2^-52` (relative) of `w_i / T`.
+/// fractions, so each item's probability is within `2^-52` (relative) of `w_i / T`.
 #[derive(Clone, Debug, Default)]
 struct Alias {
     /// Columns.
     n: usize,
-    /// Column c: `(keep threshold as a 63-bit fraction, alias)`; a column whose own
-    /// weight fills it has threshold `2^63` and itself as alias, a zero-weight column
-    /// threshold 0.
-    entries: Vec<(u64, u64)>,
+    /// Column c: `(keep threshold as a 63-bit fraction, own id, alias id)`; a column
+    /// whose own weight fills it has threshold `2^63`.
+    entries: Vec<(u64, u32, u32)>,
 }
 
 /// Build scratch shared by the tables (kept to avoid allocating per rebuild).
 #[derive(Clone, Debug, Default)]
 struct AliasScratch {
-    weights: Vec<u64>,
+    /// Items: `(weight, id)`; zero weights are skipped by the build.
+    weights: Vec<(u64, u32)>,
     scaled: Vec<u128>,
     /// Small columns from the front, large ones from the back.
     work: Vec<usize>,
 }
 
 impl Alias {
-    /// Rebuilds the table from `scratch.weights` (one per column; the total must be
-    /// below 2^63 and positive).
+    /// Rebuilds the table from `scratch.weights` (the total must be below 2^63 and
+    /// positive).
     fn rebuild(&mut self, scratch: &mut AliasScratch) {
+        scratch.weights.retain(|&(w, _)| w > 0);
         let n = scratch.weights.len();
         self.n = n;
-        self.entries.resize(n, (0, 0));
+        self.entries.clear();
+        self.entries
+            .extend(scratch.weights.iter().map(|&(_, id)| (1 << 63, id, id)));
         scratch.scaled.resize(n, 0);
         scratch.work.resize(n, 0);
         let mut total = 0u64;
-        for (s, &w) in scratch.scaled.iter_mut().zip(&scratch.weights) {
+        for (s, &(w, _)) in scratch.scaled.iter_mut().zip(&scratch.weights) {
             total += w;
             *s = u128::from(w) * n as u128;
         }
@@ -184,7 +188,8 @@ impl Alias {
             let g = work[nl];
             let sl = scaled[l];
             // sl < cap < 2^63: exact as i64, and the fraction stays below 2^63
-            row[l] = ((sl as i64 as f64 * to_frac) as i64 as u64, g as u64);
+            row[l].0 = (sl as i64 as f64 * to_frac) as i64 as u64;
+            row[l].2 = row[g].1;
             scaled[g] -= cap - sl;
             if scaled[g] < cap {
                 // g turns small: it leaves the large stack for the small one
@@ -194,20 +199,17 @@ impl Alias {
             }
         }
         // what is left is full (exactly so in exact arithmetic: the capacities add up
-        // to the weights)
-        for &i in work[..ns].iter().chain(&work[nl..]) {
-            row[i] = (1 << 63, i as u64);
-        }
+        // to the weights): its threshold stays 2^63
     }
 
-    /// A column with probability `weight / total`, from one random word.
+    /// An item's id with probability `weight / total`, from one random word.
     #[inline(always)]
-    fn sample(&self, word: u64) -> usize {
+    fn sample(&self, word: u64) -> u32 {
         let m = u128::from(word) * self.n as u128;
         let c = (m >> 64) as usize;
-        let (keep, alias) = self.entries[c];
+        let (keep, own, alias) = self.entries[c];
         // the keep/alias choice is a coin flip to the branch predictor
-        core::hint::select_unpredictable((m as u64 >> 1) < keep, c, alias as usize)
+        core::hint::select_unpredictable((m as u64 >> 1) < keep, own, alias)
     }
 }
 
@@ -264,13 +266,11 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     /// Planned empty-slot weight per row: the empties at the last resync plus the
     /// headroom of later growth (removals' empties come on top).
     base_slack: [u64; W],
-    /// Side u: one table over (component k, bucket b) pairs, column `k · stride + b`,
+    /// Side u: one table over (component k, bucket b) pairs, id `k · 2^16 + b`,
     /// weight ∝ `â_k(b) slots_b Σ_j b̂_k(j) slots_j`, so one draw picks both.
     joint: Alias,
     /// Side v: one table over the buckets per component, weight `q_{R+k}(b) slots_b`.
     side_v: Vec<Alias>,
-    /// Column stride of `joint` (a power of two ≥ buckets).
-    stride: usize,
     scratch: AliasScratch,
     /// Side u of the next proposal, drawn ahead so its memory can be prefetched.
     next_u: Option<(usize, usize, u64)>,
@@ -390,7 +390,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             base_slack: [0; W],
             joint: Alias::default(),
             side_v: vec![Alias::default(); R],
-            stride: 1,
             scratch: AliasScratch::default(),
             next_u: None,
             pipeline: false,
@@ -573,30 +572,30 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         let live = sa > 0.0 && self.n >= 2;
         if self.rates_stale && live {
-            let nb = self.buckets.len();
-            self.stride = nb.next_power_of_two();
             let sc = &mut self.scratch;
             // side u, jointly over (k, b): integer weights summing to at most 2^61
             sc.weights.clear();
             for (k, &ck) in c.iter().enumerate() {
                 let f = ck * (1u64 << 61) as f64 / sa;
-                for bk in &self.buckets {
+                for (b, bk) in self.buckets.iter().enumerate() {
                     // q · slots is exact in u64; rounded up once, so a bucket with
                     // slots is never left out (and one without never chosen)
                     let qs = bk.q[k] * bk.slots;
-                    sc.weights.push(if qs == 0 {
-                        0
-                    } else {
-                        (qs as f64 * f) as u64 + 1
-                    });
+                    if qs > 0 {
+                        sc.weights
+                            .push(((qs as f64 * f) as u64 + 1, (k << 16 | b) as u32));
+                    }
                 }
-                sc.weights.resize(sc.weights.len() + self.stride - nb, 0);
             }
             self.joint.rebuild(sc);
             for k in 0..R {
                 sc.weights.clear();
-                sc.weights
-                    .extend(self.buckets.iter().map(|bk| bk.q[R + k] * bk.slots));
+                sc.weights.extend(
+                    self.buckets
+                        .iter()
+                        .enumerate()
+                        .map(|(b, bk)| (bk.q[R + k] * bk.slots, b as u32)),
+                );
                 self.side_v[k].rebuild(sc);
             }
             self.rates_stale = false;
@@ -614,8 +613,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// slot's count or list entry.
     #[inline(always)]
     fn draw_u<Rn: Rng + ?Sized>(&self, rng: &mut Rn, fetch: bool) -> (usize, usize, u64) {
-        let col = self.joint.sample(rng.next_u64());
-        let (k, bu) = (col >> self.stride.trailing_zeros(), col & (self.stride - 1));
+        let id = self.joint.sample(rng.next_u64()) as usize;
+        let (k, bu) = (id >> 16, id & 0xffff);
         let bk = &self.buckets[bu];
         let su = below(rng, bk.slots);
         if fetch {
@@ -683,7 +682,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             rep.rejections += 1;
             return Ok(false);
         };
-        let bv = self.side_v[k].sample(rng.next_u64());
+        let bv = self.side_v[k].sample(rng.next_u64()) as usize;
         let sv = if bu != bv && full_single(self, bv) {
             0
         } else {
@@ -1031,36 +1030,44 @@ mod tests {
         let mut sc = AliasScratch::default();
         for w in cases {
             let total: u64 = w.iter().sum();
-            sc.weights = w.clone();
+            // ids: the item's index, spread out (as the joint table's are)
+            let id = |i: usize| (i * 37 + 5) as u32;
+            sc.weights = w.iter().enumerate().map(|(i, &x)| (x, id(i))).collect();
             let mut t = Alias::default();
             t.rebuild(&mut sc);
-            let n = w.len();
-            let mut p = alloc::vec![0.0f64; n];
-            for (c, &(keep, alias)) in t.entries.iter().enumerate() {
+            let n = t.n;
+            assert_eq!(
+                n,
+                w.iter().filter(|&&x| x > 0).count(),
+                "zero items dropped"
+            );
+            let mut p = alloc::vec![0.0f64; w.len()];
+            let index = |id: u32| (id as usize - 5) / 37;
+            for &(keep, own, alias) in &t.entries {
                 let k = keep as f64 / 9_223_372_036_854_775_808.0;
-                p[c] += k / n as f64;
-                p[alias as usize] += (1.0 - k) / n as f64;
+                p[index(own)] += k / n as f64;
+                p[index(alias)] += (1.0 - k) / n as f64;
             }
-            for i in 0..n {
+            for i in 0..w.len() {
                 let want = w[i] as f64 / total as f64;
                 assert!(
                     (p[i] - want).abs() <= 1e-12 * want + 1e-18,
-                    "column {i}: {} vs {want}",
+                    "item {i}: {} vs {want}",
                     p[i]
                 );
                 if w[i] == 0 {
-                    assert_eq!(p[i], 0.0, "zero-weight column {i}");
+                    assert_eq!(p[i], 0.0, "zero-weight item {i}");
                 }
             }
             // sample: the column is the word's top part; low bits decide keep/alias
             for _ in 0..1000 {
                 let word = rng.next_u64();
                 let c = ((u128::from(word) * n as u128) >> 64) as usize;
-                let (keep, alias) = t.entries[c];
+                let (keep, own, alias) = t.entries[c];
                 let low = (u128::from(word) * n as u128) as u64 >> 1;
-                let want = if low < keep { c } else { alias as usize };
+                let want = if low < keep { own } else { alias };
                 assert_eq!(t.sample(word), want);
-                assert!(w[want] > 0);
+                assert!(w[index(want)] > 0);
             }
         }
     }
