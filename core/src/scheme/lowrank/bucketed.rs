@@ -470,9 +470,15 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 fmax[r] = fmax[r].max(ext[0][r]);
             }
         }
+        // a power of two, so integer-valued factors quantise exactly: then a pair of
+        // singleton buckets has bound = squeeze and needs no acceptance draw
         for r in 0..W {
             self.scale[r] = if fmax[r] > 0.0 {
-                fmax[r] / self.qmax as f64
+                let mut sc = libm::exp2(libm::ceil(libm::log2(fmax[r] / self.qmax as f64)));
+                while fmax[r] / sc > self.qmax as f64 {
+                    sc *= 2.0;
+                }
+                sc
             } else {
                 1.0
             };
@@ -704,20 +710,24 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             bound += gu.hi[kk] * gv.hi[R + kk] + gv.hi[kk] * gu.hi[R + kk];
             low += gu.min[kk] * gv.min[R + kk] + gv.min[kk] * gu.min[R + kk];
         }
-        let u = bound * open_unit(rng);
-        if u > self.floor * low {
-            let c = self.kernel.rate(xu as f64, xv as f64);
-            if !(c >= 0.0 && c.is_finite()) {
-                return Err(Error::InvalidRate {
-                    name: "coagulation kernel",
-                    value: c,
-                });
-            }
-            if c > bound * (1.0 + 1e-12) {
-                rep.bound_violations += 1;
-            } else if u > c {
-                rep.rejections += 1;
-                return Ok(false);
+        // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
+        let squeeze = self.floor * low;
+        if squeeze < bound {
+            let u = bound * open_unit(rng);
+            if u > squeeze {
+                let c = self.kernel.rate(xu as f64, xv as f64);
+                if !(c >= 0.0 && c.is_finite()) {
+                    return Err(Error::InvalidRate {
+                        name: "coagulation kernel",
+                        value: c,
+                    });
+                }
+                if c > bound * (1.0 + 1e-12) {
+                    rep.bound_violations += 1;
+                } else if u > c {
+                    rep.rejections += 1;
+                    return Ok(false);
+                }
             }
         }
         let x = xu + xv;
