@@ -497,18 +497,33 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.resync();
     }
 
-    /// Rebuilds the buckets from the counts: each bucket takes grid mode when at least
-    /// 3/4 of its `width × max N_x` slots are full, list mode otherwise; the empty slots
-    /// of lazy removals are dropped. O(M + particles in lists).
+    /// Rebuilds the buckets: each bucket takes grid mode when at least 3/4 of its
+    /// `width × max N_x` slots are full, list mode otherwise; the empty slots of lazy
+    /// removals are dropped. A list bucket too sparse for a grid whatever its counts
+    /// (`4n < 3 · width`) keeps its list as it is (a list has no empties) without
+    /// reading the counts, so a resync costs O(grid sizes + particles in near-dense
+    /// lists), not O(M).
     fn resync(&mut self) {
         self.since_resync = 0;
-        self.restore_list_counts();
         for b in 1..self.buckets.len() {
+            let width = 1u64 << width_bits(b);
             let (lo, hi) = bucket_range(b);
+            if self.buckets[b].cap == 0 {
+                let bk = &mut self.buckets[b];
+                if 4 * bk.n < 3 * width {
+                    bk.slots = bk.n;
+                    continue;
+                }
+                // restore the counts from the list, to judge the bucket
+                let cs = &mut self.counts[lo as usize..=hi as usize];
+                cs.fill(0);
+                for &off in &self.lists[b - SINGLE as usize] {
+                    cs[off as usize] += 1;
+                }
+            }
             let cs = &self.counts[lo as usize..=hi as usize];
             let n: u64 = cs.iter().map(|&c| u64::from(c)).sum();
             let mx = u64::from(cs.iter().copied().max().unwrap_or(0));
-            let width = 1u64 << width_bits(b);
             let bk = &mut self.buckets[b];
             debug_assert_eq!(n, bk.n);
             if b < SINGLE as usize || (n > 0 && 4 * n >= 3 * width * mx) {
@@ -529,22 +544,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             self.base_slack[r] = self.row_total[r] - self.live(r);
         }
         self.rates_stale = true;
-    }
-
-    /// Rewrites the count entries of the list-mode buckets from their lists.
-    fn restore_list_counts(&mut self) {
-        for (b, list) in self.lists.iter().enumerate() {
-            let b = b + SINGLE as usize;
-            if self.buckets[b].cap > 0 {
-                continue;
-            }
-            let (lo, hi) = bucket_range(b);
-            let cs = &mut self.counts[lo as usize..=hi as usize];
-            cs.fill(0);
-            for &off in list {
-                cs[off as usize] += 1;
-            }
-        }
     }
 
     fn double_particles(&mut self) {
