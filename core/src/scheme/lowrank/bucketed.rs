@@ -232,6 +232,9 @@ struct Bucket<const W: usize> {
     cap: u64,
     /// Smallest size of the bucket.
     lo: u64,
+    /// Particles when the bucket's mode was last judged from its counts (a list
+    /// bucket is judged again only when this changed by more than 1/8).
+    judged: u64,
     /// log2 of the bucket's width.
     sh: u32,
     /// Quantised largest factor (table weight of one particle).
@@ -450,6 +453,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 slots: 0,
                 n: 0,
                 cap: 1,
+                judged: 0,
                 lo: if b == 0 { 0 } else { bucket_range(b).0 },
                 sh: width_bits(b),
                 q: [0; W],
@@ -510,7 +514,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             let (lo, hi) = bucket_range(b);
             if self.buckets[b].cap == 0 {
                 let bk = &mut self.buckets[b];
-                if 4 * bk.n < 3 * width {
+                // too sparse for a grid, or judged a list at a similar size before
+                if 4 * bk.n < 3 * width || bk.n.abs_diff(bk.judged) <= bk.judged >> 3 {
                     bk.slots = bk.n;
                     continue;
                 }
@@ -526,6 +531,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             let mx = u64::from(cs.iter().copied().max().unwrap_or(0));
             let bk = &mut self.buckets[b];
             debug_assert_eq!(n, bk.n);
+            bk.judged = n;
             if b < SINGLE as usize || (n > 0 && 4 * n >= 3 * width * mx) {
                 bk.cap = mx.max(1);
                 bk.slots = width * bk.cap;
@@ -552,6 +558,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         for bk in &mut self.buckets {
             bk.n *= 2;
+            bk.judged *= 2;
             bk.slots *= 2;
             bk.cap *= 2;
         }
