@@ -796,7 +796,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     }
 
     /// Adds a particle of size x, growing its bucket's slots when none is free.
-    #[inline]
+    #[inline(always)]
     fn insert(&mut self, x: u64) {
         let b = bucket_of(x);
         let bk = &mut self.buckets[b];
@@ -814,7 +814,13 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 return;
             }
         }
-        // a full bucket grows by 1/8, so the tables are rarely rebuilt
+        self.grow(b);
+    }
+
+    /// Grows full bucket b by 1/8 of its slots, so the tables are rarely rebuilt.
+    #[cold]
+    fn grow(&mut self, b: usize) {
+        let bk = &mut self.buckets[b];
         let extra = if bk.cap > 0 {
             let more = 1 + (bk.cap >> GROW);
             bk.cap += more;
