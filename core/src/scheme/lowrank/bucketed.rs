@@ -552,6 +552,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.rates_stale = true;
     }
 
+    #[cold]
     fn double_particles(&mut self) {
         for c in &mut self.counts {
             *c *= 2;
@@ -757,9 +758,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.remove(b1, s1, x1);
         self.remove(b2, s2, x2);
         if grows {
-            self.m *= 2;
-            self.counts.resize(count_len(self.m), 0);
-            self.requantise();
+            self.double_m();
         }
         self.insert(x);
         self.n -= 1;
@@ -772,15 +771,29 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // after the last one, so the O(M) resync stays O(1) per event when M ≫ N
         self.since_resync += 1;
         if self.n & 255 == 0 && self.since_resync >= self.counts.len() as u64 >> 6 {
-            for r in 0..W {
-                let total = self.row_total[r];
-                if total.saturating_sub(self.live(r) + self.base_slack[r]) > total >> 4 {
-                    self.resync();
-                    break;
-                }
-            }
+            self.resync_if_sparse();
         }
         Ok(true)
+    }
+
+    /// Doubles M (the new buckets' factors are already computed).
+    #[cold]
+    fn double_m(&mut self) {
+        self.m *= 2;
+        self.counts.resize(count_len(self.m), 0);
+        self.requantise();
+    }
+
+    /// Resyncs once the empties left by removals pass 1/16 of a row's weight.
+    #[cold]
+    fn resync_if_sparse(&mut self) {
+        for r in 0..W {
+            let total = self.row_total[r];
+            if total.saturating_sub(self.live(r) + self.base_slack[r]) > total >> 4 {
+                self.resync();
+                return;
+            }
+        }
     }
 
     /// Removes the particle of size x in slot s of bucket b (its slot stays, empty).
