@@ -281,6 +281,38 @@ mod tests {
         poisson_through_restarts(-2.0, 12);
     }
 
+    /// The restart times' law, directly: in a batch ending with arrival c at `end`,
+    /// the gap `end − time_of(c − 1)` has mean `(end − start)/c`; in a cut-back batch
+    /// of m arrivals, `t − time_of(m)` has mean `(t − start)/(m + 1)`. A beta shape off
+    /// by one doubles the first (and halves or shifts the second) — tens of SE here.
+    #[test]
+    fn last_arrival_gaps_have_their_mean() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(14);
+        let reps = 20_000;
+        for margin in [SIGMAS, -2.0] {
+            let (mut sum, mut n) = (0.0, 0);
+            while n < reps {
+                let b = Batch::plan_with_margin(0.0, 1.0, 500.0, margin, &mut rng).unwrap();
+                if b.len < 2 {
+                    continue;
+                }
+                // gap scaled by its expected value: mean 1, sd ~1
+                let x = if b.last {
+                    (b.end - b.time_of(b.len, &mut rng)) * (b.len + 1) as f64 / (b.end - b.start)
+                } else {
+                    (b.end - b.time_of(b.len - 1, &mut rng)) * b.len as f64 / (b.end - b.start)
+                };
+                sum += x;
+                n += 1;
+            }
+            let mean = sum / n as f64;
+            assert!(
+                (mean - 1.0).abs() < 5.0 / libm::sqrt(n as f64),
+                "margin {margin}: scaled last gap {mean}"
+            );
+        }
+    }
+
     /// A wrong restart time would show: placing the k-th arrival at the batch's end
     /// instead (a plausible bug) must fail the same check.
     #[test]

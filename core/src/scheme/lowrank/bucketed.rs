@@ -162,13 +162,17 @@ struct AliasScratch {
 }
 
 impl Alias {
-    /// Rebuilds the table from `scratch.weights` (the total must be below 2^63 and
-    /// positive).
+    /// Rebuilds the table from `scratch.weights` (the total must be below 2^63; an
+    /// all-zero row gives an empty table, which must not be sampled).
     fn rebuild(&mut self, scratch: &mut AliasScratch) {
         scratch.weights.retain(|&(w, _)| w > 0);
         let n = scratch.weights.len();
         self.n = n;
         self.entries.clear();
+        if n == 0 {
+            // an empty row: the table is never sampled (its component has no pairs)
+            return;
+        }
         self.entries
             .extend(scratch.weights.iter().map(|&(_, id)| (1 << 63, id, id)));
         scratch.scaled.resize(n, 0);
@@ -366,7 +370,7 @@ struct Rates {
 /// The two proposal streams' rates, in the units of `S_A`.
 #[derive(Clone, Copy, Debug)]
 struct StreamRates {
-    main: f64,
+    over: f64,
     total: f64,
 }
 
@@ -638,16 +642,14 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// the overflow countdown.
     fn refresh<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Rates {
         let mut rates = self.rates();
-        if self.n >= 2
-            && rates.total > 0.0
-            && (self.rates_stale || self.over_rate > rates.total / 16.0)
+        if self.n >= 2 && rates.total > 0.0 && (self.rates_stale || rates.over > rates.total / 16.0)
         {
             self.rebuild_tables();
             rates = self.rates();
         }
         self.rates_changed = false;
-        self.over_rate = rates.total - rates.main;
-        self.over_p = (self.over_rate / rates.total).clamp(0.0, 1.0);
+        self.over_rate = rates.over;
+        self.over_p = (rates.over / rates.total).clamp(0.0, 1.0);
         self.countdown = geometric(self.over_p, rng);
         Rates {
             live: rates.total > 0.0 && self.n >= 2,
@@ -655,16 +657,34 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
     }
 
-    /// The main stream's rate `Σ_k main_k main_{R+k} s_k s_{R+k}` and the total
-    /// `Σ_k T_k T_{R+k} s_k s_{R+k}` (`T` = the rows' current weights).
+    /// The streams' rates: main `Σ_k M_k M_{R+k} s_k s_{R+k}` and overflow (the sum
+    /// of [`Self::over_terms`]), each summed from its own terms so that a small
+    /// overflow keeps its relative precision.
     fn rates(&self) -> StreamRates {
-        let (mut main, mut total) = (0.0, 0.0);
+        let (mut main, mut over) = (0.0, 0.0);
         for k in 0..R {
             let ck = self.scale[k] * self.scale[R + k];
             main += self.main[k] as f64 * self.main[R + k] as f64 * ck;
-            total += self.row_total[k] as f64 * self.row_total[R + k] as f64 * ck;
+            let [a, b] = self.over_terms(k);
+            over += a + b;
         }
-        StreamRates { main, total }
+        StreamRates {
+            over,
+            total: main + over,
+        }
+    }
+
+    /// Component k's overflow terms: `O_k T_{R+k} s_k s_{R+k}` (side u grown) and
+    /// `M_k O_{R+k} s_k s_{R+k}` (side u in the tables, side v grown), `O = T − M`
+    /// (saturating: the terms are meaningless only while the tables are stale).
+    fn over_terms(&self, k: usize) -> [f64; 2] {
+        let ck = self.scale[k] * self.scale[R + k];
+        let ou = self.row_total[k].saturating_sub(self.main[k]) as f64;
+        let ov = self.row_total[R + k].saturating_sub(self.main[R + k]) as f64;
+        [
+            ou * self.row_total[R + k] as f64 * ck,
+            self.main[k] as f64 * ov * ck,
+        ]
     }
 
     /// Rebuilds the tables from the current slots (which become `tab`); the overflow
@@ -687,6 +707,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // side u, jointly over (k, b): integer weights summing to at most 2^61
         sc.weights.clear();
         for (k, &ck) in c.iter().enumerate() {
+            if ck <= 0.0 {
+                // no pairs of component k (its v row is empty)
+                continue;
+            }
             let f = ck * (1u64 << 61) as f64 / sa;
             for (b, bk) in self.buckets.iter().enumerate() {
                 // q · slots is exact in u64; rounded up once, so a bucket with
@@ -756,15 +780,23 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         &self,
         rng: &mut Rn,
     ) -> Option<((usize, u64, u64), (usize, u64, u64))> {
+        let ((bu, su), (bv, sv)) = self.overflow_slots(rng)?;
+        let xu = self.occupant(bu, su)?;
+        let xv = self.occupant(bv, sv)?;
+        Some(((bu, su, xu), (bv, sv, xv)))
+    }
+
+    /// The two slots `((bu, su), (bv, sv))` of an overflow-stream proposal (`None`
+    /// only when the overflow is empty).
+    #[allow(clippy::type_complexity)]
+    fn overflow_slots<Rn: Rng + ?Sized>(
+        &self,
+        rng: &mut Rn,
+    ) -> Option<((usize, u64), (usize, u64))> {
         let mut r = open_unit(rng) * self.over_rate;
         let mut pick = None;
         'terms: for k in 0..R {
-            let ck = self.scale[k] * self.scale[R + k];
-            let terms = [
-                (self.row_total[k] - self.main[k]) as f64 * self.row_total[R + k] as f64 * ck,
-                self.main[k] as f64 * (self.row_total[R + k] - self.main[R + k]) as f64 * ck,
-            ];
-            for (grown_u, w) in [true, false].into_iter().zip(terms) {
+            for (grown_u, w) in [true, false].into_iter().zip(self.over_terms(k)) {
                 if w > 0.0 {
                     pick = Some((k, grown_u));
                     if r < w {
@@ -794,9 +826,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             let u = (bu, below(rng, self.buckets[bu].tab));
             (u, self.pick_over(R + k, rng))
         };
-        let xu = self.occupant(bu, su)?;
-        let xv = self.occupant(bv, sv)?;
-        Some(((bu, su, xu), (bv, sv, xv)))
+        Some(((bu, su), (bv, sv)))
     }
 
     /// Draws side u of a proposal — component k, bucket and slot — and prefetches the
@@ -824,6 +854,23 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         (k, bu, su)
     }
 
+    /// Draws side v of a main-stream proposal of component k whose side u is in bucket
+    /// `bu`. A full singleton bucket holds only its size, so its slot is drawn only if
+    /// it is `bu` (for the same-particle test); deferring that draw keeps the two slots
+    /// independent and uniform.
+    #[inline(always)]
+    fn draw_v<Rn: Rng + ?Sized>(&self, k: usize, bu: usize, rng: &mut Rn) -> (usize, u64) {
+        let bv = self.side_v[k].sample(rng.next_u64()) as usize;
+        let bk = &self.buckets[bv];
+        // (a width-1 bucket is a singleton: `sh == 0`)
+        let sv = if bu != bv && bk.sh == 0 && bk.slots == bk.n {
+            0
+        } else {
+            below(rng, bk.tab)
+        };
+        (bv, sv)
+    }
+
     /// `Σ_b q_r(b) n_b`: the weight of the real particles in row r.
     fn live(&self, r: usize) -> u64 {
         self.buckets.iter().map(|bk| bk.q[r] * bk.n).sum()
@@ -846,10 +893,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// One proposal; returns whether it was accepted.
     #[inline(always)]
     fn propose<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn, rep: &mut StepReport) -> Result<bool> {
-        // side u first: an empty slot rejects before side v is drawn. A full singleton
-        // bucket holds only its size, so its slot is drawn only if side v lands in the
-        // same bucket (for the same-particle test); deferring that draw keeps the two
-        // slots independent and uniform.
+        // Main stream: side u first, so an empty slot rejects before side v is drawn.
         // With a count array beyond the caches, side u is drawn one proposal ahead and
         // its slot prefetched: the draw depends only on the tables, which stay fixed
         // until a refresh discards it.
@@ -865,21 +909,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             } else {
                 self.draw_u(rng, false)
             };
-            // (a width-1 bucket is a singleton: `sh == 0`)
-            let full_single = |s: &Self, b: usize| {
-                let bk = &s.buckets[b];
-                bk.sh == 0 && bk.slots == bk.n
-            };
             let Some(xu) = self.occupant(bu, su) else {
                 rep.rejections += 1;
                 return Ok(false);
             };
-            let bv = self.side_v[k].sample(rng.next_u64()) as usize;
-            let sv = if bu != bv && full_single(self, bv) {
-                0
-            } else {
-                below(rng, self.buckets[bv].tab)
-            };
+            let (bv, sv) = self.draw_v(k, bu, rng);
             let Some(xv) = self.occupant(bv, sv) else {
                 rep.rejections += 1;
                 return Ok(false);
@@ -1244,6 +1278,10 @@ mod tests {
                 over.sort_unstable();
                 grown.sort_unstable();
                 assert_eq!(over, grown, "overflow buckets");
+                if !self.rates_changed {
+                    let sum: f64 = (0..R).map(|k| self.over_terms(k).iter().sum::<f64>()).sum();
+                    assert_eq!(sum, self.over_rate, "overflow rate");
+                }
             }
         }
     }
@@ -1321,6 +1359,121 @@ mod tests {
                 assert!(w[index(want)] > 0);
             }
         }
+    }
+
+    /// Both streams together propose every ordered pair of slots at its rate: with
+    /// buckets grown since the tables were built (so the overflow stream is in play),
+    /// 2·10^6 raw proposals are counted per cell (u bucket, u slot grown?, v bucket, v
+    /// slot grown?) and compared with `Σ_k q_k(bu) q_{R+k}(bv) s_k s_{R+k} × slots`
+    /// by a chi-square test; the overflow stream's share is checked on its own. A
+    /// factor 2 anywhere in the overflow stream moves its share by tens of SE.
+    fn streams_match_the_pair_rates<K: CoagulationKernel, const R: usize, const W: usize>(
+        kernel: K,
+        seed: u64,
+    ) {
+        let init: Vec<u64> = (0..120u64).map(|i| 1 + (i * 7) % 13).collect();
+        let v = init.iter().sum::<u64>() as f64;
+        let mut s = Bucketed::<K, R, W>::new(kernel, &init, v).unwrap();
+        let mut rng = <rand_pcg::Pcg64Mcg as rand_core::SeedableRng>::seed_from_u64(seed);
+        let _ = s.refresh(&mut rng);
+        assert!(!s.rates_stale);
+        // grow some buckets (twice for one) without rebuilding the tables
+        for b in [2, 9, 40, 70, 80, 2, 9, 40, 70, 80, 80] {
+            s.grow(b);
+        }
+        let _ = s.refresh(&mut rng);
+        assert!(!s.over.is_empty() && s.over_p > 0.0 && !s.rates_stale);
+        s.check_invariants();
+        let nb = s.buckets.len();
+        let cell = |bu: usize, gu: bool, bv: usize, gv: bool| {
+            ((bu * nb + bv) * 2 + usize::from(gu)) * 2 + usize::from(gv)
+        };
+        let mut obs = vec![0u64; nb * nb * 4];
+        let draws = 2_000_000u64;
+        let mut from_over = 0u64;
+        for _ in 0..draws {
+            let ((bu, su), (bv, sv)) = if open_unit(&mut rng) <= s.over_p {
+                from_over += 1;
+                s.overflow_slots(&mut rng).unwrap()
+            } else {
+                let (k, bu, su) = s.draw_u(&mut rng, false);
+                ((bu, su), s.draw_v(k, bu, &mut rng))
+            };
+            assert!(su < s.buckets[bu].slots && sv < s.buckets[bv].slots);
+            obs[cell(bu, su >= s.buckets[bu].tab, bv, sv >= s.buckets[bv].tab)] += 1;
+        }
+        // expected cell probabilities
+        let mut exp = vec![0.0f64; nb * nb * 4];
+        let mut total = 0.0;
+        for (bu, gu) in s.buckets.iter().enumerate() {
+            for (bv, gv) in s.buckets.iter().enumerate() {
+                for (grown_u, nu) in [(false, gu.tab), (true, gu.slots - gu.tab)] {
+                    for (grown_v, nv) in [(false, gv.tab), (true, gv.slots - gv.tab)] {
+                        let mut w = 0.0;
+                        for k in 0..R {
+                            w += (gu.q[k] * nu) as f64
+                                * (gv.q[R + k] * nv) as f64
+                                * s.scale[k]
+                                * s.scale[R + k];
+                        }
+                        exp[cell(bu, grown_u, bv, grown_v)] = w;
+                        total += w;
+                    }
+                }
+            }
+        }
+        let (mut chi2, mut df, mut pooled_o, mut pooled_e) = (0.0, 0u64, 0.0, 0.0);
+        let mut over_e = 0.0;
+        for c in 0..exp.len() {
+            let e = exp[c] / total * draws as f64;
+            if c % 4 != 0 {
+                over_e += e;
+            }
+            if e >= 5.0 {
+                chi2 += (obs[c] as f64 - e).powi(2) / e;
+                df += 1;
+            } else {
+                assert!(e > 0.0 || obs[c] == 0, "a pair of rate 0 was proposed");
+                pooled_o += obs[c] as f64;
+                pooled_e += e;
+            }
+        }
+        if pooled_e > 0.0 {
+            chi2 += (pooled_o - pooled_e).powi(2) / pooled_e;
+            df += 1;
+        }
+        let df = (df - 1) as f64;
+        // the chi-square's mean is df, its sd √(2 df): 6 sd is a 1e-6 false alarm
+        assert!(
+            chi2 < df + 6.0 * libm::sqrt(2.0 * df),
+            "chi2 {chi2} for {df} df"
+        );
+        // the overflow stream's own share (every grown-slot pair is its)
+        let se = libm::sqrt(over_e * (1.0 - over_e / draws as f64));
+        let seen: u64 = (0..obs.len()).filter(|c| c % 4 != 0).map(|c| obs[c]).sum();
+        assert!(
+            (seen as f64 - over_e).abs() < 5.0 * se,
+            "grown-slot pairs {seen} vs {over_e}"
+        );
+        // the overflow stream proposes exactly the pairs with a grown slot
+        assert_eq!(from_over, seen, "overflow draws");
+        assert!(
+            over_e > 10_000.0,
+            "the overflow must carry weight: {over_e}"
+        );
+    }
+
+    #[test]
+    fn streams_match_the_pair_rates_rank1() {
+        streams_match_the_pair_rates::<_, 1, 2>(crate::kernel::Coagulation::additive(), 21);
+    }
+
+    #[test]
+    fn streams_match_the_pair_rates_rank3() {
+        let k = crate::kernel::Coagulation::free_molecular()
+            .with_min_size(1.0)
+            .unwrap();
+        streams_match_the_pair_rates::<_, 3, 6>(k, 22);
     }
 
     #[test]
