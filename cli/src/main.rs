@@ -122,6 +122,13 @@ enum BenchKind {
         /// Wall-clock budget per baseline run, in seconds (cells beyond it print "-").
         #[arg(long, default_value_t = 600.0)]
         budget: f64,
+        /// Budget of the acceptance-rejection runs alone (default: --budget), e.g. to
+        /// let it finish a row the paper timed beyond ten minutes.
+        #[arg(long)]
+        ar_budget: Option<f64>,
+        /// Budget of the inverse runs alone (default: --budget); 0 skips them.
+        #[arg(long)]
+        inverse_budget: Option<f64>,
         /// Only this table: brownian, ballistic or linear.
         #[arg(long)]
         only: Option<String>,
@@ -224,14 +231,36 @@ fn main() -> ExitCode {
                 BenchKind::Lowrank {
                     n0,
                     budget,
+                    ar_budget,
+                    inverse_budget,
                     only,
                     skip_baselines,
                     repeat,
                     seed,
                 },
         } => {
-            bench::lowrank(n0, budget, only, skip_baselines, repeat, seed);
-            Ok(())
+            let budgets = bench::Budgets {
+                ar: ar_budget.unwrap_or(budget),
+                inverse: inverse_budget.unwrap_or(budget),
+            };
+            let bad = [
+                ("--budget", budget),
+                ("--ar-budget", budgets.ar),
+                ("--inverse-budget", budgets.inverse),
+            ]
+            .into_iter()
+            .find(|&(_, b)| !(b.is_finite() && b >= 0.0));
+            match bad {
+                Some((name, value)) => Err(coagula_core::Error::OutOfRange {
+                    name,
+                    value,
+                    range: "[0, inf) seconds",
+                }),
+                None => {
+                    bench::lowrank(n0, budgets, only, skip_baselines, repeat, seed);
+                    Ok(())
+                }
+            }
         }
         Command::Bench {
             which:
