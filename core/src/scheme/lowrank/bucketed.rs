@@ -60,8 +60,17 @@
 //! branch-free component choice and a precomputed mean time step 499; the joint (k, u)
 //! table and on-demand live weights cut another 3–9 % of wall time at N = 10^7. On the
 //! paper's large-M rows lists alone were slower than the per-size tree (a cache miss
-//! per read in 40 MB of lists); grid mode fixed that. See `coagula bench lowrank` for
-//! the tables.
+//! per read in 40 MB of lists); grid mode fixed that. Later steps, timed as alternating
+//! A/B runs of two builds (minimum of 4–8 each, N0 = 10^7): batched proposal times
+//! (linear t = 1 11 %, t = 6 7 % faster); `propose` inlined (linear t = 1 12–15 %);
+//! list buckets kept out of the count array (linear t = 6 14–20 %, Brownian t = 1e5
+//! 7 %); exact power-of-two factor scales, so exact singleton pairs skip the
+//! acceptance draw (linear t = 1 7 %); resyncs that skip sparse list buckets and
+//! re-judge near-dense ones only after 1/8 change (Brownian t = 1e5 6 % + 4 %); the
+//! overflow stream (linear t = 6 8 %) and the finer growth and resync it allowed. At
+//! N0 = 10^5 and M ~ 10^6 this layout went from 2–3× slower than the per-size tree
+//! (a rebuild per growth) to 2.4–3.3× faster. See `coagula bench lowrank` for the
+//! tables.
 //!
 //! The state is the counts `N_i` (see [`Bucketed::counts`]); M doubling and particle
 //! doubling work as in [`super::LowRank`]. Allocation happens when M doubles, when the
