@@ -201,22 +201,21 @@ mod tests {
         }
     }
 
-    /// A unit-rate Poisson process stepped by batches towards t, with the rate
-    /// "changing" (a restart) after a geometric number of arrivals: the arrivals before
-    /// t must be Poisson(t) — a law that depends on every restart time and every
-    /// cut-back being right. Run with the schemes' margin (cut-backs rare) and with a
-    /// negative one (most batches overshoot t and are cut back).
-    fn poisson_through_restarts(margin: f64, seed: u64) {
+    /// Arrivals of a unit-rate Poisson process before t = 2000, stepped by batches
+    /// with the rate "changing" (a restart) after a geometric number of arrivals (mean
+    /// 300) and one exponential at a time at the end, as the schemes do. `misplace`
+    /// restarts at the batch's end instead of the arrival's time (a plausible bug).
+    /// Returns the counts per replica and the numbers of restarts, cut-back batches
+    /// and restarts inside cut-back batches.
+    fn arrivals(margin: f64, seed: u64, reps: usize, misplace: bool) -> (Vec<f64>, [u64; 3]) {
         let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(seed);
         let t = 2000.0;
-        let reps = 4000;
         let mut counts = Vec::with_capacity(reps);
-        let (mut restarts, mut cut_restarts, mut cuts) = (0u64, 0u64, 0u64);
+        let mut seen = [0u64; 3];
         for _ in 0..reps {
             let (mut now, mut n) = (0.0, 0u64);
             loop {
                 let Some(b) = Batch::plan_with_margin(now, 1.0, t, margin, &mut rng) else {
-                    // one exponential at a time, as the schemes do near the end
                     loop {
                         now += super::super::exp1(&mut rng);
                         if now > t {
@@ -226,18 +225,22 @@ mod tests {
                     }
                     break;
                 };
-                cuts += u64::from(b.last);
+                seen[1] += u64::from(b.last);
                 let mut k = 0;
                 let mut restarted = false;
                 while k < b.len {
                     k += 1;
                     n += 1;
                     if open_unit(&mut rng) < 1.0 / 300.0 {
-                        now = b.time_of(k, &mut rng);
+                        now = if misplace {
+                            b.end
+                        } else {
+                            b.time_of(k, &mut rng)
+                        };
                         assert!(now >= b.start && now <= b.end);
                         restarted = true;
-                        restarts += 1;
-                        cut_restarts += u64::from(b.last);
+                        seen[0] += 1;
+                        seen[2] += u64::from(b.last);
                         break;
                     }
                 }
@@ -250,6 +253,15 @@ mod tests {
             }
             counts.push(n as f64);
         }
+        (counts, seen)
+    }
+
+    /// The arrivals before t must be Poisson(t) — a law that depends on every restart
+    /// time and every cut-back being right. Run with the schemes' margin (cut-backs
+    /// rare) and with a negative one (most batches overshoot t and are cut back).
+    fn poisson_through_restarts(margin: f64, seed: u64) {
+        let (t, reps) = (2000.0, 4000);
+        let (counts, [restarts, cuts, cut_restarts]) = arrivals(margin, seed, reps, false);
         assert!(restarts > 5 * reps as u64, "restarts exercised: {restarts}");
         if margin < 0.0 {
             assert!(
@@ -313,38 +325,13 @@ mod tests {
         }
     }
 
-    /// A wrong restart time would show: placing the k-th arrival at the batch's end
-    /// instead (a plausible bug) must fail the same check.
+    /// The Poisson check has power: restarting at the batch's end instead of the
+    /// arrival's time moves the mean count by far more than 5 SE.
     #[test]
     fn the_poisson_check_catches_misplaced_restarts() {
-        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(13);
-        let t = 2000.0;
-        let reps = 2000;
-        let mut total = 0.0;
-        for _ in 0..reps {
-            let (mut now, mut n) = (0.0, 0u64);
-            while let Some(b) = Batch::plan(now, 1.0, t, &mut rng) {
-                let mut k = 0;
-                let mut restarted = false;
-                while k < b.len {
-                    k += 1;
-                    n += 1;
-                    if open_unit(&mut rng) < 1.0 / 300.0 {
-                        now = b.end; // wrong: should be time_of(k)
-                        restarted = true;
-                        break;
-                    }
-                }
-                if !restarted {
-                    now = b.end;
-                    if b.last {
-                        break;
-                    }
-                }
-            }
-            total += n as f64;
-        }
-        let m = total / reps as f64;
+        let (t, reps) = (2000.0, 2000);
+        let (counts, _) = arrivals(SIGMAS, 13, reps, true);
+        let (m, _) = mean_var(&counts);
         assert!(
             (m - t).abs() > 5.0 * libm::sqrt(t / reps as f64),
             "mean {m}"

@@ -732,25 +732,22 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             }
         }
         self.joint.rebuild(sc);
-        for (k, table) in self.side_v.iter_mut().enumerate() {
+        // one row over the buckets, weight q_r(b) tab_b
+        let mut row = |table: &mut Alias, r: usize| {
             sc.weights.clear();
             sc.weights.extend(
                 self.buckets
                     .iter()
                     .enumerate()
-                    .map(|(b, bk)| (bk.q[R + k] * bk.tab, b as u32)),
+                    .map(|(b, bk)| (bk.q[r] * bk.tab, b as u32)),
             );
             table.rebuild(sc);
+        };
+        for (k, table) in self.side_v.iter_mut().enumerate() {
+            row(table, R + k);
         }
         for (k, table) in self.side_u.iter_mut().enumerate() {
-            sc.weights.clear();
-            sc.weights.extend(
-                self.buckets
-                    .iter()
-                    .enumerate()
-                    .map(|(b, bk)| (bk.q[k] * bk.tab, b as u32)),
-            );
-            table.rebuild(sc);
+            row(table, k);
         }
         self.rates_stale = false;
         // a side-u draw made against the old tables is void
