@@ -366,3 +366,68 @@ fn single_b<K: CoagulationKernel, const R: usize, const W: usize>(
     );
     (rep.events, sim.max_size())
 }
+
+/// `coagula bench lowrank-small`: the per-size tree and the bucketed layout on many
+/// small constant-kernel systems (a host running many small cells), side by side.
+pub fn lowrank_small(
+    n0s: &[u64],
+    len: usize,
+    t: f64,
+    replicas: u64,
+) -> Result<(), coagula_core::Error> {
+    if !(t.is_finite() && t > 0.0) {
+        return Err(coagula_core::Error::OutOfRange {
+            name: "--t",
+            value: t,
+            range: "(0, inf)",
+        });
+    }
+    if len == 0 || replicas < 2 {
+        return Err(coagula_core::Error::OutOfRange {
+            name: "--len / --replicas",
+            value: len.min(replicas as usize) as f64,
+            range: "len >= 1, replicas >= 2",
+        });
+    }
+    let k = Coagulation::constant(1.0)?;
+    println!(
+        "constant kernel, monomers in a count vector of length {len}, to t = {t}, {replicas} replicas"
+    );
+    println!(
+        "{:>8} {:>9} | {:>9} {:>9} {:>12} {:>10}",
+        "N0", "layout", "accept", "s", "mean N/V", "SE"
+    );
+    for &n0 in n0s {
+        let mut init = vec![0u64; len];
+        init[0] = n0;
+        let v = n0 as f64;
+        for layout in ["tree", "bucketed"] {
+            let start = Instant::now();
+            let (mut prop, mut ev) = (0u64, 0u64);
+            let mut st = coagula_core::observe::Replicas::new();
+            for r in 0..replicas {
+                let mut rng = Pcg64Mcg::seed_from_u64(r ^ (n0 << 32));
+                let (rep, nv) = if layout == "tree" {
+                    let mut s = LowRank::<_, 1>::new(k, &init, v)?;
+                    let rep = s.advance_to(t, &mut rng)?;
+                    (rep, s.particles() as f64 / s.volume())
+                } else {
+                    let mut s = Bucketed::<_, 1, 2>::new(k, &init, v)?;
+                    let rep = s.advance_to(t, &mut rng)?;
+                    (rep, s.particles() as f64 / s.volume())
+                };
+                prop += rep.proposals;
+                ev += rep.events;
+                st.push(nv);
+            }
+            println!(
+                "{n0:>8} {layout:>9} | {:>9.4} {:>9.3} {:>12.6} {:>10.2e}",
+                ev as f64 / prop.max(1) as f64,
+                start.elapsed().as_secs_f64(),
+                st.mean(),
+                st.std_error()
+            );
+        }
+    }
+    Ok(())
+}

@@ -161,6 +161,23 @@ enum BenchKind {
         #[arg(long)]
         bucketed: bool,
     },
+    /// Small systems side by side: per-size tree vs bucketed low-rank, many replicas of
+    /// a constant-kernel run from N0 monomers, reporting acceptance (events/proposals),
+    /// seconds and the mean N/V with its standard error.
+    LowrankSmall {
+        /// Initial particle numbers, comma-separated.
+        #[arg(long, value_delimiter = ',', default_values_t = [32u64, 128, 256, 1000])]
+        n0: Vec<u64>,
+        /// Length of the initial count vector (monomers only; longer = larger M).
+        #[arg(long, default_value_t = 1)]
+        len: usize,
+        /// End time.
+        #[arg(long, default_value_t = 64.0)]
+        t: f64,
+        /// Replicas per layout.
+        #[arg(long, default_value_t = 1000)]
+        replicas: u64,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -276,6 +293,15 @@ fn main() -> ExitCode {
             bench::lowrank_single(&kernel, n0, t, seed, binary, bucketed);
             Ok(())
         }
+        Command::Bench {
+            which:
+                BenchKind::LowrankSmall {
+                    n0,
+                    len,
+                    t,
+                    replicas,
+                },
+        } => bench::lowrank_small(&n0, len, t, replicas),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

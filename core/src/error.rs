@@ -99,6 +99,17 @@ pub enum Error {
         /// What overflowed.
         name: &'static str,
     },
+    /// A kernel returned a rate above the bound it declared (the low-rank bound, or
+    /// the supremum acceptance–rejection proposes with): a scheme built on that bound
+    /// would be biased, so it stops instead.
+    BoundExceeded {
+        /// Which bound was exceeded.
+        name: &'static str,
+        /// The kernel's value.
+        rate: f64,
+        /// The declared bound at that pair.
+        bound: f64,
+    },
 }
 
 impl fmt::Display for Error {
@@ -145,6 +156,10 @@ impl fmt::Display for Error {
             Error::Unsupported { what } => write!(f, "not supported: {what}"),
             Error::Checkpoint { what } => write!(f, "cannot restore checkpoint: {what}"),
             Error::Overflow { name } => write!(f, "integer overflow in {name}"),
+            Error::BoundExceeded { name, rate, bound } => write!(
+                f,
+                "the kernel returned {rate}, above its declared {name} {bound}: the bound must hold for every pair"
+            ),
         }
     }
 }

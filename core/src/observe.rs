@@ -202,10 +202,141 @@ pub fn student_t_975(df: u64) -> f64 {
     }
 }
 
+/// Two-sided false-alarm probability of one statistical comparison in coagula's own
+/// tests, `coagula validate` and the C/C++/Fortran clients. CI makes fewer than 1 000
+/// such comparisons per run (they are counted in `docs/design/statistical-tests.md`),
+/// so by the union bound a correct build fails a CI run by chance with probability
+/// below 1e-3 — whenever a change re-rolls the seeded random streams.
+pub const TEST_ALPHA: f64 = 1e-6;
+
+/// The two-sided threshold `z` with `P(|T_ν| > z) = alpha` for Student's t with
+/// `df = ν` degrees of freedom (the standard normal for `df = u64::MAX`), by bisection
+/// on the exact tail (regularised incomplete beta); accurate to ~1e-10 relative.
+/// NaN for `df = 0` or `alpha` outside (0, 1).
+///
+/// A mean of R replicas compared with a known value using the replicas' own standard
+/// error is off by more than `student_t_threshold(alpha, R − 1)` SE with probability
+/// `alpha` (for normal replica values).
+///
+/// ```
+/// use coagula_core::observe::student_t_threshold;
+/// assert!((student_t_threshold(0.05, 15) - 2.131449545559776).abs() < 1e-9);
+/// assert!((student_t_threshold(0.05, u64::MAX) - 1.959963984540054).abs() < 1e-9);
+/// ```
+pub fn student_t_threshold(alpha: f64, df: u64) -> f64 {
+    if df == 0 || !(alpha > 0.0 && alpha < 1.0) {
+        return f64::NAN;
+    }
+    let tail = |z: f64| -> f64 {
+        if df == u64::MAX {
+            libm::erfc(z / core::f64::consts::SQRT_2)
+        } else {
+            let v = df as f64;
+            incomplete_beta(v / (v + z * z), 0.5 * v, 0.5)
+        }
+    };
+    let (mut lo, mut hi) = (0.0f64, 1.0f64);
+    while tail(hi) > alpha {
+        hi *= 2.0;
+        if hi > 1e12 {
+            return f64::INFINITY;
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if tail(mid) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo <= 1e-12 * hi {
+            break;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The regularised incomplete beta function `I_x(a, b)`, by its continued fraction
+/// (modified Lentz), using the symmetry `I_x(a, b) = 1 − I_{1−x}(b, a)` where the
+/// fraction converges slowly.
+fn incomplete_beta(x: f64, a: f64, b: f64) -> f64 {
+    if x <= 0.0 {
+        return 0.0;
+    }
+    if x >= 1.0 {
+        return 1.0;
+    }
+    let ln_front = libm::lgamma(a + b) - libm::lgamma(a) - libm::lgamma(b)
+        + a * libm::log(x)
+        + b * libm::log1p(-x);
+    if x > (a + 1.0) / (a + b + 2.0) {
+        return 1.0 - incomplete_beta(1.0 - x, b, a);
+    }
+    const TINY: f64 = 1e-300;
+    let (mut c, mut d) = (1.0f64, 1.0 - (a + b) * x / (a + 1.0));
+    if d.abs() < TINY {
+        d = TINY;
+    }
+    d = 1.0 / d;
+    let mut f = d;
+    for m in 1..=1000 {
+        let m = f64::from(m);
+        // even step, then odd step of the fraction
+        for num in [
+            m * (b - m) * x / ((a + 2.0 * m - 1.0) * (a + 2.0 * m)),
+            -(a + m) * (a + b + m) * x / ((a + 2.0 * m) * (a + 2.0 * m + 1.0)),
+        ] {
+            d = 1.0 + num * d;
+            if d.abs() < TINY {
+                d = TINY;
+            }
+            c = 1.0 + num / c;
+            if c.abs() < TINY {
+                c = TINY;
+            }
+            d = 1.0 / d;
+            f *= c * d;
+        }
+        if (c * d - 1.0).abs() < 1e-15 {
+            break;
+        }
+    }
+    libm::exp(ln_front) * f / a
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use alloc::vec::Vec;
+
+    /// The t thresholds against published quantiles, and the 0.975 table against the
+    /// bisection.
+    #[test]
+    fn student_t_thresholds_match_tables() {
+        // (alpha two-sided, df, quantile): standard tables (e.g. Abramowitz & Stegun 26.10)
+        let known = [
+            (0.05, 1, 12.706204736174694),
+            (0.01, 1, 63.65674116287399),
+            (0.05, 7, 2.364624251592784),
+            (0.001, 15, 4.072765195903),
+            (0.01, 30, 2.749995653567),
+            (1e-6, u64::MAX, 4.891638475698),
+            (1e-3, u64::MAX, 3.290526731492),
+        ];
+        for (alpha, df, q) in known {
+            let z = student_t_threshold(alpha, df);
+            assert!(
+                (z - q).abs() < 1e-8 * q,
+                "alpha {alpha} df {df}: {z} vs {q}"
+            );
+        }
+        for df in [2u64, 5, 15, 30, 31, 100, 1000] {
+            let (a, b) = (student_t_threshold(0.05, df), student_t_975(df));
+            assert!((a - b).abs() < 1e-6 * b, "df {df}: {a} vs {b}");
+        }
+        assert!(student_t_threshold(0.05, 0).is_nan());
+        assert!(student_t_threshold(0.0, 3).is_nan());
+    }
 
     #[test]
     fn welford_matches_two_pass_on_shifted_data() {

@@ -69,7 +69,7 @@ pub(crate) fn status_of(e: &Error) -> i32 {
     match e {
         Error::BufferLength { .. } => COAG_BUFFER_TOO_SMALL,
         Error::Capacity { .. } | Error::Overflow { .. } => COAG_CAPACITY,
-        Error::InvalidRate { .. } => COAG_INVALID_RATE,
+        Error::InvalidRate { .. } | Error::BoundExceeded { .. } => COAG_INVALID_RATE,
         Error::Unsupported { .. } => COAG_UNSUPPORTED,
         Error::TimeBackwards { .. } => COAG_TIME_BACKWARDS,
         Error::Checkpoint { .. } => COAG_BAD_CHECKPOINT,

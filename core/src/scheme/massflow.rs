@@ -375,6 +375,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
             } else {
                 xk
             };
+            if !new.is_finite() {
+                // two sizes near f64::MAX merged: refuse the step, not return inf
+                return Err(Error::Overflow {
+                    name: "particle size (a coagulation passed the largest f64)",
+                });
+            }
             self.next[k] = new;
             self.changed[k] = new != xk;
         }

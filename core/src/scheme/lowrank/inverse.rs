@@ -11,9 +11,10 @@
 //! matrix (filled on first use, at most 32 MB), so an update costs a load and a
 //! multiply-add rather than a kernel evaluation — as an honest baseline should.
 //!
-//! A kernel that returns NaN or a negative rate in the middle of an event's row update
-//! makes `advance_to` fail with the state of that event half applied; the low-rank
-//! scheme, by contrast, validates before it changes anything.
+//! Every kernel value an event needs (the rows of both colliding sizes and of the
+//! merged size) is evaluated and validated before anything changes, so a kernel that
+//! returns NaN or a negative rate makes `advance_to` fail with the state as it was
+//! before that event.
 
 use super::{DEFAULT_SIZE_LIMIT, check_counts};
 use crate::error::{Error, Result};
@@ -47,8 +48,10 @@ pub struct Inverse<K> {
     diag: Vec<f64>,
     /// `slot[size - 1]` = position in the occupied arrays, or NONE.
     slot: Vec<u32>,
-    /// Scratch: K(i, ·) over the occupied slots.
+    /// Scratch: K(i, ·), K(j, ·) and K(i + j, ·) over the occupied slots.
     scratch: Vec<f64>,
+    scratch_j: Vec<f64>,
+    scratch_m: Vec<f64>,
     /// `K(x, y)` at `(x − 1) · dim + y − 1` for `x, y ≤ dim`, or −1 when not yet
     /// evaluated; `dim` doubles with the largest size, up to [`CACHE_DIM`].
     cache: Vec<f64>,
@@ -89,6 +92,8 @@ impl<K: CoagulationKernel> Inverse<K> {
             diag: Vec::new(),
             slot: vec![NONE; counts.len().next_power_of_two()],
             scratch: Vec::new(),
+            scratch_j: Vec::new(),
+            scratch_m: Vec::new(),
             cache: Vec::new(),
             dim: 0,
             n,
@@ -197,51 +202,6 @@ impl<K: CoagulationKernel> Inverse<K> {
     pub fn totals(&self) -> StepReport {
         self.totals
     }
-
-    /// Adds `delta` particles of size `x` and updates every row sum; creates or removes
-    /// the slot as needed.
-    fn change(&mut self, x: u64, delta: i64) -> Result<()> {
-        let xi = x as usize - 1;
-        if xi >= self.slot.len() {
-            self.slot.resize((xi + 1).next_power_of_two(), NONE);
-        }
-        // row sums move by K(k, x) * delta
-        for a in 0..self.size.len() {
-            let k = self.rate(self.size[a], x)?;
-            self.row[a] += k * delta as f64;
-        }
-        if self.slot[xi] == NONE {
-            // new occupied size: its row sum from scratch (it already includes itself)
-            let d = self.rate(x, x)?;
-            let mut r = d * delta as f64;
-            for b in 0..self.size.len() {
-                r += self.rate(x, self.size[b])? * self.count[b] as f64;
-            }
-            self.slot[xi] = self.size.len() as u32;
-            self.size.push(x);
-            self.count.push(delta as u64);
-            self.row.push(r);
-            self.diag.push(d);
-        } else {
-            let a = self.slot[xi] as usize;
-            let c = self.count[a] as i64 + delta;
-            if c == 0 {
-                // swap-remove the slot
-                let last = self.size.len() - 1;
-                self.slot[xi] = NONE;
-                if a != last {
-                    self.slot[self.size[last] as usize - 1] = a as u32;
-                }
-                self.size.swap_remove(a);
-                self.count.swap_remove(a);
-                self.row.swap_remove(a);
-                self.diag.swap_remove(a);
-            } else {
-                self.count[a] = c as u64;
-            }
-        }
-        Ok(())
-    }
 }
 
 impl<K: CoagulationKernel> Scheme for Inverse<K> {
@@ -320,19 +280,17 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                     capacity: self.size_limit as usize,
                 });
             }
-            rep.proposals += 1;
-            self.time += dt;
-            // removals first (reuse the cached row of i for its own removal)
-            for a in 0..occ {
-                self.row[a] -= self.scratch[a];
-            }
-            if let Err(e) = self
-                .finish_removal(xi)
-                .and_then(|()| self.change(xj, -1))
-                .and_then(|()| self.change(merged, 1))
-            {
+            // every kernel value the event needs, validated before anything changes
+            let dm = match self.event_rows(xj, merged) {
+                Ok(d) => d,
+                Err(e) => break Err(e),
+            };
+            if let Err(e) = self.reserve_size(merged) {
                 break Err(e);
             }
+            rep.proposals += 1;
+            self.time += dt;
+            self.apply_event(ia, ja, merged, dm);
             self.n -= 1;
             rep.events += 1;
             if self.n < self.n0 / 2 {
@@ -352,23 +310,92 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
 }
 
 impl<K: CoagulationKernel> Inverse<K> {
-    /// Removes one particle of size `x` whose row contribution was already subtracted.
-    fn finish_removal(&mut self, x: u64) -> Result<()> {
-        let a = self.slot[x as usize - 1] as usize;
-        if self.count[a] == 1 {
-            let last = self.size.len() - 1;
-            self.slot[x as usize - 1] = NONE;
-            if a != last {
-                self.slot[self.size[last] as usize - 1] = a as u32;
+    /// Fills `scratch_j = K(·, x_j)` and `scratch_m = K(·, merged)` over the occupied
+    /// slots (`scratch` already holds `K(x_i, ·)`) and returns `K(merged, merged)`; an
+    /// invalid kernel value is an error, with nothing changed.
+    fn event_rows(&mut self, xj: u64, merged: u64) -> Result<f64> {
+        let (mut kj, mut km) = (
+            core::mem::take(&mut self.scratch_j),
+            core::mem::take(&mut self.scratch_m),
+        );
+        kj.clear();
+        km.clear();
+        let mut fill = || -> Result<f64> {
+            for a in 0..self.size.len() {
+                let x = self.size[a];
+                kj.push(self.rate(x, xj)?);
+                km.push(self.rate(x, merged)?);
             }
-            self.size.swap_remove(a);
-            self.count.swap_remove(a);
-            self.row.swap_remove(a);
-            self.diag.swap_remove(a);
-        } else {
-            self.count[a] -= 1;
+            self.rate(merged, merged)
+        };
+        let d = fill();
+        self.scratch_j = kj;
+        self.scratch_m = km;
+        d
+    }
+
+    /// Makes room in the size index for size `x` (the only allocation of an event).
+    fn reserve_size(&mut self, x: u64) -> Result<()> {
+        let need = x as usize;
+        if need > self.slot.len() {
+            let len = need.next_power_of_two();
+            self.slot
+                .try_reserve_exact(len - self.slot.len())
+                .map_err(|_| Error::Capacity {
+                    name: "memory for the size index",
+                    capacity: self.slot.len(),
+                })?;
+            self.slot.resize(len, NONE);
         }
         Ok(())
+    }
+
+    /// Applies a collision of the particles in slots `ia` and `ja` (equal for two
+    /// particles of one size) into size `merged`, with the rows of `event_rows`:
+    /// infallible, so an event is applied whole or not at all.
+    fn apply_event(&mut self, ia: usize, ja: usize, merged: u64, dm: f64) {
+        let occ = self.size.len();
+        for a in 0..occ {
+            self.row[a] += self.scratch_m[a] - self.scratch[a] - self.scratch_j[a];
+        }
+        self.count[ia] -= 1;
+        self.count[ja] -= 1;
+        let mi = merged as usize - 1;
+        if self.slot[mi] == NONE {
+            // a new occupied size: its row from scratch (it includes itself)
+            let mut r = dm;
+            for b in 0..occ {
+                r += self.scratch_m[b] * self.count[b] as f64;
+            }
+            self.slot[mi] = occ as u32;
+            self.size.push(merged);
+            self.count.push(1);
+            self.row.push(r);
+            self.diag.push(dm);
+        } else {
+            self.count[self.slot[mi] as usize] += 1;
+        }
+        // emptied slots go, the higher index first so the other keeps its place
+        let (hi, lo) = (ia.max(ja), ia.min(ja));
+        if self.count[hi] == 0 {
+            self.remove_slot(hi);
+        }
+        if lo != hi && self.count[lo] == 0 {
+            self.remove_slot(lo);
+        }
+    }
+
+    /// Swap-removes occupied slot `a` (its count is zero).
+    fn remove_slot(&mut self, a: usize) {
+        let last = self.size.len() - 1;
+        self.slot[self.size[a] as usize - 1] = NONE;
+        if a != last {
+            self.slot[self.size[last] as usize - 1] = a as u32;
+        }
+        self.size.swap_remove(a);
+        self.count.swap_remove(a);
+        self.row.swap_remove(a);
+        self.diag.swap_remove(a);
     }
 }
 

@@ -92,6 +92,8 @@ pub struct LowRank<K, const R: usize, T = WideTree<R>> {
     time: f64,
     totals: StepReport,
     zig: Ziggurat,
+    /// Proposals accepted without evaluating K until the next spot check.
+    spot: u32,
 }
 
 impl<K, const R: usize, T> core::fmt::Debug for LowRank<K, R, T> {
@@ -123,6 +125,40 @@ pub(crate) fn factors_at<K: CoagulationKernel, const R: usize>(
         }
     }
     Ok((a, b))
+}
+
+/// A kernel whose bound is exact (or whose acceptance a squeeze decides) is still
+/// evaluated at every `SPOT_CHECK`-th proposal accepted without it, so a kernel that
+/// turns NaN or exceeds its bound is caught (a deterministic countdown: the random
+/// stream is the same with or without the check).
+pub(crate) const SPOT_CHECK: u32 = 1024;
+
+/// `K(x, y)` validated against the proposal bound: a negative or non-finite value is
+/// [`Error::InvalidRate`], a value above `bound` (beyond rounding) is
+/// [`Error::BoundExceeded`] — a capped rate would bias the run silently.
+#[inline]
+pub(crate) fn bounded_rate<K: CoagulationKernel + ?Sized>(
+    kernel: &K,
+    x: f64,
+    y: f64,
+    bound: f64,
+    name: &'static str,
+) -> Result<f64> {
+    let c = kernel.rate(x, y);
+    if !(c >= 0.0 && c.is_finite()) {
+        return Err(Error::InvalidRate {
+            name: "coagulation kernel",
+            value: c,
+        });
+    }
+    if c > bound * (1.0 + 1e-12) {
+        return Err(Error::BoundExceeded {
+            name,
+            rate: c,
+            bound,
+        });
+    }
+    Ok(c)
 }
 
 /// Validates an initial count vector and returns its particle number.
@@ -172,6 +208,7 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             time: 0.0,
             totals: StepReport::default(),
             zig: Ziggurat::new(),
+            spot: SPOT_CHECK,
         };
         s.counts[..counts.len()].copy_from_slice(counts);
         s.extend_factors(m)?;
@@ -186,9 +223,13 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         self
     }
 
-    /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them.
+    /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them
+    /// (nothing to do when the tables already cover `m`).
     fn extend_factors(&mut self, m: usize) -> Result<()> {
         let start = self.fab.len();
+        if m <= start {
+            return Ok(());
+        }
         let (mut na, mut nb) = (Vec::with_capacity(m - start), Vec::with_capacity(m - start));
         for i in start + 1..=m {
             let (a, b) = factors_at::<K, R>(&self.kernel, i as f64)?;
@@ -267,22 +308,20 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             rep.rejections += 1;
             return Ok(false);
         }
-        if !self.exact_bound {
+        let spot = self.exact_bound && {
+            self.spot -= 1;
+            self.spot == 0
+        };
+        if !self.exact_bound || spot {
             let (x, y) = ((i + 1) as f64, (j + 1) as f64);
-            let c = self.kernel.rate(x, y);
-            if !(c >= 0.0 && c.is_finite()) {
-                return Err(Error::InvalidRate {
-                    name: "coagulation kernel",
-                    value: c,
-                });
-            }
             let mut bound = 0.0;
             for kk in 0..R {
                 bound += self.fab[i][0][kk] * self.fab[j][1][kk]
                     + self.fab[j][0][kk] * self.fab[i][1][kk];
             }
-            if c > bound * (1.0 + 1e-12) {
-                rep.bound_violations += 1;
+            let c = bounded_rate(&self.kernel, x, y, bound, "low-rank bound")?;
+            if spot {
+                self.spot = SPOT_CHECK;
             } else if bound * open_unit(rng) > c {
                 rep.rejections += 1;
                 return Ok(false);
@@ -448,9 +487,9 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> crate::checkpoint
             });
         }
         let tree = T::load(m, r)?;
-        if m > self.fab.len() {
-            self.extend_factors(m)?;
-        }
+        // a checkpoint taken before the size table grew has a smaller M: the factor
+        // table keeps its longer prefix (it depends only on the kernel)
+        self.extend_factors(m)?;
         self.m = m;
         self.size_limit = size_limit;
         self.n = n;

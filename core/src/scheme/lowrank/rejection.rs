@@ -163,16 +163,17 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 q += 1;
             }
             let (x, y) = (self.sizes[p], self.sizes[q]);
-            let c = self.kernel.rate(x as f64, y as f64);
-            if !(c >= 0.0 && c.is_finite()) {
-                break Err(Error::InvalidRate {
-                    name: "coagulation kernel",
-                    value: c,
-                });
-            }
-            if c > self.cmax * (1.0 + 1e-12) {
-                rep.bound_violations += 1;
-            } else if self.cmax * open_unit(rng) > c {
+            let c = match super::bounded_rate(
+                &self.kernel,
+                x as f64,
+                y as f64,
+                self.cmax,
+                "supremum C_max",
+            ) {
+                Ok(c) => c,
+                Err(e) => break Err(e),
+            };
+            if self.cmax * open_unit(rng) > c {
                 self.time += dt;
                 rep.rejections += 1;
                 continue;

@@ -279,22 +279,6 @@ fn capacity_error_leaves_state_unchanged() {
     }
 }
 
-#[test]
-fn violated_bound_is_counted() {
-    // K = 2 x y but the factors only cover x y: every proposal violates the bound
-    let k = UserKernel::new(|x: f64, y: f64| 2.0 * x * y)
-        .with_low_rank(1, |x: f64, a: &mut [f64], b: &mut [f64]| {
-            a[0] = 0.5 * x;
-            b[0] = x;
-        })
-        .unwrap();
-    let mut s = LowRank::<_, 1>::monodisperse(k, 1000).unwrap();
-    let mut rng = Pcg64Mcg::new(2);
-    let rep = s.advance_to(0.3, &mut rng).unwrap();
-    assert!(rep.events > 0);
-    assert_eq!(rep.bound_violations, rep.events);
-}
-
 /// Determinism: the same seed and inputs give the same report and state.
 #[test]
 fn same_seed_gives_identical_results() {
@@ -479,19 +463,4 @@ fn bucketed_bad_input_and_capacity() {
         s.advance_to(0.0, &mut rng),
         Err(Error::TimeBackwards { .. })
     ));
-}
-
-#[test]
-fn bucketed_violated_bound_is_counted() {
-    let k = UserKernel::new(|x: f64, y: f64| 2.0 * x * y)
-        .with_low_rank(1, |x: f64, a: &mut [f64], b: &mut [f64]| {
-            a[0] = 0.5 * x;
-            b[0] = x;
-        })
-        .unwrap();
-    let mut s = Bucketed::<_, 1, 2>::monodisperse(k, 1000).unwrap();
-    let mut rng = Pcg64Mcg::new(2);
-    let rep = s.advance_to(0.3, &mut rng).unwrap();
-    assert!(rep.events > 0);
-    assert_eq!(rep.bound_violations, rep.events);
 }
