@@ -53,9 +53,12 @@ pub struct Inverse<K> {
     scratch_j: Vec<f64>,
     scratch_m: Vec<f64>,
     /// `K(x, y)` at `(x − 1) · dim + y − 1` for `x, y ≤ dim`, or −1 when not yet
-    /// evaluated; `dim` doubles with the largest size, up to [`CACHE_DIM`].
+    /// evaluated; `dim` doubles with the largest size, up to `cache_max`.
     cache: Vec<f64>,
     dim: usize,
+    /// Largest `dim`: [`CACHE_DIM`], or less for few particles (the occupied sizes are
+    /// then few, and a 32 MB table per small system would cost more than it saves).
+    cache_max: usize,
     n: u64,
     n0: u64,
     volume: f64,
@@ -96,6 +99,7 @@ impl<K: CoagulationKernel> Inverse<K> {
             scratch_m: Vec::new(),
             cache: Vec::new(),
             dim: 0,
+            cache_max: (n as usize).next_power_of_two().clamp(64, CACHE_DIM),
             n,
             n0: n,
             volume,
@@ -134,7 +138,7 @@ impl<K: CoagulationKernel> Inverse<K> {
     fn rate(&mut self, x: u64, y: u64) -> Result<f64> {
         let (xi, yi) = (x as usize - 1, y as usize - 1);
         if xi.max(yi) >= self.dim {
-            if xi.max(yi) >= CACHE_DIM {
+            if xi.max(yi) >= self.cache_max {
                 return crate::kernel::checked_rate(&self.kernel, x as f64, y as f64);
             }
             self.grow_cache(xi.max(yi) + 1);
@@ -152,7 +156,7 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// Re-lays the cache out for sizes up to `need` (a power of two, at least 64).
     #[cold]
     fn grow_cache(&mut self, need: usize) {
-        let dim = need.next_power_of_two().clamp(64, CACHE_DIM);
+        let dim = need.next_power_of_two().clamp(64, self.cache_max);
         let mut cache = vec![-1.0; dim * dim];
         for x in 0..self.dim {
             cache[x * dim..x * dim + self.dim]
