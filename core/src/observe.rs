@@ -69,7 +69,9 @@ pub fn moment_of_counts(counts: &[u64], volume: f64, m: f64) -> f64 {
 /// where N is the number of particles at the start (particles that left the system
 /// count as absent).
 pub fn mass_flow_moment(sizes: &[f64], initial_mass: f64, n_initial: usize, m: f64) -> f64 {
-    initial_mass / n_initial as f64 * sizes.iter().map(|&x| power(x, m - 1.0)).sum::<f64>()
+    // each term weighted before the sum, so sizes near f64::MAX do not overflow it
+    let w = initial_mass / n_initial as f64;
+    sizes.iter().map(|&x| w * power(x, m - 1.0)).sum::<f64>()
 }
 
 /// Gel mass estimated by the mass flow algorithm, `m1(0) − n/N` (Eibeck & Wagner

@@ -1,0 +1,220 @@
+//! Regression tests for the defects of issue 12, one test (or more) per numbered item;
+//! each failed on the code before the fix. Items 1–2 (bucketed small systems) are unit
+//! tests in `scheme/lowrank/bucketed.rs` (they check internal invariants) and the
+//! finite-N reference in `tests/finite_n.rs`.
+
+use coagula_core::checkpoint::Checkpoint;
+use coagula_core::error::Error;
+use coagula_core::kernel::{Coagulation, CoagulationKernel, NoFragmentation, UserKernel};
+use coagula_core::scheme::Scheme;
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use coagula_core::scheme::massflow::{MassFlow, PointSource};
+use rand_pcg::Pcg64Mcg;
+
+/// Mass `Σ i N_i` of a count vector.
+fn mass(counts: &[u64]) -> u64 {
+    counts
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (i as u64 + 1) * c)
+        .sum()
+}
+
+/// Advances in small steps until the first error; checks that the error is `expect`
+/// and that the state is exactly the one before the failing event: the mass is
+/// conserved (up to doubling) and every count is consistent. Returns the number of
+/// steps that succeeded.
+fn run_until_error<S: Scheme>(
+    s: &mut S,
+    counts: impl Fn(&S) -> Vec<u64>,
+    n0: u64,
+    expect: fn(&Error) -> bool,
+) -> u32 {
+    let mut rng = Pcg64Mcg::new(12);
+    for step in 1..=100_000 {
+        let before = counts(s);
+        let t0 = s.time();
+        match s.advance_to(t0 + 0.01, &mut rng) {
+            Ok(_) => {}
+            Err(e) => {
+                assert!(expect(&e), "unexpected error {e:?}");
+                let after = counts(s);
+                let m = mass(&after);
+                assert_eq!(m % n0, 0, "mass {m} lost (N0 = {n0})");
+                assert!((m / n0).is_power_of_two(), "mass {m} lost (N0 = {n0})");
+                assert!(s.time() >= t0 && s.time() <= t0 + 0.01);
+                assert!(after.iter().sum::<u64>() <= before.iter().sum::<u64>());
+                return step;
+            }
+        }
+    }
+    panic!("no error within 100 000 steps");
+}
+
+fn invalid_rate(e: &Error) -> bool {
+    matches!(e, Error::InvalidRate { .. })
+}
+
+fn bound_exceeded(e: &Error) -> bool {
+    matches!(e, Error::BoundExceeded { .. })
+}
+
+/// Items 5 and 8: a kernel that turns NaN mid-run (x + y > 4) made `Inverse` remove the
+/// colliding pair and never insert the merged particle (M1 fell from 1 to 0.9994). Now
+/// every kernel value is validated before the event changes anything, in every
+/// size-count scheme.
+#[test]
+fn a_kernel_turning_nan_mid_run_loses_no_mass() {
+    let nan_beyond_4 = |x: f64, y: f64| if x + y > 4.0 { f64::NAN } else { 1.0 };
+    let mut inv = Inverse::monodisperse(nan_beyond_4, 1000).unwrap();
+    let steps = run_until_error(&mut inv, |s| s.counts(), 1000, invalid_rate);
+    assert!(steps >= 1);
+    assert_eq!(mass(&inv.counts()), 1000 * (inv.volume() as u64 / 1000));
+
+    let user = || {
+        UserKernel::new(|x: f64, y: f64| if x + y > 4.0 { f64::NAN } else { 1.0 })
+            .with_low_rank(1, |_x: f64, a: &mut [f64], b: &mut [f64]| {
+                a[0] = 0.5;
+                b[0] = 1.0;
+            })
+            .unwrap()
+    };
+    let mut lr = LowRank::<_, 1>::monodisperse(user(), 1000).unwrap();
+    run_until_error(&mut lr, |s| s.counts().to_vec(), 1000, invalid_rate);
+    let mut bk = Bucketed::<_, 1, 2>::monodisperse(user(), 1000).unwrap();
+    run_until_error(&mut bk, |s| s.counts(), 1000, invalid_rate);
+}
+
+/// Item 9: a kernel above its declared bound was capped at the bound and counted
+/// (M0 0.662 where the truth is ~0.167). Now it is `Error::BoundExceeded`, with the
+/// state as before the event, for low-rank (both layouts) and acceptance–rejection.
+#[test]
+fn a_kernel_above_its_bound_is_an_error() {
+    // K = 2 x y, factors covering x y only
+    let k = || {
+        UserKernel::new(|x: f64, y: f64| 2.0 * x * y)
+            .with_low_rank(1, |x: f64, a: &mut [f64], b: &mut [f64]| {
+                a[0] = 0.5 * x;
+                b[0] = x;
+            })
+            .unwrap()
+    };
+    let mut rng = Pcg64Mcg::new(2);
+    let mut lr = LowRank::<_, 1>::monodisperse(k(), 1000).unwrap();
+    let e = lr.advance_to(0.3, &mut rng).unwrap_err();
+    assert!(bound_exceeded(&e), "{e:?}");
+    assert_eq!(
+        lr.counts()[0],
+        1000,
+        "the first proposal fails: nothing changed"
+    );
+    assert_eq!(lr.time(), 0.0);
+    let mut bk = Bucketed::<_, 1, 2>::monodisperse(k(), 1000).unwrap();
+    let e = bk.advance_to(0.3, &mut rng).unwrap_err();
+    assert!(bound_exceeded(&e), "{e:?}");
+    assert_eq!(bk.counts()[0], 1000);
+    assert_eq!(bk.time(), 0.0);
+
+    /// A kernel whose declared supremum is half its value.
+    struct LowSup;
+    impl CoagulationKernel for LowSup {
+        fn rate(&self, _x: f64, _y: f64) -> f64 {
+            2.0
+        }
+        fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
+            Some(1.0)
+        }
+    }
+    let mut ar = AcceptanceRejection::monodisperse(LowSup, 1000).unwrap();
+    let e = ar.advance_to(0.3, &mut rng).unwrap_err();
+    assert!(bound_exceeded(&e), "{e:?}");
+    assert_eq!(ar.counts()[0], 1000);
+    assert_eq!(ar.time(), 0.0);
+
+    /// A NaN supremum is refused when the scheme is built.
+    struct NanSup;
+    impl CoagulationKernel for NanSup {
+        fn rate(&self, _x: f64, _y: f64) -> f64 {
+            1.0
+        }
+        fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
+            Some(f64::NAN)
+        }
+    }
+    assert!(matches!(
+        AcceptanceRejection::monodisperse(NanSup, 100),
+        Err(Error::InvalidRate { .. })
+    ));
+}
+
+/// Item 9, last part: a kernel declared exactly low-rank is never evaluated on the
+/// proposal path, but is spot-checked: one that turns NaN is caught.
+#[test]
+fn an_exact_low_rank_kernel_is_spot_checked() {
+    /// K = x + y declared exact (factors a = x, b = 1), NaN once x + y > 8.
+    struct Exact;
+    impl CoagulationKernel for Exact {
+        fn rate(&self, x: f64, y: f64) -> f64 {
+            if x + y > 8.0 { f64::NAN } else { x + y }
+        }
+        fn rank(&self) -> usize {
+            1
+        }
+        fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+            a[0] = x;
+            b[0] = 1.0;
+        }
+        fn low_rank_is_exact(&self) -> bool {
+            true
+        }
+    }
+    let mut lr = LowRank::<_, 1>::monodisperse(Exact, 10_000).unwrap();
+    run_until_error(&mut lr, |s| s.counts().to_vec(), 10_000, invalid_rate);
+    let mut bk = Bucketed::<_, 1, 2>::monodisperse(Exact, 10_000).unwrap();
+    run_until_error(&mut bk, |s| s.counts(), 10_000, invalid_rate);
+}
+
+/// Item 7: restoring a checkpoint taken before the size table grew into a scheme
+/// whose table had grown, then advancing, panicked (`m − fab.len()` underflow). Now the
+/// restored run continues, bit-identical to the unbroken one.
+#[test]
+fn restoring_an_earlier_smaller_checkpoint_then_growing_works() {
+    let k = Coagulation::additive();
+    let mut a = LowRank::<_, 1>::monodisperse(k, 2000).unwrap();
+    let mut rng = Pcg64Mcg::new(3);
+    a.advance_to(0.1, &mut rng).unwrap();
+    let m_small = a.max_size();
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    a.save_to(&mut buf).unwrap();
+    let rng_at_save = rng.clone();
+    a.advance_to(3.0, &mut rng).unwrap();
+    assert!(a.max_size() > m_small, "the size table must have grown");
+    let unbroken = a.counts().to_vec();
+    // restore the small checkpoint into the grown scheme and run the same way
+    a.restore_from(&buf).unwrap();
+    assert_eq!(a.max_size(), m_small);
+    let mut rng2 = rng_at_save;
+    a.advance_to(3.0, &mut rng2).unwrap();
+    assert_eq!(a.counts(), &unbroken[..]);
+}
+
+/// Item 4: mass flow returned `Ok` with an infinite size (and M2 = inf) when sizes
+/// near `f64::MAX` merged. Now that step is an error and the sizes stay finite.
+#[test]
+fn mass_flow_refuses_infinite_sizes() {
+    let mut s = MassFlow::new(
+        Coagulation::constant(1.0).unwrap(),
+        NoFragmentation,
+        &[1e308; 64],
+        1.0,
+        0.5,
+        PointSource::niederreiter(),
+    )
+    .unwrap();
+    let mut rng = Pcg64Mcg::new(1);
+    let e = s.advance_to(10.0, &mut rng).unwrap_err();
+    assert!(matches!(e, Error::Overflow { .. }), "{e:?}");
+    assert!(s.sizes().iter().all(|x| x.is_finite()));
+    assert!(s.moment(2.0).is_finite());
+    assert!(s.time() < 10.0);
+}
