@@ -7,6 +7,7 @@ use coagula_core::kernel::{
     BinaryUniform, Coagulation, CoagulationKernel, FragmentationKernel, NoFragmentation,
 };
 use coagula_core::observe::Replicas;
+use coagula_core::observe::{TEST_ALPHA, student_t_threshold};
 use coagula_core::qmc::Randomization;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
@@ -449,28 +450,29 @@ pub fn cases(quick: bool, out: &mut Vec<crate::validate::Case>) {
             rep.push(if i == 0 { v.0 } else { v.1 });
         }
         let se = rep.std_error();
+        let z = student_t_threshold(TEST_ALPHA, rep.count() - 1);
         out.push(Case {
             case: format!("lecot2019/rqmc-euler-N2^{m}-P{steps}"),
             quantity: format!(
-                "{name}, {r} Owen scramblings (reference: Euler-step expectation; tol 4 SE)"
+                "{name}, {r} Owen scramblings (reference: Euler-step expectation; tol {z:.2} SE)"
             ),
             reference: euler,
             value: rep.mean(),
             error: (rep.mean() - euler).abs(),
-            tolerance: 4.0 * se,
-            pass: (rep.mean() - euler).abs() <= 4.0 * se,
+            tolerance: z * se,
+            pass: (rep.mean() - euler).abs() <= z * se,
         });
         let bias = (euler - ex).abs();
         out.push(Case {
             case: format!("lecot2019/rqmc-exact-N2^{m}-P{steps}"),
             quantity: format!(
-                "{name} (reference: exact; tol = O(Δt) Euler bias {bias:.1e} + 4 SE)"
+                "{name} (reference: exact; tol = O(Δt) Euler bias {bias:.1e} + {z:.2} SE)"
             ),
             reference: ex,
             value: rep.mean(),
             error: (rep.mean() - ex).abs(),
-            tolerance: bias + 4.0 * se,
-            pass: (rep.mean() - ex).abs() <= bias + 4.0 * se,
+            tolerance: bias + z * se,
+            pass: (rep.mean() - ex).abs() <= bias + z * se,
         });
     }
     // exact/: pure coagulation with the mass-flow scheme (RQMC replicas)
@@ -525,10 +527,13 @@ fn exact_cases(quick: bool, out: &mut Vec<crate::validate::Case>) {
             }
             let ex = e.moment(idx, 1.0).expect("valid");
             let bias = (euler - ex).abs();
-            let tol = bias + 4.0 * r.std_error() + 1e-12;
+            let z = student_t_threshold(TEST_ALPHA, r.count() - 1);
+            let tol = bias + z * r.std_error() + 1e-12;
             out.push(Case {
                 case: format!("exact/{name}-massflow-N2^{m}-P{steps}"),
-                quantity: format!("{q}, 10 RQMC replicas (tol = Euler bias {bias:.1e} + 4 SE)"),
+                quantity: format!(
+                    "{q}, 10 RQMC replicas (tol = Euler bias {bias:.1e} + {z:.2} SE)"
+                ),
                 reference: ex,
                 value: r.mean(),
                 error: (r.mean() - ex).abs(),

@@ -1,5 +1,5 @@
 // C++ client of libcoagula through include/coagula.hpp: RAII, exceptions, and the
-// constant-kernel exact solution (8 replicas, 4 standard errors).
+// constant-kernel exact solution (32 replicas, 6.07 standard errors: Student t_31 at the suite's false-alarm rate 1e-6).
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -22,7 +22,7 @@ int main() {
     auto k = coagula::Kernel::constant(1.0);
     CHECK(k.rate(2.0, 3.0) == 1.0, "rate");
     double sum = 0, sum2 = 0;
-    const int reps = 8;
+    const int reps = 32;
     for (int r = 0; r < reps; ++r) {
         auto c = coagula::lowrank_default_config();
         c.seed = 31 + r;
@@ -35,7 +35,7 @@ int main() {
     double mean = sum / reps, se = std::sqrt((sum2 / reps - mean * mean) / (reps - 1));
     double exact = 0.0;
     coagula::check(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 2.0, &exact));
-    CHECK(std::fabs(mean - exact) < 4 * se, "M0 %g ± %g vs %g", mean, se, exact);
+    CHECK(std::fabs(mean - exact) < 6.072 * se, "M0 %g ± %g vs %g", mean, se, exact);
 
     // mass flow with fragmentation, and a checkpoint round trip
     auto f = coagula::Fragmentation::binary_uniform(1.0);

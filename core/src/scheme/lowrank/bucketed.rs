@@ -85,7 +85,8 @@
 //! // M0(t) = e^{-t}
 //! let mut sim = Bucketed::<_, 1, 2>::monodisperse(Coagulation::additive(), 10_000).unwrap();
 //! sim.advance_to(1.0, &mut rng).unwrap();
-//! assert!((sim.moment(0.0) - (-1.0f64).exp()).abs() < 0.01);
+//! // one run's standard deviation is 4.3e-3: 0.025 is 5.8 of them
+//! assert!((sim.moment(0.0) - (-1.0f64).exp()).abs() < 0.025);
 //! ```
 
 use super::super::clock::Batch;

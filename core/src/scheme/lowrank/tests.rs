@@ -12,9 +12,19 @@ use rand_pcg::rand_core::SeedableRng;
 
 const REPLICAS: u64 = 16;
 const N0: u64 = 1 << 13;
-/// Tolerance in standard errors: a correct scheme fails a given (seeded) check with
-/// probability ~6e-5 per quantity; a wrong rate (factor 2) is off by tens of SE.
-const Z: f64 = 4.0;
+/// Tolerance in standard errors, from 16 replicas' own SE: Student t with 15 degrees of
+/// freedom at the suite's two-sided false-alarm rate [`TEST_ALPHA`] per comparison
+/// (`t = 7.90`; a 4-SE test on t_15 would be 1.2e-3 per comparison, and these tests
+/// make ~250). A wrong rate (factor 2) is still off by tens of SE.
+fn z() -> f64 {
+    crate::observe::student_t_threshold(crate::observe::TEST_ALPHA, REPLICAS - 1)
+}
+
+/// The same for a Welch comparison of two 16-replica means (Welch–Satterthwaite
+/// degrees of freedom are at least 15).
+fn z2() -> f64 {
+    z()
+}
 
 #[derive(Clone, Copy, Debug)]
 enum Method {
@@ -85,11 +95,12 @@ fn within(name: &str, r: &Replicas, exact: f64, failures: &mut String) {
     let se = r.std_error();
     let err = (r.mean() - exact).abs();
     // a floor for quantities whose spread is zero at this N (e.g. tiny n_k)
-    let tol = Z * se + 1e-12;
+    let tol = z() * se + 1e-12;
     if err > tol {
         failures.push_str(&format!(
-            "{name}: mean {} exact {exact} |err| {err:.3e} > {Z} SE = {tol:.3e}\n",
-            r.mean()
+            "{name}: mean {} exact {exact} |err| {err:.3e} > {:.2} SE = {tol:.3e}\n",
+            r.mean(),
+            z()
         ));
     }
 }
@@ -155,7 +166,7 @@ fn multiplicative_kernel_matches_exact_solution_before_gelation() {
 }
 
 /// Brownian (R = 2, exact bound) and ballistic (R = 3, thinning) have no exact
-/// solution: the three methods must agree (Welch statistic below Z).
+/// solution: the three methods must agree (Welch statistic below `z2()`).
 #[test]
 fn methods_agree_for_brownian_and_ballistic_kernels() {
     fn compare<K: CoagulationKernel + Copy, const RANK: usize, const W: usize>(
@@ -173,12 +184,13 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
                     let se =
                         libm::sqrt(a.std_error() * a.std_error() + b.std_error() * b.std_error());
                     let d = (a.mean() - b.mean()).abs();
-                    if d > Z * se + 1e-12 {
+                    if d > z2() * se + 1e-12 {
                         failures.push_str(&format!(
-                            "LowRank vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {Z} SE {se:.3e})\n",
+                            "LowRank vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {:.2} SE {se:.3e})\n",
                             times[ti],
                             a.mean(),
-                            b.mean()
+                            b.mean(),
+                            z2()
                         ));
                     }
                 }
@@ -356,9 +368,11 @@ fn bucketed_wide_buckets_agree_with_size_trees() {
             for (q, (x, y)) in ra.iter().zip(rb).enumerate() {
                 let se = libm::sqrt(x.std_error().powi(2) + y.std_error().powi(2));
                 let d = (x.mean() - y.mean()).abs();
-                if d > Z * se + 1e-12 {
+                // 48 replicas each: Welch degrees of freedom at least 47
+                let zw = crate::observe::student_t_threshold(crate::observe::TEST_ALPHA, 47);
+                if d > zw * se + 1e-12 {
                     failures.push_str(&format!(
-                        "{name} time #{ti} quantity {q}: {} vs {} (diff {d:.3e} > {Z} SE {se:.3e})\n",
+                        "{name} time #{ti} quantity {q}: {} vs {} (diff {d:.3e} > {zw:.2} SE {se:.3e})\n",
                         x.mean(),
                         y.mean()
                     ));
