@@ -25,6 +25,22 @@
 //! net property, so every particle is still visited once per step); or pseudo-random
 //! points (MC: every particle once, partner uniform, `u_3` uniform).
 //!
+//! **RQMC needs a new randomisation every step.** For a fixed randomisation the point
+//! of block n that selects particle k (`k = ⌊N u_1⌋`) is point `nN + i_k` with `i_k` the
+//! same in every block, so the `u_3` that particle rank k sees over the steps is itself a
+//! low-discrepancy sequence (the (1,3) projection of a (t,3)-sequence). The smallest
+//! particle keeps rank 0 until it coagulates, so it coagulates within a few 1/p_c steps with
+//! certainty instead of surviving with probability `e^{−∫M0}`: the smallest particles,
+//! which carry the largest weight `1/x` in M0, die too early and M0 is biased low by
+//! O(N^{−1/2}) (constant kernel, Gamma(2) start, t = 10: smallest-rank survival 0 vs
+//! 1/36), the same for every one of the three randomisations and independent of Δt.
+//! [`PointSource::randomized_niederreiter`] and [`PointSource::randomized_sobol`]
+//! therefore draw an independent randomisation for every block (array-RQMC; the
+//! random parameters of block n come from a key and n, so runs are reproducible and
+//! checkpoints resume). The variants with one randomisation for the whole run
+//! ([`PointSource::ScrambledNiederreiter`], [`PointSource::ScrambledSobol`]) are kept
+//! for comparison; their replicas are not unbiased.
+//!
 //! **Sorting.** After a step only the particles that coagulated or broke up have new
 //! sizes; the others are still in order. The adaptive re-sort moves the unchanged ones
 //! to the front (in order), sorts the few changed ones and merges from the back:
@@ -62,10 +78,31 @@ pub enum PointSource {
     Niederreiter(Niederreiter2<u64>),
     /// Sobol' with Joe–Kuo direction numbers, dimensions 1–3.
     Sobol(Sobol<u64>),
-    /// A randomised Niederreiter sequence (RQMC).
+    /// Niederreiter's sequence under one randomisation for the whole run. Biased as an
+    /// RQMC estimator (see the module docs); kept for comparison.
     ScrambledNiederreiter(Scrambled<Niederreiter2<u64>>),
-    /// A randomised Sobol' sequence (RQMC).
+    /// Sobol' under one randomisation for the whole run (biased, see above).
     ScrambledSobol(Scrambled<Sobol<u64>>),
+    /// Niederreiter's sequence with an independent randomisation of every block (RQMC):
+    /// block n is block n of the sequence randomised by `kind` with random parameters
+    /// drawn from `(key, n)`.
+    RerandomizedNiederreiter {
+        /// The unscrambled sequence.
+        seq: Niederreiter2<u64>,
+        /// The randomisation of every block.
+        kind: Randomization,
+        /// Key of the per-block random parameters.
+        key: u64,
+    },
+    /// Sobol' with an independent randomisation of every block (RQMC).
+    RerandomizedSobol {
+        /// The unscrambled sequence.
+        seq: Sobol<u64>,
+        /// The randomisation of every block.
+        kind: Randomization,
+        /// Key of the per-block random parameters.
+        key: u64,
+    },
     /// Pseudo-random points from the caller's RNG (MC).
     MonteCarlo,
 }
@@ -81,17 +118,26 @@ impl PointSource {
         PointSource::Sobol(Sobol::new(3).expect("dimension 3 is supported"))
     }
 
-    /// Niederreiter's sequence randomised by `kind`, drawing from `rng` (one
-    /// randomisation; build R of them for R independent replicas).
+    /// Niederreiter's sequence randomised by `kind`, independently for every step, with
+    /// the key drawn from `rng` (one replica; build R of them for R independent
+    /// replicas).
     pub fn randomized_niederreiter<R: Rng + ?Sized>(kind: Randomization, rng: &mut R) -> Self {
-        let s = Niederreiter2::new(3).expect("dimension 3 is supported");
-        PointSource::ScrambledNiederreiter(Scrambled::new(s, kind, rng))
+        let seq = Niederreiter2::new(3).expect("dimension 3 is supported");
+        PointSource::RerandomizedNiederreiter {
+            seq,
+            kind,
+            key: rng.next_u64(),
+        }
     }
 
-    /// Sobol' randomised by `kind`, drawing from `rng`.
+    /// Sobol' randomised by `kind`, independently for every step, key drawn from `rng`.
     pub fn randomized_sobol<R: Rng + ?Sized>(kind: Randomization, rng: &mut R) -> Self {
-        let s = Sobol::new(3).expect("dimension 3 is supported");
-        PointSource::ScrambledSobol(Scrambled::new(s, kind, rng))
+        let seq = Sobol::new(3).expect("dimension 3 is supported");
+        PointSource::RerandomizedSobol {
+            seq,
+            kind,
+            key: rng.next_u64(),
+        }
     }
 
     /// Pseudo-random points (Monte Carlo).
@@ -110,6 +156,12 @@ impl PointSource {
             }
             PointSource::ScrambledSobol(s) => crate::checkpoint::fingerprint([4, s.fingerprint()]),
             PointSource::MonteCarlo => 5,
+            PointSource::RerandomizedNiederreiter { kind, key, .. } => {
+                crate::checkpoint::fingerprint([6, kind_code(*kind), *key])
+            }
+            PointSource::RerandomizedSobol { kind, key, .. } => {
+                crate::checkpoint::fingerprint([7, kind_code(*kind), *key])
+            }
         }
     }
 
@@ -120,7 +172,61 @@ impl PointSource {
             PointSource::ScrambledNiederreiter(s) => s.block(n, m, out),
             PointSource::ScrambledSobol(s) => s.block(n, m, out),
             PointSource::MonteCarlo => Ok(()),
+            PointSource::RerandomizedNiederreiter { seq, kind, key } => {
+                Scrambled::new(seq.clone(), *kind, &mut BlockRng::new(*key, n)).block(n, m, out)
+            }
+            PointSource::RerandomizedSobol { seq, kind, key } => {
+                Scrambled::new(seq.clone(), *kind, &mut BlockRng::new(*key, n)).block(n, m, out)
+            }
         }
+    }
+}
+
+fn kind_code(kind: Randomization) -> u64 {
+    match kind {
+        Randomization::None => 0,
+        Randomization::DigitalShift => 1,
+        Randomization::Matousek => 2,
+        Randomization::Owen => 3,
+    }
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014) started at a hash of `(key, block)`: the
+/// random parameters of one block's randomisation, independent between blocks.
+struct BlockRng(u64);
+
+impl BlockRng {
+    fn new(key: u64, block: u64) -> Self {
+        let mut r = BlockRng(key);
+        let k = r.next();
+        let mut r = BlockRng(k ^ block);
+        let s = r.next();
+        BlockRng(s)
+    }
+
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+}
+
+impl rand_core::TryRng for BlockRng {
+    type Error = core::convert::Infallible;
+    fn try_next_u32(&mut self) -> core::result::Result<u32, Self::Error> {
+        Ok((self.next() >> 32) as u32)
+    }
+    fn try_next_u64(&mut self) -> core::result::Result<u64, Self::Error> {
+        Ok(self.next())
+    }
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> core::result::Result<(), Self::Error> {
+        for c in dst.chunks_mut(8) {
+            let w = self.next().to_le_bytes();
+            c.copy_from_slice(&w[..c.len()]);
+        }
+        Ok(())
     }
 }
 
