@@ -347,6 +347,7 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     n_resync: u64,
     /// Proposals accepted without evaluating K until the next spot check.
     spot: u32,
+    memory_budget: usize,
     /// An internal integer invariant failed (a weight would pass 2^63): every later
     /// call returns this error instead of a wrong result.
     poisoned: Option<Error>,
@@ -481,6 +482,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             });
         }
         let m = (counts.len() as u64).next_power_of_two().max(64);
+        super::within_budget(
+            count_len(m).checked_mul(core::mem::size_of::<u32>()),
+            super::DEFAULT_MEMORY_BUDGET,
+        )?;
         let mut s = Bucketed {
             floor: kernel.low_rank_floor().clamp(0.0, 1.0),
             kernel,
@@ -488,7 +493,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             buckets: Vec::new(),
             scale: [1.0; W],
             qmax: ((1u64 << 60) / n).min(1 << 53),
-            counts: vec![0; count_len(m)],
+            counts: Vec::new(),
             lists: Vec::new(),
             row_total: [0; W],
             base_slack: [0; W],
@@ -510,6 +515,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             n_resync: 0,
             poisoned: None,
             spot: SPOT_CHECK,
+            memory_budget: super::DEFAULT_MEMORY_BUDGET,
             rates_stale: true,
             m,
             size_limit: super::DEFAULT_SIZE_LIMIT,
@@ -520,6 +526,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             totals: StepReport::default(),
             zig: Ziggurat::new(),
         };
+        super::try_resize(&mut s.counts, count_len(m), 0)?;
         s.extend_buckets(m)?;
         for (i, &c) in counts.iter().enumerate() {
             s.counts[i + 1] = c as u32;
@@ -1070,6 +1077,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         let grows = x > self.m;
         if grows {
             // the fallible part first (new buckets' factors), so an error changes nothing
+            self.reserve_m(2 * self.m)?;
             self.extend_buckets(2 * self.m)?;
         }
         // list removals: the higher position first, so a swap-remove cannot move the other
@@ -1111,6 +1119,28 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         {
             self.resync();
         }
+    }
+
+    /// Checks the memory budget for maximum size `m` and reserves the count array
+    /// (before the event changes anything).
+    #[cold]
+    fn reserve_m(&mut self, m: u64) -> Result<()> {
+        let len = count_len(m);
+        super::within_budget(
+            len.checked_mul(core::mem::size_of::<u32>()),
+            self.memory_budget,
+        )?;
+        let more = len.saturating_sub(self.counts.len());
+        super::try_reserve(&mut self.counts, more)
+    }
+
+    /// Sets the memory budget in bytes of the size table (default
+    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET)): growing M past it
+    /// makes `advance_to` fail with [`Error::Capacity`], the state as before the event.
+    /// (The particles' own storage, at most 8 bytes each, is sized by the caller's N0.)
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.memory_budget = bytes;
+        self
     }
 
     /// Doubles M (the new buckets' factors are already computed).

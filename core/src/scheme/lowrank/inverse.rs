@@ -59,6 +59,7 @@ pub struct Inverse<K> {
     /// Largest `dim`: [`CACHE_DIM`], or less for few particles (the occupied sizes are
     /// then few, and a 32 MB table per small system would cost more than it saves).
     cache_max: usize,
+    memory_budget: usize,
     n: u64,
     n0: u64,
     volume: f64,
@@ -87,19 +88,25 @@ impl<K: CoagulationKernel> Inverse<K> {
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
+        let len = counts.len().next_power_of_two();
+        super::within_budget(
+            len.checked_mul(core::mem::size_of::<u32>()),
+            super::DEFAULT_MEMORY_BUDGET,
+        )?;
         let mut s = Inverse {
             kernel,
             size: Vec::new(),
             count: Vec::new(),
             row: Vec::new(),
             diag: Vec::new(),
-            slot: vec![NONE; counts.len().next_power_of_two()],
+            slot: Vec::new(),
             scratch: Vec::new(),
             scratch_j: Vec::new(),
             scratch_m: Vec::new(),
             cache: Vec::new(),
             dim: 0,
             cache_max: (n as usize).next_power_of_two().clamp(64, CACHE_DIM),
+            memory_budget: super::DEFAULT_MEMORY_BUDGET,
             n,
             n0: n,
             volume,
@@ -107,6 +114,7 @@ impl<K: CoagulationKernel> Inverse<K> {
             size_limit: DEFAULT_SIZE_LIMIT,
             totals: StepReport::default(),
         };
+        super::try_resize(&mut s.slot, len, NONE)?;
         for (i, &c) in counts.iter().enumerate() {
             if c > 0 {
                 let d = s.rate(i as u64 + 1, i as u64 + 1)?;
@@ -157,7 +165,12 @@ impl<K: CoagulationKernel> Inverse<K> {
     #[cold]
     fn grow_cache(&mut self, need: usize) {
         let dim = need.next_power_of_two().clamp(64, self.cache_max);
-        let mut cache = vec![-1.0; dim * dim];
+        let mut cache = Vec::new();
+        if super::try_resize(&mut cache, dim * dim, -1.0).is_err() {
+            // no memory for a larger cache: evaluate beyond it directly
+            self.cache_max = self.dim.max(1);
+            return;
+        }
         for x in 0..self.dim {
             cache[x * dim..x * dim + self.dim]
                 .copy_from_slice(&self.cache[x * self.dim..(x + 1) * self.dim]);
@@ -339,19 +352,30 @@ impl<K: CoagulationKernel> Inverse<K> {
     }
 
     /// Makes room in the size index for size `x` (the only allocation of an event).
+    /// Also makes room for one more occupied size, so that the event itself
+    /// allocates nothing.
     fn reserve_size(&mut self, x: u64) -> Result<()> {
         let need = x as usize;
         if need > self.slot.len() {
             let len = need.next_power_of_two();
-            self.slot
-                .try_reserve_exact(len - self.slot.len())
-                .map_err(|_| Error::Capacity {
-                    name: "memory for the size index",
-                    capacity: self.slot.len(),
-                })?;
-            self.slot.resize(len, NONE);
+            super::within_budget(
+                len.checked_mul(core::mem::size_of::<u32>()),
+                self.memory_budget,
+            )?;
+            super::try_resize(&mut self.slot, len, NONE)?;
         }
-        Ok(())
+        super::try_reserve(&mut self.size, 1)?;
+        super::try_reserve(&mut self.count, 1)?;
+        super::try_reserve(&mut self.row, 1)?;
+        super::try_reserve(&mut self.diag, 1)
+    }
+
+    /// Sets the memory budget in bytes of the size index (default
+    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET)): a size beyond it makes
+    /// `advance_to` fail with [`Error::Capacity`], the state as before the event.
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.memory_budget = bytes;
+        self
     }
 
     /// Applies a collision of the particles in slots `ia` and `ja` (equal for two
@@ -442,7 +466,13 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
             });
         }
         let max = size.iter().copied().max().unwrap_or(1) as usize;
-        let mut slot = vec![NONE; max.next_power_of_two()];
+        let len = max.next_power_of_two();
+        super::within_budget(
+            len.checked_mul(core::mem::size_of::<u32>()),
+            self.memory_budget,
+        )?;
+        let mut slot = Vec::new();
+        super::try_resize(&mut slot, len, NONE)?;
         for (a, &s) in size.iter().enumerate() {
             if slot[s as usize - 1] != NONE {
                 return Err(Error::Checkpoint {
@@ -489,11 +519,13 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Takes the state of `fresh`, keeping time, totals and the size limit.
     fn install(&mut self, fresh: Inverse<K>) {
-        let (time, totals, limit) = (self.time, self.totals, self.size_limit);
+        let (time, totals, limit, budget) =
+            (self.time, self.totals, self.size_limit, self.memory_budget);
         *self = fresh;
         self.time = time;
         self.totals = totals;
         self.size_limit = limit;
+        self.memory_budget = budget;
     }
 }
 

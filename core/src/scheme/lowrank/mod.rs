@@ -61,13 +61,48 @@ pub use trees::{BinaryTree, ProposalTree, WideTree};
 use super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
 use trees::Weights;
 
 /// Largest size the size-count schemes allow by default (2^32).
 pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
+
+/// Memory the growing size-count schemes may use by default: 2 GiB (their per-size
+/// arrays, trees and particle lists; set with `with_memory_budget`). Growth beyond it,
+/// or an allocation the system refuses, is [`Error::Capacity`] with the state as
+/// before the event — never an abort. (The core has no way to ask the machine; a host
+/// that knows its memory sets the budget.)
+pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
+
+/// `Err(Capacity)` unless `bytes` (None: overflowed) fits the budget.
+pub(crate) fn within_budget(bytes: Option<usize>, budget: usize) -> Result<()> {
+    match bytes {
+        Some(b) if b <= budget => Ok(()),
+        _ => Err(Error::Capacity {
+            name: "memory budget in bytes (raise it with with_memory_budget)",
+            capacity: budget,
+        }),
+    }
+}
+
+/// Grows `v` to `len` copies of `value` through `try_reserve` (a refused allocation is
+/// `Err(Capacity)`, `v` unchanged).
+pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Result<()> {
+    if len > v.len() {
+        try_reserve(v, len - v.len())?;
+        v.resize(len, value);
+    }
+    Ok(())
+}
+
+/// `v.try_reserve(additional)`, a refusal mapped to `Err(Capacity)`.
+pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
+    v.try_reserve(additional).map_err(|_| Error::Capacity {
+        name: "memory (the allocator refused)",
+        capacity: v.len().saturating_add(additional),
+    })
+}
 
 /// Low-rank Monte Carlo with a rank-`R` bound (Osinsky 2023). See the module docs.
 ///
@@ -94,6 +129,7 @@ pub struct LowRank<K, const R: usize, T = WideTree<R>> {
     zig: Ziggurat,
     /// Proposals accepted without evaluating K until the next spot check.
     spot: u32,
+    memory_budget: usize,
 }
 
 impl<K, const R: usize, T> core::fmt::Debug for LowRank<K, R, T> {
@@ -194,12 +230,13 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
         let m = counts.len().next_power_of_two().max(64);
+        within_budget(Self::bytes_for(m), DEFAULT_MEMORY_BUDGET)?;
         let mut s = LowRank {
             exact_bound: kernel.low_rank_is_exact(),
             kernel,
-            counts: vec![0; m],
+            counts: Vec::new(),
             fab: Vec::new(),
-            tree: T::build(8, |_| [[0.0; R]; 2]),
+            tree: T::build(8, |_| [[0.0; R]; 2])?,
             m,
             size_limit: DEFAULT_SIZE_LIMIT,
             n,
@@ -209,11 +246,27 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             totals: StepReport::default(),
             zig: Ziggurat::new(),
             spot: SPOT_CHECK,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
         };
+        try_resize(&mut s.counts, m, 0)?;
         s.counts[..counts.len()].copy_from_slice(counts);
         s.extend_factors(m)?;
-        s.rebuild();
+        s.tree = T::build(m, |idx| s.leaf_value(idx))?;
         Ok(s)
+    }
+
+    /// Sets the memory budget in bytes (default [`DEFAULT_MEMORY_BUDGET`]): growing the
+    /// size table past it makes `advance_to` fail with [`Error::Capacity`], the state
+    /// as before the event.
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.memory_budget = bytes;
+        self
+    }
+
+    /// Bytes of the per-size arrays and the tree for maximum size `m`.
+    fn bytes_for(m: usize) -> Option<usize> {
+        let per_size = core::mem::size_of::<u64>() + core::mem::size_of::<Weights<R>>();
+        m.checked_mul(per_size)?.checked_add(T::bytes(m)?)
     }
 
     /// Sets the largest particle size allowed (default [`DEFAULT_SIZE_LIMIT`]); a
@@ -230,23 +283,31 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
         if m <= start {
             return Ok(());
         }
-        let (mut na, mut nb) = (Vec::with_capacity(m - start), Vec::with_capacity(m - start));
+        // validate all before the table changes
+        let mut new = Vec::new();
+        try_reserve(&mut new, m - start)?;
         for i in start + 1..=m {
             let (a, b) = factors_at::<K, R>(&self.kernel, i as f64)?;
-            na.push(a);
-            nb.push(b);
+            new.push([a, b]);
         }
-        self.fab.extend(na.into_iter().zip(nb).map(|(a, b)| [a, b]));
+        try_reserve(&mut self.fab, new.len())?;
+        self.fab.extend(new);
         Ok(())
     }
 
+    /// The weights of size index `idx` (zero past the count array).
     #[inline]
     fn leaf_value(&self, idx: usize) -> Weights<R> {
-        scale(&self.fab[idx], self.counts[idx] as f64)
+        scale(
+            &self.fab[idx],
+            self.counts.get(idx).copied().unwrap_or(0) as f64,
+        )
     }
 
+    /// Recomputes the tree from the exact counts, in place.
     fn rebuild(&mut self) {
-        self.tree = T::build(self.m, |idx| self.leaf_value(idx));
+        let (fab, counts) = (&self.fab, &self.counts);
+        self.tree.refill(|idx| scale(&fab[idx], counts[idx] as f64));
     }
 
     /// Changes `N` at index `idx` by `delta` and updates the tree.
@@ -262,11 +323,19 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             .add(idx, &scale(&self.fab[idx], delta as f64), &leaf);
     }
 
+    /// Grows the size table to `new_m`: budget, factors, counts and the new tree are
+    /// all prepared before anything the scheme uses changes.
     fn grow(&mut self, new_m: usize) -> Result<()> {
+        // the old tree lives on while the new one is built
+        let bytes = Self::bytes_for(new_m).and_then(|b| b.checked_add(T::bytes(self.m)?));
+        within_budget(bytes, self.memory_budget)?;
         self.extend_factors(new_m)?;
+        let more = new_m - self.counts.len();
+        try_reserve(&mut self.counts, more)?;
+        let tree = T::build(new_m, |idx| self.leaf_value(idx))?;
         self.counts.resize(new_m, 0);
         self.m = new_m;
-        self.rebuild();
+        self.tree = tree;
         Ok(())
     }
 
@@ -486,6 +555,7 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> crate::checkpoint
                 what: "counts do not add up",
             });
         }
+        within_budget(Self::bytes_for(m), self.memory_budget)?;
         let tree = T::load(m, r)?;
         // a checkpoint taken before the size table grew has a smaller M: the factor
         // table keeps its longer prefix (it depends only on the kernel)
@@ -538,16 +608,20 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             });
         }
         let m = counts.len().next_power_of_two().max(self.m);
-        if m > self.fab.len() {
-            self.extend_factors(m)?;
-        }
+        let bytes = Self::bytes_for(m).and_then(|b| b.checked_add(T::bytes(self.m)?));
+        within_budget(bytes, self.memory_budget)?;
+        self.extend_factors(m)?;
+        let mut fresh = Vec::new();
+        try_resize(&mut fresh, m, 0)?;
+        fresh[..counts.len()].copy_from_slice(counts);
+        let fab = &self.fab;
+        let tree = T::build(m, |idx| scale(&fab[idx], fresh[idx] as f64))?;
         self.m = m;
-        self.counts = vec![0; m];
-        self.counts[..counts.len()].copy_from_slice(counts);
+        self.counts = fresh;
+        self.tree = tree;
         self.n = n;
         self.n0 = n;
         self.volume = volume;
-        self.rebuild();
         Ok(())
     }
 }

@@ -33,6 +33,7 @@ pub struct AcceptanceRejection<K> {
     cmax: f64,
     size_limit: u64,
     totals: StepReport,
+    memory_budget: usize,
 }
 
 impl<K> core::fmt::Debug for AcceptanceRejection<K> {
@@ -52,16 +53,26 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
     }
 
     /// Starts from `counts[i - 1] = N_i` in volume `volume`. Errors if the kernel has no
-    /// `sup_rate`, the counts are empty, or the volume is not positive.
+    /// `sup_rate` (or a NaN one), the counts are empty, the volume is not positive, or
+    /// the particle list (8 bytes a particle) would pass
+    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET) (see
+    /// [`new_with_memory_budget`](Self::new_with_memory_budget) for more).
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
+        Self::new_with_memory_budget(kernel, counts, volume, super::DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// [`new`](Self::new) with a memory budget of `bytes` for the particle list: the
+    /// list of N0 sizes, 8 bytes each, must fit it (a particle doubling never lets the
+    /// list pass N0). A refused allocation is [`Error::Capacity`] too, never an abort.
+    pub fn new_with_memory_budget(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        bytes: usize,
+    ) -> Result<Self> {
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
-        let mut sizes = Vec::with_capacity(n as usize);
-        for (i, &c) in counts.iter().enumerate() {
-            for _ in 0..c {
-                sizes.push(i as u64 + 1);
-            }
-        }
+        let sizes = Self::particle_list(counts, n, bytes)?;
         let max_present = sizes.iter().copied().max().unwrap_or(1);
         let mut s = AcceptanceRejection {
             kernel,
@@ -73,9 +84,26 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             cmax: 0.0,
             size_limit: DEFAULT_SIZE_LIMIT,
             totals: StepReport::default(),
+            memory_budget: bytes,
         };
         s.cmax = s.sup(max_present)?;
         Ok(s)
+    }
+
+    /// The sizes of `n` particles given by `counts`, in a list checked against the
+    /// budget and allocated with `try_reserve`.
+    fn particle_list(counts: &[u64], n: u64, budget: usize) -> Result<Vec<u64>> {
+        let len = usize::try_from(n).map_err(|_| Error::Capacity {
+            name: "particles (address space)",
+            capacity: usize::MAX,
+        })?;
+        super::within_budget(len.checked_mul(core::mem::size_of::<u64>()), budget)?;
+        let mut sizes = Vec::new();
+        super::try_reserve(&mut sizes, len)?;
+        for (i, &c) in counts.iter().enumerate() {
+            sizes.extend(core::iter::repeat_n(i as u64 + 1, c as usize));
+        }
+        Ok(sizes)
     }
 
     /// Sets the largest particle size allowed.
@@ -230,12 +258,24 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         let (volume, time) = (r.f64()?, r.f64()?);
         let (max_present, cmax) = (r.u64()?, r.f64()?);
         let totals = read_report(r)?;
-        let sizes = r.u64s()?;
-        if sizes.iter().any(|&s| s == 0 || s > max_present) || !(cmax >= 0.0 && volume > 0.0) {
+        let mut sizes = r.u64s()?;
+        if sizes.iter().any(|&s| s == 0 || s > max_present)
+            || !(cmax >= 0.0 && volume > 0.0)
+            || sizes.len() as u64 > n0
+        {
             return Err(Error::Checkpoint {
                 what: "inconsistent particle sizes",
             });
         }
+        // room for the doublings to come (the list never passes N0)
+        super::within_budget(
+            usize::try_from(n0)
+                .ok()
+                .and_then(|n| n.checked_mul(core::mem::size_of::<u64>())),
+            self.memory_budget,
+        )?;
+        let room = n0 as usize - sizes.len();
+        super::try_reserve(&mut sizes, room)?;
         self.size_limit = size_limit;
         self.n0 = n0;
         self.volume = volume;
@@ -275,12 +315,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             .rposition(|&c| c > 0)
             .map_or(1, |i| i as u64 + 1);
         let cmax = self.sup(max)?;
-        let mut sizes = Vec::with_capacity(n as usize);
-        for (i, &c) in counts.iter().enumerate() {
-            for _ in 0..c {
-                sizes.push(i as u64 + 1);
-            }
-        }
+        let sizes = Self::particle_list(counts, n, self.memory_budget)?;
         self.sizes = sizes;
         self.n0 = n;
         self.volume = volume;

@@ -20,7 +20,6 @@
 
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
-use alloc::vec;
 use alloc::vec::Vec;
 
 /// Per-size weights: `[0][k] = u^k_i`, `[1][k] = v^k_i`.
@@ -28,8 +27,13 @@ pub type Weights<const R: usize> = [[f64; R]; 2];
 
 /// A proposal tree over `m` sizes (m a power of two ≥ 8).
 pub trait ProposalTree<const R: usize>: Sized {
-    /// Builds the tree over `m` leaves with `leaf(i)` the weights of index i.
-    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self;
+    /// Builds the tree over `m` leaves with `leaf(i)` the weights of index i; a failed
+    /// allocation is [`Error::Capacity`].
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Result<Self>;
+    /// Recomputes every node from `leaf` in place (same leaf count; no allocation).
+    fn refill(&mut self, leaf: impl Fn(usize) -> Weights<R>);
+    /// Bytes of a tree over `m` leaves (`None` on overflow).
+    fn bytes(m: usize) -> Option<usize>;
     /// Totals of every component.
     fn totals(&self) -> Weights<R>;
     /// Leaf index found by descending component `k` of part `p` with `target ∈ [0, total)`.
@@ -87,15 +91,26 @@ fn add<const R: usize>(a: &Weights<R>, b: &Weights<R>) -> Weights<R> {
 impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
     const NEEDS_LEAF: bool = true;
 
-    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
-        let mut nodes = vec![[[0.0; R]; 2]; 2 * m];
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Result<Self> {
+        let mut nodes = Vec::new();
+        super::try_resize(&mut nodes, 2 * m, [[0.0; R]; 2])?;
+        let mut t = BinaryTree { nodes, m };
+        t.refill(leaf);
+        Ok(t)
+    }
+
+    fn refill(&mut self, leaf: impl Fn(usize) -> Weights<R>) {
+        let m = self.m;
         for i in 0..m {
-            nodes[m + i] = leaf(i);
+            self.nodes[m + i] = leaf(i);
         }
         for n in (1..m).rev() {
-            nodes[n] = add(&nodes[2 * n], &nodes[2 * n + 1]);
+            self.nodes[n] = add(&self.nodes[2 * n], &self.nodes[2 * n + 1]);
         }
-        BinaryTree { nodes, m }
+    }
+
+    fn bytes(m: usize) -> Option<usize> {
+        m.checked_mul(2 * core::mem::size_of::<Weights<R>>())
     }
 
     #[inline]
@@ -151,7 +166,7 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
         if flat.len() != 2 * m * 2 * R {
             return Err(bad_tree());
         }
-        let mut t = Self::build(m, |_| [[0.0; R]; 2]);
+        let mut t = Self::build(m, |_| [[0.0; R]; 2])?;
         for (i, node) in t.nodes.iter_mut().enumerate() {
             for p in 0..2 {
                 for k in 0..R {
@@ -228,26 +243,45 @@ impl<const R: usize> WideTree<R> {
     }
 }
 
+/// Level starts of an 8-ary tree over `m` leaves (sizes m/8, m/64, ... down to 1; the
+/// root may have fewer than 8 children) and the node count.
+fn wide_levels(m: usize) -> (Vec<usize>, usize) {
+    debug_assert!(m.is_power_of_two() && m >= B);
+    let mut start = Vec::new();
+    let mut count = 0;
+    let mut n = m;
+    loop {
+        let nodes = n.div_ceil(B);
+        start.push(count);
+        count += nodes;
+        if nodes == 1 {
+            break;
+        }
+        n = nodes;
+    }
+    (start, count)
+}
+
 impl<const R: usize> ProposalTree<R> for WideTree<R> {
     const NEEDS_LEAF: bool = false;
 
-    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Self {
-        debug_assert!(m.is_power_of_two() && m >= B);
-        // level sizes: m/8, m/64, ... down to 1 (the root may have fewer than 8 children)
-        let mut start = Vec::new();
-        let mut count = 0;
-        let mut n = m;
-        loop {
-            let nodes = n.div_ceil(B);
-            start.push(count);
-            count += nodes;
-            if nodes == 1 {
-                break;
-            }
-            n = nodes;
-        }
-        let zero = [[Row([0.0; B]); R]; 2];
-        let mut rows = vec![zero; count];
+    fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Result<Self> {
+        let (start, count) = wide_levels(m);
+        let mut rows = Vec::new();
+        super::try_resize(&mut rows, count, [[Row([0.0; B]); R]; 2])?;
+        let mut t = WideTree {
+            rows,
+            start,
+            total: [[0.0; R]; 2],
+            updates: 0,
+        };
+        t.refill(leaf);
+        Ok(t)
+    }
+
+    fn refill(&mut self, leaf: impl Fn(usize) -> Weights<R>) {
+        let m = self.start.get(1).copied().unwrap_or(1) * B;
+        let (start, rows) = (&self.start, &mut self.rows);
         for q in 0..m / B {
             for c in 0..B {
                 let w = leaf(q * B + c);
@@ -262,30 +296,34 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
         for l in 1..start.len() {
             let nodes = below.div_ceil(B);
             for q in 0..nodes {
-                for c in 0..B.min(below - q * B) {
-                    let child = start[l - 1] + q * B + c;
+                for c in 0..B {
                     for p in 0..2 {
                         for k in 0..R {
-                            rows[start[l] + q][p][k].0[c] = rows[child][p][k].0.iter().sum();
+                            rows[start[l] + q][p][k].0[c] = if c < below - q * B {
+                                let child = start[l - 1] + q * B + c;
+                                rows[child][p][k].0.iter().sum()
+                            } else {
+                                0.0
+                            };
                         }
                     }
                 }
             }
             below = nodes;
         }
-        let root = &rows[count - 1];
-        let mut total = [[0.0; R]; 2];
+        let root = &rows[rows.len() - 1];
         for p in 0..2 {
             for k in 0..R {
-                total[p][k] = root[p][k].0.iter().sum();
+                self.total[p][k] = root[p][k].0.iter().sum();
             }
         }
-        WideTree {
-            rows,
-            start,
-            total,
-            updates: 0,
-        }
+        self.updates = 0;
+    }
+
+    fn bytes(m: usize) -> Option<usize> {
+        wide_levels(m)
+            .1
+            .checked_mul(core::mem::size_of::<[[Row; R]; 2]>())
     }
 
     #[inline]
@@ -377,7 +415,7 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
         let flat = r.f64s()?;
         let tot = r.f64s()?;
         let updates = r.u64()?;
-        let mut t = Self::build(m, |_| [[0.0; R]; 2]);
+        let mut t = Self::build(m, |_| [[0.0; R]; 2])?;
         if flat.len() != t.rows.len() * 2 * R * B || tot.len() != 2 * R {
             return Err(bad_tree());
         }
@@ -417,7 +455,7 @@ mod tests {
                 }
             })
             .collect();
-        let mut t = T::build(m, |i| w[i]);
+        let mut t = T::build(m, |i| w[i]).unwrap();
         for _ in 0..2000 {
             let i = (rng.next_u64() % m as u64) as usize;
             let new = [
