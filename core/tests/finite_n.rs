@@ -15,12 +15,13 @@
 //! than N0/2 particles remain, every count and V double — depends only on N. With
 //! d doublings so far, V = M = 32 · 2^d.
 
+mod common;
+
 use coagula_core::kernel::{Coagulation, CoagulationKernel};
-use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
+use coagula_core::observe::Replicas;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
-use rand_pcg::Pcg64Mcg;
-use rand_pcg::rand_core::SeedableRng;
+use common::counts_observation;
 use std::collections::HashMap;
 
 const N0: u64 = 32;
@@ -194,32 +195,14 @@ fn reference(kind: Kind, times: &[f64]) -> Vec<[f64; 3]> {
     results
 }
 
-/// Replica statistics of N/V, N1/V, N2/V at `times` for one scheme: `make` builds it
-/// from N0 monomers, `observe` returns (N, N1, N2, V).
+/// Replica statistics of one scheme (see `common::replicas`).
 fn replicas<S: Scheme>(
     seed: u64,
     times: &[f64],
     make: impl Fn() -> S,
     observe: impl Fn(&S) -> (u64, u64, u64, f64),
 ) -> Vec<[Replicas; 3]> {
-    let mut stats = vec![[Replicas::new(), Replicas::new(), Replicas::new()]; times.len()];
-    for r in 0..REPLICAS {
-        let mut rng = Pcg64Mcg::seed_from_u64(seed.wrapping_mul(0x9e37_79b9) ^ r);
-        let mut s = make();
-        for (ti, &t) in times.iter().enumerate() {
-            s.advance_to(t, &mut rng).unwrap();
-            let (n, n1, n2, v) = observe(&s);
-            for (st, x) in stats[ti].iter_mut().zip([n, n1, n2]) {
-                st.push(x as f64 / v);
-            }
-        }
-    }
-    stats
-}
-
-fn counts_observation(counts: &[u64], v: f64) -> (u64, u64, u64, f64) {
-    let at = |i: usize| counts.get(i).copied().unwrap_or(0);
-    (counts.iter().sum(), at(0), at(1), v)
+    common::replicas(seed, REPLICAS, times, make, observe)
 }
 
 /// Compares every integer-size scheme with the reference; returns the z-scores and
@@ -231,7 +214,7 @@ fn check<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
 ) -> (String, String) {
     let exact = reference(kind, times);
     // family-wise: every comparison at TEST_ALPHA (see observe::TEST_ALPHA)
-    let z_max = student_t_threshold(TEST_ALPHA, REPLICAS - 1);
+    let z_max = common::z_max(REPLICAS);
     let mut report = String::new();
     let mut failures = String::new();
     let runs: Vec<(&str, Vec<[Replicas; 3]>)> = vec![

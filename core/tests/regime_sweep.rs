@@ -1,0 +1,244 @@
+//! The regime sweep: every size-count scheme from N0 = 32, 100, 1000 and 10^5 monomers
+//! in count vectors much longer than N0 (so M ≫ N0 from the start, the case where the
+//! bucketed layout once lost its slot bookkeeping), run through at least six particle
+//! doublings, against the per-size tree layout (Welch) and, at N0 = 10^5, against the
+//! exact Smoluchowski solution (whose O(1/N) offset is far below the standard error
+//! there). A property test runs every scheme over random small systems and checks the
+//! invariants that hold for every run: mass conserved up to doubling, no particle lost,
+//! the same seed giving the same state.
+
+mod common;
+
+use coagula_core::exact::Exact;
+use coagula_core::kernel::{Coagulation, CoagulationKernel};
+use coagula_core::observe::Replicas;
+use coagula_core::scheme::Scheme;
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use common::{LABELS, counts_observation, replicas, z_max};
+use proptest::prelude::*;
+use rand_pcg::Pcg64Mcg;
+
+/// (N0, length of the count vector, replicas).
+const CASES: [(u64, usize, u64); 4] = [
+    (32, 4096, 2000),
+    (100, 8192, 1000),
+    (1000, 1 << 16, 200),
+    (100_000, 1 << 20, 8),
+];
+
+type Stats = Vec<[Replicas; 3]>;
+
+/// All four schemes on one case: (name, stats), the tree layout first.
+fn run_all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
+    kernel: K,
+    (n0, len, reps): (u64, usize, u64),
+    times: &[f64],
+) -> Vec<(&'static str, Stats)> {
+    let mut init = vec![0u64; len];
+    init[0] = n0;
+    let v = n0 as f64;
+    let init = &init;
+    let timed = |name: &'static str, f: &dyn Fn() -> Stats| {
+        let start = std::time::Instant::now();
+        let st = f();
+        eprintln!(
+            "N0 {n0} len {len} {name}: {:.2} s",
+            start.elapsed().as_secs_f64()
+        );
+        (name, st)
+    };
+    vec![
+        timed("LowRank", &|| {
+            replicas(
+                11,
+                reps,
+                times,
+                || LowRank::<K, R>::new(kernel, init, v).unwrap(),
+                |s| counts_observation(s.counts(), s.volume()),
+            )
+        }),
+        timed("Bucketed", &|| {
+            replicas(
+                12,
+                reps,
+                times,
+                || Bucketed::<K, R, W>::new(kernel, init, v).unwrap(),
+                |s| counts_observation(&s.counts(), s.volume()),
+            )
+        }),
+        timed("Inverse", &|| {
+            replicas(
+                13,
+                reps,
+                times,
+                || Inverse::new(kernel, init, v).unwrap(),
+                |s| counts_observation(&s.counts(), s.volume()),
+            )
+        }),
+        timed("AcceptanceRejection", &|| {
+            replicas(
+                14,
+                reps,
+                times,
+                || AcceptanceRejection::new(kernel, init, v).unwrap(),
+                |s| counts_observation(&s.counts(), s.volume()),
+            )
+        }),
+    ]
+}
+
+/// Compares the schemes of each case with the tree layout (Welch, degrees of freedom
+/// at least R − 1) and, at N0 = 10^5, every scheme with `exact`.
+fn sweep<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
+    name: &str,
+    kernel: K,
+    exact: Exact,
+    times: &[f64],
+) {
+    let mut failures = String::new();
+    for case in CASES {
+        let runs = run_all::<K, R, W>(kernel, case, times);
+        let (n0, _, reps) = case;
+        let z = z_max(reps);
+        let tree = &runs[0].1;
+        for (scheme, stats) in &runs {
+            for (ti, &t) in times.iter().enumerate() {
+                for q in 0..3 {
+                    let (a, b) = (&tree[ti][q], &stats[ti][q]);
+                    if *scheme != "LowRank" {
+                        let se = (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
+                        let d = b.mean() - a.mean();
+                        if d.abs() > z * se + 1e-15 {
+                            failures.push_str(&format!(
+                                "{name} N0={n0} {scheme} t={t} {}: {} vs tree {} ({:.1} SE > {z:.2})\n",
+                                LABELS[q],
+                                b.mean(),
+                                a.mean(),
+                                d / se
+                            ));
+                        }
+                    }
+                    if n0 == 100_000 {
+                        let e = match q {
+                            0 => exact.moment(0, t).unwrap(),
+                            _ => exact.number_density(q as u64, t).unwrap(),
+                        };
+                        let zz = (b.mean() - e) / b.std_error();
+                        if zz.is_nan() || zz.abs() > z {
+                            failures.push_str(&format!(
+                                "{name} N0={n0} {scheme} t={t} {}: {} vs exact {e} ({zz:.1} SE > {z:.2})\n",
+                                LABELS[q],
+                                b.mean()
+                            ));
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
+/// Constant kernel to t = 130: N/V ≈ 2/(2 + t) = 1/66, six doublings or more.
+#[test]
+fn constant_kernel_regime_sweep() {
+    sweep::<_, 1, 2>(
+        "constant",
+        Coagulation::constant(1.0).unwrap(),
+        Exact::constant(1.0).unwrap(),
+        &[2.0, 20.0, 130.0],
+    );
+}
+
+/// Additive kernel to t = 4.5: N/V = e^{-t} = 1/90, six doublings or more, sizes
+/// growing towards the count vector's end.
+#[test]
+fn additive_kernel_regime_sweep() {
+    sweep::<_, 1, 2>(
+        "additive",
+        Coagulation::additive(),
+        Exact::additive(),
+        &[0.5, 2.0, 4.5],
+    );
+}
+
+/// `Σ i N_i`.
+fn mass(counts: &[u64]) -> u64 {
+    counts
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (i as u64 + 1) * c)
+        .sum()
+}
+
+/// Runs `make()` to `t` twice with the same seed; checks the invariants of a run.
+fn invariants<S: Scheme>(
+    make: impl Fn() -> S,
+    counts: impl Fn(&S) -> Vec<u64>,
+    t: f64,
+    seed: u64,
+    mass0: u64,
+) -> Result<(), TestCaseError> {
+    let run = || {
+        let mut s = make();
+        let mut rng = <Pcg64Mcg as rand_pcg::rand_core::SeedableRng>::seed_from_u64(seed);
+        let rep = s.advance_to(t, &mut rng);
+        (s, rep)
+    };
+    let (a, ra) = run();
+    let (b, rb) = run();
+    let ra = ra.map_err(|e| TestCaseError::fail(format!("{e}")))?;
+    prop_assert_eq!(Ok(ra), rb, "same seed, same report");
+    let (ca, cb) = (counts(&a), counts(&b));
+    prop_assert_eq!(&ca, &cb, "same seed, same counts");
+    prop_assert_eq!(a.time(), t);
+    let m = mass(&ca);
+    prop_assert!(
+        m.is_multiple_of(mass0) && (m / mass0).is_power_of_two(),
+        "mass {} from {}",
+        m,
+        mass0
+    );
+    prop_assert!(ca.iter().sum::<u64>() >= 1);
+    prop_assert_eq!(1u64 << ra.doublings, m / mass0);
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Random small systems (up to 40 sizes, up to 30 particles each), one of three
+    /// kernels, a random end time and seed: every scheme runs, conserves mass up to
+    /// doubling (the report's doublings say by how much) and is deterministic.
+    #[test]
+    fn random_small_systems_keep_their_invariants(
+        init in proptest::collection::vec(0u64..30, 1..40),
+        kernel in 0usize..3,
+        t in 0.0f64..3.0,
+        seed in any::<u64>(),
+    ) {
+        let mut init = init;
+        if init.iter().sum::<u64>() < 2 {
+            init[0] += 2;
+        }
+        let v = init.iter().sum::<u64>() as f64;
+        let mass0 = mass(&init);
+        let init = &init;
+        fn all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
+            k: K, init: &[u64], v: f64, t: f64, seed: u64, mass0: u64,
+        ) -> Result<(), TestCaseError> {
+            invariants(|| LowRank::<K, R>::new(k, init, v).unwrap(), |s| s.counts().to_vec(), t, seed, mass0)?;
+            invariants(|| Bucketed::<K, R, W>::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
+            invariants(|| Inverse::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
+            if k.sup_rate(1.0, 2.0).is_some() {
+                invariants(|| AcceptanceRejection::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
+            }
+            Ok(())
+        }
+        match kernel {
+            0 => all::<_, 1, 2>(Coagulation::constant(1.0).unwrap(), init, v, t, seed, mass0)?,
+            1 => all::<_, 1, 2>(Coagulation::additive(), init, v, t / 20.0, seed, mass0)?,
+            _ => all::<_, 2, 4>(Coagulation::brownian(), init, v, t, seed, mass0)?,
+        }
+    }
+}

@@ -1,0 +1,182 @@
+//! Value stability (the rand habit): seeded outputs of every scheme, pinned. These are
+//! not correctness checks — the conformance tests are — but a tripwire: any change to a
+//! random stream, a draw order or a rounding shows up here, and a change that means to
+//! alter them updates the pins in the same commit and says so in its message.
+//!
+//! Each pin is a report (events, proposals, rejections, doublings) and an FNV-1a hash
+//! of the state (counts, or sizes' bits), printed on a mismatch so that a deliberate
+//! update is a copy.
+
+use coagula_core::kernel::{BinaryUniform, Coagulation, CoagulationKernel};
+use coagula_core::qmc::Randomization;
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use coagula_core::scheme::massflow::{MassFlow, PointSource};
+use coagula_core::scheme::{Scheme, StepReport};
+use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
+
+/// FNV-1a over 64-bit words.
+fn fnv(words: impl IntoIterator<Item = u64>) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for w in words {
+        for b in w.to_le_bytes() {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    h
+}
+
+type Pin = (u64, u64, u64, u64, u64);
+
+fn pin(rep: StepReport, state: u64) -> Pin {
+    (
+        rep.events,
+        rep.proposals,
+        rep.rejections,
+        rep.doublings,
+        state,
+    )
+}
+
+fn check(name: &str, got: Pin, want: Pin, failures: &mut String) {
+    if got != want {
+        failures.push_str(&format!("{name}: got {got:?}, pinned {want:?}\n"));
+    }
+}
+
+/// A size-count scheme from 2000 monomers to t = 1.5 on seed 42.
+fn counts_pin<S: Scheme>(mut s: S, counts: impl Fn(&S) -> Vec<u64>) -> Pin {
+    let mut rng = Pcg64Mcg::seed_from_u64(42);
+    let rep = s.advance_to(1.5, &mut rng).unwrap();
+    pin(rep, fnv(counts(&s)))
+}
+
+#[test]
+fn size_count_schemes_are_value_stable() {
+    fn all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
+        name: &str,
+        k: K,
+        want: [Pin; 4],
+        failures: &mut String,
+    ) {
+        let n0 = 2000;
+        let got = [
+            counts_pin(LowRank::<K, R>::monodisperse(k, n0).unwrap(), |s| {
+                s.counts().to_vec()
+            }),
+            counts_pin(Bucketed::<K, R, W>::monodisperse(k, n0).unwrap(), |s| {
+                s.counts()
+            }),
+            counts_pin(Inverse::monodisperse(k, n0).unwrap(), |s| s.counts()),
+            if k.sup_rate(1.0, 2.0).is_some() {
+                counts_pin(AcceptanceRejection::monodisperse(k, n0).unwrap(), |s| {
+                    s.counts()
+                })
+            } else {
+                (0, 0, 0, 0, 0)
+            },
+        ];
+        for (i, scheme) in ["LowRank", "Bucketed", "Inverse", "AcceptanceRejection"]
+            .iter()
+            .enumerate()
+        {
+            check(&format!("{name} {scheme}"), got[i], want[i], failures);
+        }
+    }
+    let mut failures = String::new();
+    all::<_, 1, 2>(
+        "constant",
+        Coagulation::constant(1.0).unwrap(),
+        [
+            (857, 857, 0, 0, 6611134844062161652),
+            (842, 993, 151, 0, 10292517931893902689),
+            (885, 885, 0, 0, 14576362283316678503),
+            (860, 860, 0, 0, 2032075766861111642),
+        ],
+        &mut failures,
+    );
+    all::<_, 1, 2>(
+        "additive",
+        Coagulation::additive(),
+        [
+            (2200, 2201, 1, 2, 9058174104570674959),
+            (2231, 2608, 377, 2, 849035870507809853),
+            (2250, 2250, 0, 2, 8515852320400115809),
+            (2220, 36318, 34098, 2, 14969627286106257695),
+        ],
+        &mut failures,
+    );
+    all::<_, 2, 4>(
+        "brownian",
+        Coagulation::brownian(),
+        [
+            (2017, 2017, 0, 2, 12553428287362706833),
+            (2056, 2373, 317, 2, 3268949292869073306),
+            (2057, 2057, 0, 2, 7889359025669339345),
+            (2070, 2377, 307, 2, 806088874076014372),
+        ],
+        &mut failures,
+    );
+    all::<_, 3, 6>(
+        "ballistic",
+        Coagulation::free_molecular().with_min_size(1.0).unwrap(),
+        [
+            (2762, 3822, 1060, 2, 485149301755014905),
+            (2764, 4377, 1613, 2, 3967336986320952043),
+            (2775, 2775, 0, 2, 14471779863178766222),
+            (2738, 5263, 2525, 2, 1015803066374961111),
+        ],
+        &mut failures,
+    );
+    assert!(failures.is_empty(), "{failures}");
+}
+
+#[test]
+fn mass_flow_is_value_stable() {
+    let mut failures = String::new();
+    let mut key = Pcg64Mcg::seed_from_u64(7);
+    let sources = [
+        (
+            "niederreiter",
+            PointSource::niederreiter(),
+            (1084, 51200, 0, 0, 3912149161184120340),
+        ),
+        (
+            "sobol",
+            PointSource::sobol(),
+            (1067, 51200, 0, 0, 624291934428782012),
+        ),
+        (
+            "mc",
+            PointSource::monte_carlo(),
+            (1041, 51200, 0, 0, 11721847907050127431),
+        ),
+        (
+            "rqmc-owen",
+            PointSource::randomized_niederreiter(Randomization::Owen, &mut key),
+            (1075, 51200, 0, 0, 13149859491019460695),
+        ),
+        (
+            "rqmc-matousek",
+            PointSource::randomized_sobol(Randomization::Matousek, &mut key),
+            (1088, 51200, 0, 0, 7305217675960912766),
+        ),
+    ];
+    for (name, src, want) in sources {
+        let mut s = MassFlow::new(
+            Coagulation::constant(1.0).unwrap(),
+            BinaryUniform::new(1.0).unwrap(),
+            &vec![1.0; 1 << 10],
+            1.0,
+            0.01,
+            src,
+        )
+        .unwrap();
+        let mut rng = Pcg64Mcg::seed_from_u64(42);
+        let rep = s.advance_to(0.5, &mut rng).unwrap();
+        let got = pin(rep, fnv(s.sizes().iter().map(|x| x.to_bits())));
+        check(name, got, want, &mut failures);
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
