@@ -1067,8 +1067,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 bounded_rate(&self.kernel, xu as f64, xv as f64, bound, "low-rank bound")?;
             }
         }
-        let x = xu + xv;
-        if x > self.size_limit {
+        // (saturating: a size limit near u64::MAX must not let the sum wrap)
+        let x = xu.saturating_add(xv);
+        if x > self.size_limit || x == u64::MAX {
             return Err(Error::Capacity {
                 name: "maximum particle size",
                 capacity: self.size_limit as usize,

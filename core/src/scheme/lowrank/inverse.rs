@@ -105,7 +105,9 @@ impl<K: CoagulationKernel> Inverse<K> {
             scratch_m: Vec::new(),
             cache: Vec::new(),
             dim: 0,
-            cache_max: (n as usize).next_power_of_two().clamp(64, CACHE_DIM),
+            cache_max: (n.min(CACHE_DIM as u64) as usize)
+                .next_power_of_two()
+                .clamp(64, CACHE_DIM),
             memory_budget: super::DEFAULT_MEMORY_BUDGET,
             n,
             n0: n,
@@ -290,8 +292,8 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 }
             }
             let xj = self.size[ja];
-            let merged = xi + xj;
-            if merged > self.size_limit {
+            let merged = xi.saturating_add(xj);
+            if merged > self.size_limit || merged == u64::MAX {
                 break Err(Error::Capacity {
                     name: "maximum particle size",
                     capacity: self.size_limit as usize,
@@ -355,9 +357,9 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// Also makes room for one more occupied size, so that the event itself
     /// allocates nothing.
     fn reserve_size(&mut self, x: u64) -> Result<()> {
-        let need = x as usize;
+        let need = usize::try_from(x).unwrap_or(usize::MAX);
         if need > self.slot.len() {
-            let len = need.next_power_of_two();
+            let len = need.checked_next_power_of_two().unwrap_or(usize::MAX);
             super::within_budget(
                 len.checked_mul(core::mem::size_of::<u32>()),
                 self.memory_budget,
@@ -466,7 +468,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
             });
         }
         let max = size.iter().copied().max().unwrap_or(1) as usize;
-        let len = max.next_power_of_two();
+        let len = max.checked_next_power_of_two().unwrap_or(usize::MAX);
         super::within_budget(
             len.checked_mul(core::mem::size_of::<u32>()),
             self.memory_budget,

@@ -206,8 +206,8 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 rep.rejections += 1;
                 continue;
             }
-            let merged = x + y;
-            if merged > self.size_limit {
+            let merged = x.saturating_add(y);
+            if merged > self.size_limit || merged == u64::MAX {
                 break Err(Error::Capacity {
                     name: "maximum particle size",
                     capacity: self.size_limit as usize,

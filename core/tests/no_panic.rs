@@ -1,0 +1,313 @@
+//! The public API under hostile input: every constructor, setter, stepping call and
+//! checkpoint restore fed huge counts, zero, NaN, ±inf, negative and out-of-range values
+//! returns `Err` (never a panic, an abort or a hang), first as a table of the known bad
+//! values, then as property tests over arbitrary ones. An `Err` leaves the scheme as it
+//! was.
+
+use coagula_core::checkpoint::Checkpoint;
+use coagula_core::exact::Exact;
+use coagula_core::kernel::{BinaryUniform, Coagulation, NoFragmentation, UserKernel};
+use coagula_core::qmc::{DigitalSequence, Niederreiter2, Sobol};
+use coagula_core::scheme::Scheme;
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use coagula_core::scheme::massflow::{MassFlow, PointSource};
+use proptest::prelude::*;
+use rand_pcg::Pcg64Mcg;
+
+const BAD_REALS: [f64; 6] = [
+    f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    0.0,
+    -1.0,
+    -f64::MIN_POSITIVE,
+];
+
+#[test]
+fn kernels_and_exact_solutions_refuse_bad_parameters() {
+    for v in BAD_REALS {
+        assert!(Coagulation::constant(v).is_err(), "constant({v})");
+        assert!(BinaryUniform::new(v).is_err(), "BinaryUniform({v})");
+        assert!(Exact::constant(v).is_err(), "Exact::constant({v})");
+        assert!(Coagulation::product(v).is_err(), "product({v})");
+        assert!(Coagulation::homogeneous(v).is_err(), "homogeneous({v})");
+    }
+    for a in [1.5, 2.0, 1e300] {
+        assert!(Coagulation::product(a).is_err(), "product({a})");
+    }
+    for g in [1.0, 2.5, 1e300] {
+        assert!(Coagulation::homogeneous(g).is_err(), "homogeneous({g})");
+    }
+    for v in [f64::NAN, f64::INFINITY, -1.0] {
+        assert!(Coagulation::additive().with_min_size(v).is_err());
+    }
+    let e = Exact::constant(1.0).unwrap();
+    for t in [f64::NAN, f64::INFINITY, -1.0] {
+        assert!(e.moment(2, t).is_err(), "moment at t = {t}");
+        assert!(e.number_density(1, t).is_err(), "n_1 at t = {t}");
+    }
+    for r in [0, 9, usize::MAX] {
+        assert!(
+            UserKernel::new(|x: f64, y: f64| x + y)
+                .with_low_rank(r, |_x: f64, _a: &mut [f64], _b: &mut [f64]| {})
+                .is_err()
+        );
+    }
+}
+
+#[test]
+fn digital_sequences_refuse_bad_dimensions_and_indices() {
+    for d in [0usize, 100_000, usize::MAX] {
+        assert!(Sobol::<u64>::new(d).is_err(), "Sobol({d})");
+        assert!(Niederreiter2::<u64>::new(d).is_err(), "Niederreiter({d})");
+    }
+    // 32-bit digits: 2^32 points
+    let s32 = Sobol::<u32>::new(3).unwrap();
+    let mut out = [0.0; 3];
+    assert!(s32.point(1 << 32, &mut out).is_err());
+    assert!(s32.point(u64::MAX, &mut out).is_err());
+    let s = Sobol::<u64>::new(3).unwrap();
+    let mut small = [0.0; 2];
+    assert!(s.point(0, &mut small).is_err(), "buffer too short");
+    let mut block = vec![0.0; 3 * 4];
+    assert!(
+        s.block(0, 3, &mut block).is_err(),
+        "buffer of the wrong length"
+    );
+    assert!(
+        s.block(u64::MAX, 2, &mut block).is_err(),
+        "block past the end"
+    );
+    assert!(s.block(0, 70, &mut block).is_err(), "m beyond the word");
+}
+
+/// Every size-count constructor refuses empty, all-zero and overflowing counts and a
+/// bad volume; a target time that is NaN, infinite or in the past is refused and
+/// changes nothing.
+#[test]
+fn size_count_schemes_refuse_bad_input() {
+    let k = Coagulation::constant(1.0).unwrap();
+    let bad_counts: [&[u64]; 3] = [&[], &[0, 0, 0], &[u64::MAX, 1]];
+    for c in bad_counts {
+        assert!(LowRank::<_, 1>::new(k, c, 1.0).is_err(), "{c:?}");
+        assert!(Bucketed::<_, 1, 2>::new(k, c, 1.0).is_err(), "{c:?}");
+        assert!(Inverse::new(k, c, 1.0).is_err(), "{c:?}");
+        assert!(AcceptanceRejection::new(k, c, 1.0).is_err(), "{c:?}");
+    }
+    for v in BAD_REALS {
+        assert!(LowRank::<_, 1>::new(k, &[10], v).is_err(), "volume {v}");
+        assert!(Bucketed::<_, 1, 2>::new(k, &[10], v).is_err(), "volume {v}");
+        assert!(Inverse::new(k, &[10], v).is_err(), "volume {v}");
+        assert!(AcceptanceRejection::new(k, &[10], v).is_err(), "volume {v}");
+    }
+    // a count vector whose size table would pass the memory budget
+    let mut long = vec![0u64; 1 << 27];
+    long[(1 << 27) - 1] = 1;
+    long[0] = 1;
+    assert!(LowRank::<_, 1>::new(k, &long, 1.0).is_err());
+    assert!(Bucketed::<_, 1, 2>::new(k, &[1 << 33], 1.0).is_err());
+    drop(long);
+
+    let mut rng = Pcg64Mcg::new(1);
+    let mut lr = LowRank::<_, 1>::monodisperse(k, 100).unwrap();
+    let mut bk = Bucketed::<_, 1, 2>::monodisperse(k, 100).unwrap();
+    let mut inv = Inverse::monodisperse(k, 100).unwrap();
+    let mut ar = AcceptanceRejection::monodisperse(k, 100).unwrap();
+    lr.advance_to(1.0, &mut rng).unwrap();
+    bk.advance_to(1.0, &mut rng).unwrap();
+    inv.advance_to(1.0, &mut rng).unwrap();
+    ar.advance_to(1.0, &mut rng).unwrap();
+    for t in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.5, -1.0] {
+        let before = (lr.counts().to_vec(), bk.counts(), inv.counts(), ar.counts());
+        assert!(lr.advance_to(t, &mut rng).is_err());
+        assert!(bk.advance_to(t, &mut rng).is_err());
+        assert!(inv.advance_to(t, &mut rng).is_err());
+        assert!(ar.advance_to(t, &mut rng).is_err());
+        assert_eq!(
+            before,
+            (lr.counts().to_vec(), bk.counts(), inv.counts(), ar.counts())
+        );
+        assert_eq!(lr.time(), 1.0);
+    }
+    // setters: an error changes nothing
+    for (c, v) in [(&[][..], 1.0), (&[0u64][..], 1.0), (&[5u64][..], f64::NAN)] {
+        let before = (lr.counts().to_vec(), lr.volume());
+        assert!(lr.set_counts(c, v).is_err());
+        assert_eq!(before, (lr.counts().to_vec(), lr.volume()));
+        let before = (inv.counts(), inv.volume());
+        assert!(inv.set_counts(c, v).is_err());
+        assert_eq!(before, (inv.counts(), inv.volume()));
+        let before = (ar.counts(), ar.volume());
+        assert!(ar.set_counts(c, v).is_err());
+        assert_eq!(before, (ar.counts(), ar.volume()));
+    }
+}
+
+#[test]
+fn mass_flow_refuses_bad_input() {
+    let k = Coagulation::constant(1.0).unwrap();
+    let src = PointSource::niederreiter;
+    for n in [0usize, 1, 3, 6, 1000] {
+        assert!(MassFlow::new(k, NoFragmentation, &vec![1.0; n], 1.0, 0.1, src()).is_err());
+    }
+    for v in BAD_REALS {
+        let mut init = vec![1.0; 8];
+        init[3] = v;
+        assert!(MassFlow::new(k, NoFragmentation, &init, 1.0, 0.1, src()).is_err());
+        assert!(MassFlow::new(k, NoFragmentation, &[1.0; 8], v, 0.1, src()).is_err());
+        assert!(MassFlow::new(k, NoFragmentation, &[1.0; 8], 1.0, v, src()).is_err());
+        assert!(MassFlow::from_inverse_cdf(k, NoFragmentation, 8, |_| v, 1.0, 0.1, src()).is_err());
+    }
+    let mut s = MassFlow::new(k, NoFragmentation, &[1.0; 8], 1.0, 0.1, src()).unwrap();
+    let mut rng = Pcg64Mcg::new(2);
+    s.advance_to(0.5, &mut rng).unwrap();
+    let before = s.sizes().to_vec();
+    for t in [f64::NAN, f64::INFINITY, 0.2, -1.0] {
+        assert!(s.advance_to(t, &mut rng).is_err());
+    }
+    for v in BAD_REALS {
+        assert!(s.set_dt(v).is_err());
+        let mut sz = vec![1.0; 8];
+        sz[0] = v;
+        assert!(s.set_sizes(&sz).is_err());
+    }
+    assert!(s.set_sizes(&[1.0; 4]).is_err());
+    assert_eq!(before, s.sizes());
+    assert_eq!(s.dt(), 0.1);
+}
+
+/// Any real number (NaN, infinities, subnormals and all).
+fn any_real() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        Just(f64::NAN),
+        Just(f64::INFINITY),
+        Just(f64::NEG_INFINITY),
+        Just(0.0),
+        Just(-0.0),
+        Just(f64::MAX),
+        Just(f64::MIN_POSITIVE),
+        any::<f64>(),
+        -10.0f64..10.0,
+    ]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Arbitrary counts and volumes: construction either fails or gives a scheme that
+    /// runs a short step (small systems only, so the step is short).
+    #[test]
+    fn size_count_constructors_never_panic(
+        counts in proptest::collection::vec(prop_oneof![Just(u64::MAX), Just(0u64), 0u64..50, any::<u64>()], 0..20),
+        volume in any_real(),
+        t in any_real(),
+    ) {
+        let k = Coagulation::additive();
+        let small = counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)).is_some_and(|n| n <= 1000);
+        let mut rng = Pcg64Mcg::new(3);
+        let t = if t.is_finite() { t.clamp(-1.0, 1e-3) } else { t };
+        if let Ok(mut s) = LowRank::<_, 1>::new(k, &counts, volume) && small {
+            let _ = s.advance_to(t, &mut rng);
+        }
+        if let Ok(mut s) = Bucketed::<_, 1, 2>::new(k, &counts, volume) && small {
+            let _ = s.advance_to(t, &mut rng);
+        }
+        if let Ok(mut s) = Inverse::new(k, &counts, volume) && small {
+            let _ = s.advance_to(t, &mut rng);
+        }
+        if small && let Ok(mut s) = AcceptanceRejection::new(k, &counts, volume) {
+            let _ = s.advance_to(t, &mut rng);
+        }
+    }
+
+}
+
+proptest! {
+    // fewer cases: a tiny volume makes a short step run to the size limit
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Arbitrary counts and volumes given to the setters of a running scheme: an error
+    /// changes nothing; a success gives a scheme that still runs.
+    #[test]
+    fn size_count_setters_never_panic(
+        counts in proptest::collection::vec(prop_oneof![Just(u64::MAX), Just(0u64), 0u64..50, any::<u64>()], 0..20),
+        volume in any_real(),
+        limit in any::<u64>(),
+    ) {
+        let k = Coagulation::constant(1.0).unwrap();
+        let small = counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)).is_some_and(|n| n <= 1000);
+        let mut rng = Pcg64Mcg::new(6);
+        let mut lr = LowRank::<_, 1>::monodisperse(k, 40).unwrap().with_size_limit(limit);
+        let mut inv = Inverse::monodisperse(k, 40).unwrap().with_size_limit(limit);
+        // (a 1 MiB budget: a particle list of 2^28 sizes would take seconds to fill)
+        let mut ar = AcceptanceRejection::new_with_memory_budget(k, &[40], 40.0, 1 << 20)
+            .unwrap()
+            .with_size_limit(limit);
+        let before = (lr.counts().to_vec(), inv.counts(), ar.counts());
+        let ok = [
+            lr.set_counts(&counts, volume).is_ok(),
+            inv.set_counts(&counts, volume).is_ok(),
+            ar.set_counts(&counts, volume).is_ok(),
+        ];
+        if !ok[0] { prop_assert_eq!(&before.0, &lr.counts().to_vec()); }
+        if !ok[1] { prop_assert_eq!(&before.1, &inv.counts()); }
+        if !ok[2] { prop_assert_eq!(&before.2, &ar.counts()); }
+        if small {
+            let _ = lr.advance_to(0.01, &mut rng);
+            let _ = inv.advance_to(0.01, &mut rng);
+            let _ = ar.advance_to(0.01, &mut rng);
+        }
+    }
+
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(256))]
+
+    /// Arbitrary sizes, masses and steps for mass flow.
+    #[test]
+    fn mass_flow_constructor_never_panics(
+        sizes in proptest::collection::vec(any_real(), 0..17),
+        mass in any_real(),
+        dt in any_real(),
+    ) {
+        let k = Coagulation::constant(1.0).unwrap();
+        if let Ok(mut s) = MassFlow::new(k, NoFragmentation, &sizes, mass, dt, PointSource::niederreiter()) {
+            let mut rng = Pcg64Mcg::new(4);
+            let _ = s.advance_to((dt * 3.0).min(1.0), &mut rng);
+        }
+    }
+
+    /// Arbitrary bytes (and a valid checkpoint with one byte changed) are refused or
+    /// restored, never a panic; a refused restore changes nothing.
+    #[test]
+    fn checkpoint_restore_never_panics(
+        bytes in proptest::collection::vec(any::<u8>(), 0..600),
+        flip in any::<usize>(),
+        value in any::<u8>(),
+    ) {
+        let k = Coagulation::constant(1.0).unwrap();
+        let mut rng = Pcg64Mcg::new(5);
+        let mut lr = LowRank::<_, 1>::monodisperse(k, 50).unwrap();
+        lr.advance_to(0.5, &mut rng).unwrap();
+        let mut good = vec![0u8; lr.checkpoint_len()];
+        lr.save_to(&mut good).unwrap();
+        let mut bent = good.clone();
+        let i = flip % bent.len();
+        bent[i] = value;
+        let mut inv = Inverse::monodisperse(k, 50).unwrap();
+        let mut ar = AcceptanceRejection::monodisperse(k, 50).unwrap();
+        let mut mf = MassFlow::new(k, NoFragmentation, &[1.0; 8], 1.0, 0.1, PointSource::niederreiter()).unwrap();
+        for buf in [&bytes, &bent] {
+            let before = lr.counts().to_vec();
+            if lr.restore_from(buf).is_err() {
+                prop_assert_eq!(&before, &lr.counts().to_vec());
+            } else {
+                let _ = lr.advance_to(lr.time() + 0.01, &mut rng);
+            }
+            let _ = inv.restore_from(buf);
+            let _ = ar.restore_from(buf);
+            let _ = mf.restore_from(buf);
+        }
+    }
+}
