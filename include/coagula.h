@@ -189,8 +189,8 @@ typedef double (*coag_sup_fn)(double lo, double hi, void *user_data);
 
 /*
  A user coagulation kernel: the rate and whichever bounds the chosen scheme needs.
- Unused bounds may be NULL (0 for `rank`). A bound violated at run time is counted in
- the step report (`bound_violations`), never silently ignored.
+ Unused bounds may be NULL (0 for `rank`). A bound violated at run time makes
+ `coag_sim_advance_to` fail with `COAG_INVALID_RATE`, the sim as before the event.
  */
 typedef struct {
   /*
@@ -333,7 +333,7 @@ typedef struct {
    */
   uint64_t rejections;
   /*
-   Proposals where the kernel exceeded its declared bound (results are biased).
+   Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
    */
   uint64_t bound_violations;
   /*

@@ -22,8 +22,8 @@ pub type coag_piece_fn =
     Option<unsafe extern "C" fn(x: f64, u: f64, user_data: *mut c_void) -> f64>;
 
 /// A user coagulation kernel: the rate and whichever bounds the chosen scheme needs.
-/// Unused bounds may be NULL (0 for `rank`). A bound violated at run time is counted in
-/// the step report (`bound_violations`), never silently ignored.
+/// Unused bounds may be NULL (0 for `rank`). A bound violated at run time makes
+/// `coag_sim_advance_to` fail with `COAG_INVALID_RATE`, the sim as before the event.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct coag_user_kernel {

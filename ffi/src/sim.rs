@@ -86,7 +86,7 @@ pub struct coag_step_report {
     pub proposals: u64,
     /// Proposals rejected by thinning.
     pub rejections: u64,
-    /// Proposals where the kernel exceeded its declared bound (results are biased).
+    /// Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
     pub bound_violations: u64,
     /// Probabilities above 1 that were clipped (time-driven scheme).
     pub clipped: u64,

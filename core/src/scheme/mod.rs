@@ -30,8 +30,9 @@ pub struct StepReport {
     pub proposals: u64,
     /// Proposals rejected by thinning (including same-particle rejections).
     pub rejections: u64,
-    /// Proposals where the kernel exceeded its declared bound (the bound was violated:
-    /// results are biased; the scheme counts instead of silently continuing).
+    /// Proposals where the kernel exceeded its declared bound. Always 0 since a
+    /// violated bound became an error (`Error::BoundExceeded`, the state as before the
+    /// event); kept for the C ABI's step report.
     pub bound_violations: u64,
     /// Time steps whose probabilities exceeded 1 and were clipped (time-driven schemes).
     pub clipped: u64,

@@ -28,7 +28,11 @@
 //!   pair keeps its proposal rate `Â/V`, so this is exact thinning. Removals therefore
 //!   never change a weight, a new particle usually fills a free slot (a full bucket grows
 //!   by 1/16), and the slots are reset to the particles (a *resync*) when the
-//!   empties left by removals pass 1/64 of a row's weight.
+//!   empties left by removals pass 1/64 of a row's weight, at every particle doubling,
+//!   and — an O(1) test per event — when the slots pass `3n/2` (this bounds every
+//!   alias weight below `5 · 2^60`, checked in release builds) or the removals' empties
+//!   pass `n/8` (what keeps a small system's acceptance high). An empty singleton
+//!   bucket keeps no slot.
 //! * Slots grown since the tables were built form an *overflow*: the proposal process
 //!   splits exactly into a main stream (pairs of slots the tables know, `Σ_k M_k
 //!   M_{R+k}` in row weights) and an overflow stream (pairs with a grown slot, `Σ_k
