@@ -349,8 +349,6 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     /// the empties left by removals exceed `n/8` (the rule that keeps small systems'
     /// acceptance high). Recomputed whenever the slots change.
     n_resync: u64,
-    /// Proposals accepted without evaluating K until the next spot check.
-    spot: u32,
     memory_budget: usize,
     /// An internal integer invariant failed (a weight would pass 2^63): every later
     /// call returns this error instead of a wrong result.
@@ -518,7 +516,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             planned: 0,
             n_resync: 0,
             poisoned: None,
-            spot: SPOT_CHECK,
             memory_budget: super::DEFAULT_MEMORY_BUDGET,
             rates_stale: true,
             m,
@@ -1063,13 +1060,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 true
             }
         };
-        if !evaluated {
+        if !evaluated && (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK) {
             // accepted without K: a spot check now and then
-            self.spot -= 1;
-            if self.spot == 0 {
-                self.spot = SPOT_CHECK;
-                bounded_rate(&self.kernel, xu as f64, xv as f64, bound, "low-rank bound")?;
-            }
+            bounded_rate(&self.kernel, xu as f64, xv as f64, bound, "low-rank bound")?;
         }
         // (saturating: a size limit near u64::MAX must not let the sum wrap)
         let x = xu.saturating_add(xv);

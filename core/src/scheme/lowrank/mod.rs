@@ -127,8 +127,6 @@ pub struct LowRank<K, const R: usize, T = WideTree<R>> {
     time: f64,
     totals: StepReport,
     zig: Ziggurat,
-    /// Proposals accepted without evaluating K until the next spot check.
-    spot: u32,
     memory_budget: usize,
 }
 
@@ -164,10 +162,10 @@ pub(crate) fn factors_at<K: CoagulationKernel, const R: usize>(
 }
 
 /// A kernel whose bound is exact (or whose acceptance a squeeze decides) is still
-/// evaluated at every `SPOT_CHECK`-th proposal accepted without it, so a kernel that
-/// turns NaN or exceeds its bound is caught (a deterministic countdown: the random
-/// stream is the same with or without the check).
-pub(crate) const SPOT_CHECK: u32 = 1024;
+/// evaluated when the run's `SPOT_CHECK`-th proposal (and every multiple) is accepted
+/// without it, so a kernel that turns NaN or exceeds its bound is caught
+/// (deterministic: the random stream is the same with or without the check).
+pub(crate) const SPOT_CHECK: u64 = 1024;
 
 /// `K(x, y)` validated against the proposal bound: a negative or non-finite value is
 /// [`Error::InvalidRate`], a value above `bound` (beyond rounding) is
@@ -245,7 +243,6 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             time: 0.0,
             totals: StepReport::default(),
             zig: Ziggurat::new(),
-            spot: SPOT_CHECK,
             memory_budget: DEFAULT_MEMORY_BUDGET,
         };
         try_resize(&mut s.counts, m, 0)?;
@@ -377,10 +374,8 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
             rep.rejections += 1;
             return Ok(false);
         }
-        let spot = self.exact_bound && {
-            self.spot -= 1;
-            self.spot == 0
-        };
+        let spot =
+            self.exact_bound && (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK);
         if !self.exact_bound || spot {
             let (x, y) = ((i + 1) as f64, (j + 1) as f64);
             let mut bound = 0.0;
@@ -389,9 +384,7 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
                     + self.fab[j][0][kk] * self.fab[i][1][kk];
             }
             let c = bounded_rate(&self.kernel, x, y, bound, "low-rank bound")?;
-            if spot {
-                self.spot = SPOT_CHECK;
-            } else if bound * open_unit(rng) > c {
+            if !spot && bound * open_unit(rng) > c {
                 rep.rejections += 1;
                 return Ok(false);
             }
