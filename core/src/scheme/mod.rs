@@ -88,13 +88,11 @@ pub(crate) fn check_target(now: f64, t: f64) -> Result<()> {
 /// Exponential variates by the ziggurat method (Marsaglia & Tsang 2000), 256 layers:
 /// one 64-bit draw, one multiply and one comparison in ~99% of calls, exact in
 /// distribution (the rare wedge and tail cases fall back to `exp`/`ln`). The tables are
-/// computed once by [`Ziggurat::new`] with `libm`, so they are identical on every
-/// platform.
-#[derive(Clone)]
-pub(crate) struct Ziggurat {
-    x: [f64; 257],
-    f: [f64; 257],
-}
+/// constants ([`ziggurat_table`]), computed with `libm` and checked bit for bit against
+/// that computation by a test, so they are identical on every platform and building a
+/// scheme costs no 500 `exp`/`ln` calls (which dominated small systems).
+#[derive(Clone, Copy)]
+pub(crate) struct Ziggurat;
 
 impl core::fmt::Debug for Ziggurat {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -104,10 +102,19 @@ impl core::fmt::Debug for Ziggurat {
 
 /// Rightmost layer boundary and layer area of the 256-layer exponential ziggurat.
 const ZIG_EXP_R: f64 = 7.697_117_470_131_05;
+#[cfg(test)]
 const ZIG_EXP_V: f64 = 0.003_949_659_822_581_557;
+
+mod ziggurat_table;
 
 impl Ziggurat {
     pub(crate) fn new() -> Self {
+        Ziggurat
+    }
+
+    /// The tables as `libm` computes them: layer boundaries `x` and `f = exp(−x)`.
+    #[cfg(test)]
+    fn compute() -> ([f64; 257], [f64; 257]) {
         let (mut x, mut f) = ([0.0; 257], [0.0; 257]);
         let fr = libm::exp(-ZIG_EXP_R);
         x[0] = ZIG_EXP_V / fr;
@@ -119,26 +126,26 @@ impl Ziggurat {
         for i in 0..257 {
             f[i] = libm::exp(-x[i]);
         }
-        Ziggurat { x, f }
+        (x, f)
     }
 
     /// An exponential variate with mean 1.
     #[inline(always)]
     pub(crate) fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        let (xs, fs) = (&ziggurat_table::X, &ziggurat_table::F);
         loop {
             let bits = rng.next_u64();
             let i = (bits & 0xff) as usize;
             let u = (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-            let x = u * self.x[i];
-            if x < self.x[i + 1] {
+            let x = u * xs[i];
+            if x < xs[i + 1] {
                 return x;
             }
             if i == 0 {
                 // tail beyond R: memoryless, R + Exp(1)
                 return ZIG_EXP_R + exp1(rng);
             }
-            let y =
-                self.f[i + 1] + (self.f[i] - self.f[i + 1]) * crate::tree::unit_f64(rng.next_u64());
+            let y = fs[i + 1] + (fs[i] - fs[i + 1]) * crate::tree::unit_f64(rng.next_u64());
             if y < libm::exp(-x) {
                 return x;
             }
@@ -149,6 +156,32 @@ impl Ziggurat {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The constant tables are what `libm` computes, bit for bit (on a mismatch the
+    /// message is the table to paste into `ziggurat_table.rs`).
+    #[test]
+    fn ziggurat_tables_are_the_libm_computation() {
+        let (x, f) = Ziggurat::compute();
+        let same = |a: &[f64; 257], b: &[f64; 257]| {
+            a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
+        };
+        if !same(&x, &ziggurat_table::X) || !same(&f, &ziggurat_table::F) {
+            let mut out = alloc::string::String::new();
+            for (name, t) in [("X", &x), ("F", &f)] {
+                out.push_str(&alloc::format!(
+                    "pub(super) static {name}: [f64; 257] = [\n"
+                ));
+                for v in t.iter() {
+                    out.push_str(&alloc::format!(
+                        "    f64::from_bits(0x{:016x}),\n",
+                        v.to_bits()
+                    ));
+                }
+                out.push_str("];\n");
+            }
+            panic!("ziggurat tables differ from libm's:\n{out}");
+        }
+    }
 
     /// The ziggurat's moments and tail probabilities match Exp(1) within 5 standard
     /// errors over 4e6 draws.

@@ -423,6 +423,10 @@ struct StreamRates {
     total: f64,
 }
 
+/// Below this many particles the overflow stream may carry up to half the proposal
+/// rate before the tables are rebuilt (above, 1/16).
+const SMALL_N: u64 = 4096;
+
 /// Most buckets in the overflow before the tables are rebuilt (each overflow proposal
 /// scans them).
 const OVER_MAX: usize = 32;
@@ -743,7 +747,13 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             return Err(e);
         }
         let mut rates = self.rates();
-        if self.n >= 2 && rates.total > 0.0 && (self.rates_stale || rates.over > rates.total / 16.0)
+        // a small system grows a bucket at most events (every new size is a new slot),
+        // and a rebuild costs O(buckets) against a scan of ≤ OVER_MAX grown buckets for
+        // an overflow proposal: there the overflow may carry half the rate
+        let share = if self.n < SMALL_N { 2.0 } else { 16.0 };
+        if self.n >= 2
+            && rates.total > 0.0
+            && (self.rates_stale || rates.over > rates.total / share)
         {
             self.rebuild_tables();
             if let Some(e) = self.poisoned {
@@ -1316,8 +1326,15 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
                 break;
             }
             // the rate is constant until the tables change: proposals in batches, with
-            // no clock per proposal (see `clock`)
-            if let Some(batch) = Batch::plan(self.time, rates.mean_dt, t, rng) {
+            // no clock per proposal (see `clock`) — except in a small system, where
+            // almost every event changes the rates and a batch's gamma and beta draws
+            // would cost more than an exponential per proposal
+            let batch = if self.n >= SMALL_N {
+                Batch::plan(self.time, rates.mean_dt, t, rng)
+            } else {
+                None
+            };
+            if let Some(batch) = batch {
                 let mut k = 0;
                 while k < batch.len {
                     k += 1;
