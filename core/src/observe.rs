@@ -327,14 +327,11 @@ mod tests {
         ];
         for (alpha, df, q) in known {
             let z = student_t_threshold(alpha, df);
-            assert!(
-                (z - q).abs() < 1e-8 * q,
-                "alpha {alpha} df {df}: {z} vs {q}"
-            );
+            approx::assert_relative_eq!(z, q, max_relative = 1e-8);
         }
         for df in [2u64, 5, 15, 30, 31, 100, 1000] {
             let (a, b) = (student_t_threshold(0.05, df), student_t_975(df));
-            assert!((a - b).abs() < 1e-6 * b, "df {df}: {a} vs {b}");
+            approx::assert_relative_eq!(a, b, max_relative = 1e-6);
         }
         assert!(student_t_threshold(0.05, 0).is_nan());
         assert!(student_t_threshold(0.0, 3).is_nan());

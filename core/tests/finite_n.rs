@@ -287,7 +287,7 @@ fn reference_is_close_to_smoluchowski() {
     let e = reference(Kind::Constant, &[2.0]);
     // N/V → 1/(1 + t/2) = 0.5, n_1 → 1/(1 + t/2)^2 = 0.25, n_2 → (t/2)/(1+t/2)^3 = 0.125
     for (got, want) in e[0].iter().zip([0.5, 0.25, 0.125]) {
-        assert!((got - want).abs() < 0.05 * want, "{got} vs {want}");
+        approx::assert_relative_eq!(*got, want, max_relative = 0.05);
     }
     let e = reference(Kind::Additive, &[1.0]);
     // N/V → e^{-1}, n_1 → e^{-τ} e^{-1} with τ = 1 − e^{-1}
@@ -296,7 +296,7 @@ fn reference_is_close_to_smoluchowski() {
         .iter()
         .zip([(-1.0f64).exp(), (-tau).exp() * (-1.0f64).exp()])
     {
-        assert!((got - want).abs() < 0.05 * want, "{got} vs {want}");
+        approx::assert_relative_eq!(*got, want, max_relative = 0.05);
     }
 }
 
