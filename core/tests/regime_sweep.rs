@@ -14,7 +14,7 @@ use coagula_core::kernel::{Coagulation, CoagulationKernel};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
-use common::{LABELS, counts_observation, replicas, z_max};
+use common::{LABELS, counts_observation, mass, replicas, z_max};
 use proptest::prelude::*;
 use rand_pcg::Pcg64Mcg;
 
@@ -160,15 +160,6 @@ fn additive_kernel_regime_sweep() {
         Exact::additive(),
         &[0.5, 2.0, 4.5],
     );
-}
-
-/// `Σ i N_i`.
-fn mass(counts: &[u64]) -> u64 {
-    counts
-        .iter()
-        .enumerate()
-        .map(|(i, &c)| (i as u64 + 1) * c)
-        .sum()
 }
 
 /// Runs `make()` to `t` twice with the same seed; checks the invariants of a run.

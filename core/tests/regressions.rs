@@ -3,22 +3,16 @@
 //! tests in `scheme/lowrank/bucketed.rs` (they check internal invariants) and the
 //! finite-N reference in `tests/finite_n.rs`.
 
+mod common;
+
 use coagula_core::checkpoint::Checkpoint;
 use coagula_core::error::Error;
 use coagula_core::kernel::{Coagulation, CoagulationKernel, NoFragmentation, UserKernel};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
+use common::mass;
 use rand_pcg::Pcg64Mcg;
-
-/// Mass `Σ i N_i` of a count vector.
-fn mass(counts: &[u64]) -> u64 {
-    counts
-        .iter()
-        .enumerate()
-        .map(|(i, &c)| (i as u64 + 1) * c)
-        .sum()
-}
 
 /// Advances in small steps until the first error; checks that the error is `expect`
 /// and that the state is the one before the failing event: the mass is the initial

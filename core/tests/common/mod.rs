@@ -45,3 +45,12 @@ pub fn z_max(reps: u64) -> f64 {
 
 /// The observables' names, in the order of [`replicas`].
 pub const LABELS: [&str; 3] = ["N/V", "N1/V", "N2/V"];
+
+/// Mass `Σ i N_i` of a count vector `counts[i − 1] = N_i`.
+pub fn mass(counts: &[u64]) -> u64 {
+    counts
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (i as u64 + 1) * c)
+        .sum()
+}
