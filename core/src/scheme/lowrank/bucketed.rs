@@ -38,10 +38,9 @@
 //!   M_{R+k}` in row weights) and an overflow stream (pairs with a grown slot, `Σ_k
 //!   (O_k T_{R+k} + M_k O_{R+k})`, `T = M + O`). A geometric countdown says which
 //!   stream each proposal belongs to; the overflow stream scans its ≤ 32 buckets. A
-//!   growth thus costs a rate update instead of a rebuild (rebuilds 37 000 → 1 000 on
-//!   the linear t = 6 row, 8 % faster). With growth that cheap, buckets grow by 1/16
-//!   instead of 1/8 and resync at 1/64 instead of 1/16 of empties (fewer empty-slot
-//!   rejections: linear t = 6 and t = 1 7–10 %, Brownian t = 1e5 7 % faster).
+//!   growth thus costs a rate update instead of a rebuild, which lets buckets grow by
+//!   1/16 and resync at 1/64 of empties. Below 4096 particles the overflow may carry
+//!   half the rate before a rebuild (1/16 above).
 //! * A bucket is in *grid* mode (slot = (size x, level ℓ), full iff ℓ < N_x, read from a
 //!   `u32` count array — right when at least 3/4 of its slots are full) or in *list* mode
 //!   (slot s = the s-th entry of a list of its particles' offsets — right for sparse
@@ -53,28 +52,12 @@
 //!
 //! A proposal costs two alias draws, up to two slot draws and reads and a squeeze; a
 //! collision adds O(1) count/list work — independent of M. Proposal times come in
-//! batches (see `clock`): one gamma variate per batch, not an exponential per proposal.
+//! batches (see `clock`): one gamma variate per batch, not an exponential per proposal
+//! (below 4096 particles, where almost every event changes the rates, one ziggurat
+//! exponential per proposal).
 //!
-//! How the design was chosen (callgrind instructions per collision, Brownian from 10^6
-//! monomers to t = 1, M = 64; `coagula bench lowrank-single --bucketed`): the per-size
-//! 8-ary tree 714; buckets with eager tree updates and lists 938; lazy slots with a
-//! running-sum integer tree 755; alias tables instead of the tree 700 (the rebuilds cost
-//! ~100 of those at this small N); cheaper rebuilds and growth by 1/8 instead of 1/32,
-//! 615; side v drawn only after side u is found full, 553; one record per bucket 508;
-//! branch-free component choice and a precomputed mean time step 499; the joint (k, u)
-//! table and on-demand live weights cut another 3–9 % of wall time at N = 10^7. On the
-//! paper's large-M rows lists alone were slower than the per-size tree (a cache miss
-//! per read in 40 MB of lists); grid mode fixed that. Later steps, timed as alternating
-//! A/B runs of two builds (minimum of 4–8 each, N0 = 10^7): batched proposal times
-//! (linear t = 1 11 %, t = 6 7 % faster); `propose` inlined (linear t = 1 12–15 %);
-//! list buckets kept out of the count array (linear t = 6 14–20 %, Brownian t = 1e5
-//! 7 %); exact power-of-two factor scales, so exact singleton pairs skip the
-//! acceptance draw (linear t = 1 7 %); resyncs that skip sparse list buckets and
-//! re-judge near-dense ones only after 1/8 change (Brownian t = 1e5 6 % + 4 %); the
-//! overflow stream (linear t = 6 8 %) and the finer growth and resync it allowed. At
-//! N0 = 10^5 and M ~ 10^6 this layout went from 2–3× slower than the per-size tree
-//! (a rebuild per growth) to 2.4–3.3× faster. See `coagula bench lowrank` for the
-//! tables.
+//! Why the layout is shaped so — the measurements behind each step — is in
+//! `docs/design/bucketed-layout.md`.
 //!
 //! The state is the counts `N_i` (see [`Bucketed::counts`]); M doubling and particle
 //! doubling work as in [`super::LowRank`]. Allocation happens when M doubles, when the
