@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs libcoagula for C, C++ and Fortran users:
-#   PREFIX/lib/libcoagula.{a,so}, PREFIX/include/coagula.{h,hpp,f90},
+#   PREFIX/lib/libcoagula.a, libcoagula.so.VERSION (SONAME libcoagula.so.MAJOR, links
+#   libcoagula.so.MAJOR and libcoagula.so), stripped of debug info;
+#   PREFIX/include/coagula.{h,hpp,f90},
 #   PREFIX/lib/pkgconfig/coagula.pc
 # Usage: scripts/install.sh [PREFIX]   (default /usr/local)
 set -euo pipefail
@@ -8,9 +10,18 @@ cd "$(dirname "$0")/.."
 prefix=${1:-/usr/local}
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -n 1)
 cargo build --release -q -p coagula-ffi
+major=${version%%.*}
 install -d "$prefix/lib/pkgconfig" "$prefix/include"
 install -m 644 target/release/libcoagula.a "$prefix/lib/"
-install -m 755 target/release/libcoagula.so "$prefix/lib/"
+# libcoagula.so.VERSION, with the SONAME link libcoagula.so.MAJOR and the link-time
+# name libcoagula.so
+install -m 755 target/release/libcoagula.so "$prefix/lib/libcoagula.so.$version"
+ln -sf "libcoagula.so.$version" "$prefix/lib/libcoagula.so.$major"
+ln -sf "libcoagula.so.$major" "$prefix/lib/libcoagula.so"
+# the release profile keeps line tables for profiling; installed libraries do not
+if command -v strip >/dev/null; then
+    strip --strip-debug "$prefix/lib/libcoagula.a" "$prefix/lib/libcoagula.so.$version"
+fi
 install -m 644 include/coagula.h include/coagula.hpp include/coagula.f90 "$prefix/include/"
 cat > "$prefix/lib/pkgconfig/coagula.pc" <<PC
 prefix=$prefix
