@@ -19,8 +19,10 @@ pub mod massflow;
 use crate::error::Result;
 use rand_core::Rng;
 
-/// What one call of [`Scheme::advance_to`] did.
+/// What one call of [`Scheme::advance_to`] did. `#[non_exhaustive]`: schemes to come
+/// add what they report; build one with `StepReport::default()`.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[non_exhaustive]
 pub struct StepReport {
     /// Time reached (the requested time on success).
     pub time: f64,
@@ -38,6 +40,12 @@ pub struct StepReport {
     pub clipped: u64,
     /// Times the particle number was doubled (size-count schemes).
     pub doublings: u64,
+    /// Particles that left the system (beyond a truncation size, into a gel, absorbed
+    /// by a wall); 0 for the schemes that keep every particle.
+    pub removed: u64,
+    /// Collisions that bounced instead of merging (schemes with restitution, specular
+    /// walls); 0 for pure coagulation.
+    pub bounces: u64,
 }
 
 impl StepReport {
@@ -50,6 +58,8 @@ impl StepReport {
         self.bound_violations += other.bound_violations;
         self.clipped += other.clipped;
         self.doublings += other.doublings;
+        self.removed += other.removed;
+        self.bounces += other.bounces;
     }
 }
 
