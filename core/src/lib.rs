@@ -39,6 +39,7 @@ pub mod exact;
 pub mod kernel;
 pub mod observe;
 pub mod qmc;
+pub(crate) mod random;
 pub mod scheme;
 pub mod tree;
 

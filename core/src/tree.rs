@@ -62,14 +62,7 @@ impl Weight for u64 {
     }
     /// Lemire's multiply-and-reject method: exactly uniform.
     fn uniform_below<R: Rng + ?Sized>(rng: &mut R, bound: Self) -> Self {
-        let mut m = u128::from(rng.next_u64()) * u128::from(bound);
-        if (m as u64) < bound {
-            let threshold = bound.wrapping_neg() % bound;
-            while (m as u64) < threshold {
-                m = u128::from(rng.next_u64()) * u128::from(bound);
-            }
-        }
-        (m >> 64) as u64
+        crate::random::below(rng, bound)
     }
 }
 
@@ -97,11 +90,7 @@ impl Weight for f64 {
     }
 }
 
-/// Maps 64 random bits to a double in `[0, 1)` (top 53 bits).
-#[inline]
-pub fn unit_f64(bits: u64) -> f64 {
-    (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
-}
+pub use crate::random::unit_f64;
 
 /// A sum tree over weights of type `W` (`u64` or `f64`). See the module docs.
 #[derive(Clone)]

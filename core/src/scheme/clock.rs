@@ -24,7 +24,7 @@
 
 use rand_core::Rng;
 
-use super::open_unit;
+use crate::random::{beta, binomial_by_count, gamma};
 
 /// Below this many expected arrivals before the target, [`Batch::plan`] declines.
 pub(crate) const MIN_EXPECTED: f64 = 256.0;
@@ -33,50 +33,6 @@ pub(crate) const MIN_EXPECTED: f64 = 256.0;
 const SIGMAS: f64 = 6.0;
 /// Largest batch (arrivals past a rate change are drawn for nothing, but cost nothing).
 const MAX_BATCH: f64 = 1048576.0;
-
-/// A standard normal variate (Marsaglia's polar method).
-pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
-    loop {
-        let u = 2.0 * open_unit(rng) - 1.0;
-        let v = 2.0 * open_unit(rng) - 1.0;
-        let s = u * u + v * v;
-        if s < 1.0 && s > 0.0 {
-            return u * libm::sqrt(-2.0 * libm::log(s) / s);
-        }
-    }
-}
-
-/// A gamma variate of shape `a ≥ 1` and unit scale (Marsaglia & Tsang 2000).
-pub(crate) fn gamma<R: Rng + ?Sized>(a: f64, rng: &mut R) -> f64 {
-    debug_assert!(a >= 1.0);
-    let d = a - 1.0 / 3.0;
-    let c = 1.0 / libm::sqrt(9.0 * d);
-    loop {
-        let x = normal(rng);
-        let v = 1.0 + c * x;
-        if v <= 0.0 {
-            continue;
-        }
-        let v = v * v * v;
-        let u = open_unit(rng);
-        let x2 = x * x;
-        if u < 1.0 - 0.0331 * x2 * x2 || libm::log(u) < 0.5 * x2 + d * (1.0 - v + libm::log(v)) {
-            return d * v;
-        }
-    }
-}
-
-/// A beta variate of shapes `a, b ≥ 1`.
-pub(crate) fn beta<R: Rng + ?Sized>(a: f64, b: f64, rng: &mut R) -> f64 {
-    let x = gamma(a, rng);
-    let y = gamma(b, rng);
-    x / (x + y)
-}
-
-/// A binomial `(n, p)` variate by counting `n` uniforms: O(n), for rare paths only.
-fn binomial_by_count<R: Rng + ?Sized>(n: u64, p: f64, rng: &mut R) -> u64 {
-    (0..n).filter(|_| open_unit(rng) <= p).count() as u64
-}
 
 /// A batch of arrivals of a Poisson process (see the module docs).
 #[derive(Clone, Copy, Debug)]
@@ -159,51 +115,9 @@ impl Batch {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::random::{mean_var, open_unit};
     use alloc::vec::Vec;
     use rand_core::SeedableRng;
-
-    fn mean_var(xs: &[f64]) -> (f64, f64) {
-        let n = xs.len() as f64;
-        let m = xs.iter().sum::<f64>() / n;
-        let v = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
-        (m, v)
-    }
-
-    /// Gamma and beta variates have their mean and variance within 5 standard errors
-    /// (the variance's standard error from the fourth central moment).
-    #[test]
-    fn gamma_and_beta_moments() {
-        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
-        let n = 200_000;
-        for a in [1.0, 2.0, 7.0, 300.0, 1e6] {
-            let xs: Vec<f64> = (0..n).map(|_| gamma(a, &mut rng)).collect();
-            let (m, v) = mean_var(&xs);
-            // Var = a; fourth central moment 3a² + 6a
-            let se_m = libm::sqrt(a / n as f64);
-            let se_v = libm::sqrt((3.0 * a * a + 6.0 * a - a * a) / n as f64);
-            assert!((m - a).abs() < 5.0 * se_m, "gamma({a}) mean {m}");
-            assert!((v - a).abs() < 5.0 * se_v, "gamma({a}) variance {v}");
-        }
-        for (a, b) in [(1.0, 1.0), (1.0, 999.0), (40.0, 3.0), (5e4, 5e4)] {
-            let xs: Vec<f64> = (0..n).map(|_| beta(a, b, &mut rng)).collect();
-            let (m, v) = mean_var(&xs);
-            let want_m = a / (a + b);
-            let want_v = a * b / ((a + b) * (a + b) * (a + b + 1.0));
-            assert!(
-                (m - want_m).abs() < 5.0 * libm::sqrt(want_v / n as f64),
-                "beta({a},{b}) mean {m}"
-            );
-            // the sample variance's standard error is Var · sqrt((κ − 1)/n), κ the
-            // beta distribution's kurtosis (≈ 9 for beta(1, 999)); 5.5 SE
-            let excess = 6.0 * ((a - b) * (a - b) * (a + b + 1.0) - a * b * (a + b + 2.0))
-                / (a * b * (a + b + 2.0) * (a + b + 3.0));
-            let se_v = want_v * libm::sqrt((2.0 + excess) / n as f64);
-            assert!(
-                (v - want_v).abs() < 5.5 * se_v,
-                "beta({a},{b}) variance {v} vs {want_v}"
-            );
-        }
-    }
 
     /// Arrivals of a unit-rate Poisson process before t = 2000, stepped by batches
     /// with the rate "changing" (a restart) after a geometric number of arrivals (mean

@@ -81,6 +81,7 @@ use super::super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
 use super::{SPOT_CHECK, bounded_rate, check_counts};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
+use crate::random::{below, geometric};
 use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -116,19 +117,6 @@ fn bucket_range(b: usize) -> (u64, u64) {
         let m = b - sh * SUB;
         (m << sh, ((m + 1) << sh) - 1)
     }
-}
-
-/// A uniform integer in `[0, n)`, exactly (Lemire's multiply-and-reject), `n ≥ 1`.
-#[inline]
-fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
-    let mut m = u128::from(rng.next_u64()) * u128::from(n);
-    if (m as u64) < n {
-        let threshold = n.wrapping_neg() % n;
-        while (m as u64) < threshold {
-            m = u128::from(rng.next_u64()) * u128::from(n);
-        }
-    }
-    (m >> 64) as u64
 }
 
 /// A Walker alias table: O(1) sampling of an item with probability `w_i / Σ w` from
@@ -413,18 +401,6 @@ const SMALL_N: u64 = 4096;
 /// Most buckets in the overflow before the tables are rebuilt (each overflow proposal
 /// scans them).
 const OVER_MAX: usize = 32;
-
-/// Failures before the first success of Bernoulli(p) trials (`u64::MAX` for p = 0).
-fn geometric<Rn: Rng + ?Sized>(p: f64, rng: &mut Rn) -> u64 {
-    if p <= 0.0 {
-        return u64::MAX;
-    }
-    if p >= 1.0 {
-        return 0;
-    }
-    let g = libm::log(open_unit(rng)) / libm::log1p(-p);
-    if g < 1.8e19 { g as u64 } else { u64::MAX }
-}
 
 /// Largest number of initial particles (counts are stored as `u32`).
 pub const MAX_PARTICLES: u64 = u32::MAX as u64;

@@ -1,0 +1,283 @@
+//! Random variates from a caller's generator: the one place every scheme draws from.
+//!
+//! Uniforms (`unit_f64`, `open_unit`), exactly uniform bounded integers (Lemire's
+//! multiply-and-reject, `below`), exponentials (`exp1` by the logarithm, `Ziggurat` by
+//! Marsaglia & Tsang's ziggurat), geometric counts, normals (Marsaglia's polar method),
+//! gamma (Marsaglia & Tsang 2000), beta and small binomials. All take `&mut R` with
+//! `R: Rng + ?Sized`, and all floating point goes through `libm`, so a seed gives the
+//! same bits on every platform.
+
+use rand_core::Rng;
+
+/// Maps 64 random bits to a double in `[0, 1)` (top 53 bits).
+#[inline]
+pub fn unit_f64(bits: u64) -> f64 {
+    (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// A uniform double in `(0, 1]` (never 0, so `ln` is finite).
+#[inline]
+pub(crate) fn open_unit<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    ((rng.next_u64() >> 11) + 1) as f64 * (1.0 / (1u64 << 53) as f64)
+}
+
+/// An exponential variate with mean 1.
+#[inline]
+pub(crate) fn exp1<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    -libm::log(open_unit(rng))
+}
+
+/// A uniform integer in `[0, n)`, exactly (Lemire's multiply-and-reject), `n ≥ 1`.
+#[inline]
+pub(crate) fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
+    let mut m = u128::from(rng.next_u64()) * u128::from(n);
+    if (m as u64) < n {
+        let threshold = n.wrapping_neg() % n;
+        while (m as u64) < threshold {
+            m = u128::from(rng.next_u64()) * u128::from(n);
+        }
+    }
+    (m >> 64) as u64
+}
+
+/// Failures before the first success of Bernoulli(p) trials (`u64::MAX` for p = 0).
+pub(crate) fn geometric<Rn: Rng + ?Sized>(p: f64, rng: &mut Rn) -> u64 {
+    if p <= 0.0 {
+        return u64::MAX;
+    }
+    if p >= 1.0 {
+        return 0;
+    }
+    let g = libm::log(open_unit(rng)) / libm::log1p(-p);
+    if g < 1.8e19 { g as u64 } else { u64::MAX }
+}
+
+/// A standard normal variate (Marsaglia's polar method).
+pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    loop {
+        let u = 2.0 * open_unit(rng) - 1.0;
+        let v = 2.0 * open_unit(rng) - 1.0;
+        let s = u * u + v * v;
+        if s < 1.0 && s > 0.0 {
+            return u * libm::sqrt(-2.0 * libm::log(s) / s);
+        }
+    }
+}
+
+/// A gamma variate of shape `a ≥ 1` and unit scale (Marsaglia & Tsang 2000).
+pub(crate) fn gamma<R: Rng + ?Sized>(a: f64, rng: &mut R) -> f64 {
+    debug_assert!(a >= 1.0);
+    let d = a - 1.0 / 3.0;
+    let c = 1.0 / libm::sqrt(9.0 * d);
+    loop {
+        let x = normal(rng);
+        let v = 1.0 + c * x;
+        if v <= 0.0 {
+            continue;
+        }
+        let v = v * v * v;
+        let u = open_unit(rng);
+        let x2 = x * x;
+        if u < 1.0 - 0.0331 * x2 * x2 || libm::log(u) < 0.5 * x2 + d * (1.0 - v + libm::log(v)) {
+            return d * v;
+        }
+    }
+}
+
+/// A beta variate of shapes `a, b ≥ 1`.
+pub(crate) fn beta<R: Rng + ?Sized>(a: f64, b: f64, rng: &mut R) -> f64 {
+    let x = gamma(a, rng);
+    let y = gamma(b, rng);
+    x / (x + y)
+}
+
+/// A binomial `(n, p)` variate by counting `n` uniforms: O(n), for rare paths only.
+pub(crate) fn binomial_by_count<R: Rng + ?Sized>(n: u64, p: f64, rng: &mut R) -> u64 {
+    (0..n).filter(|_| open_unit(rng) <= p).count() as u64
+}
+
+/// Exponential variates by the ziggurat method (Marsaglia & Tsang 2000), 256 layers:
+/// one 64-bit draw, one multiply and one comparison in ~99% of calls, exact in
+/// distribution (the rare wedge and tail cases fall back to `exp`/`ln`). The tables are
+/// constants ([`ziggurat_table`]), computed with `libm` and checked bit for bit against
+/// that computation by a test, so they are identical on every platform and building a
+/// scheme costs no 500 `exp`/`ln` calls (which dominated small systems).
+#[derive(Clone, Copy)]
+pub(crate) struct Ziggurat;
+
+impl core::fmt::Debug for Ziggurat {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("Ziggurat")
+    }
+}
+
+/// Rightmost layer boundary and layer area of the 256-layer exponential ziggurat.
+const ZIG_EXP_R: f64 = 7.697_117_470_131_05;
+#[cfg(test)]
+const ZIG_EXP_V: f64 = 0.003_949_659_822_581_557;
+
+mod ziggurat_table;
+
+impl Ziggurat {
+    pub(crate) fn new() -> Self {
+        Ziggurat
+    }
+
+    /// The tables as `libm` computes them: layer boundaries `x` and `f = exp(−x)`.
+    #[cfg(test)]
+    fn compute() -> ([f64; 257], [f64; 257]) {
+        let (mut x, mut f) = ([0.0; 257], [0.0; 257]);
+        let fr = libm::exp(-ZIG_EXP_R);
+        x[0] = ZIG_EXP_V / fr;
+        x[1] = ZIG_EXP_R;
+        for i in 2..256 {
+            x[i] = -libm::log(ZIG_EXP_V / x[i - 1] + libm::exp(-x[i - 1]));
+        }
+        x[256] = 0.0;
+        for i in 0..257 {
+            f[i] = libm::exp(-x[i]);
+        }
+        (x, f)
+    }
+
+    /// An exponential variate with mean 1.
+    #[inline(always)]
+    pub(crate) fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
+        let (xs, fs) = (&ziggurat_table::X, &ziggurat_table::F);
+        loop {
+            let bits = rng.next_u64();
+            let i = (bits & 0xff) as usize;
+            let u = (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+            let x = u * xs[i];
+            if x < xs[i + 1] {
+                return x;
+            }
+            if i == 0 {
+                // tail beyond R: memoryless, R + Exp(1)
+                return ZIG_EXP_R + exp1(rng);
+            }
+            let y = fs[i + 1] + (fs[i] - fs[i + 1]) * crate::tree::unit_f64(rng.next_u64());
+            if y < libm::exp(-x) {
+                return x;
+            }
+        }
+    }
+}
+
+/// Sample mean and variance (for the variate tests here and in `scheme::clock`).
+#[cfg(test)]
+pub(crate) fn mean_var(xs: &[f64]) -> (f64, f64) {
+    let n = xs.len() as f64;
+    let m = xs.iter().sum::<f64>() / n;
+    let v = xs.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0);
+    (m, v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use alloc::vec::Vec;
+    use rand_core::SeedableRng;
+
+    /// The constant tables are what `libm` computes, bit for bit (on a mismatch the
+    /// message is the table to paste into `ziggurat_table.rs`).
+    #[test]
+    fn ziggurat_tables_are_the_libm_computation() {
+        let (x, f) = Ziggurat::compute();
+        let same = |a: &[f64; 257], b: &[f64; 257]| {
+            a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
+        };
+        if !same(&x, &ziggurat_table::X) || !same(&f, &ziggurat_table::F) {
+            let mut out = alloc::string::String::new();
+            for (name, t) in [("X", &x), ("F", &f)] {
+                out.push_str(&alloc::format!(
+                    "pub(super) static {name}: [f64; 257] = [\n"
+                ));
+                for v in t.iter() {
+                    out.push_str(&alloc::format!(
+                        "    f64::from_bits(0x{:016x}),\n",
+                        v.to_bits()
+                    ));
+                }
+                out.push_str("];\n");
+            }
+            panic!("ziggurat tables differ from libm's:\n{out}");
+        }
+    }
+
+    /// The ziggurat's moments and tail probabilities match Exp(1) within 5 standard
+    /// errors over 4e6 draws.
+    #[test]
+    fn ziggurat_is_exponential() {
+        let z = Ziggurat::new();
+        let mut rng = rand_pcg::Pcg64Mcg::new(77);
+        let n = 4_000_000;
+        let (mut s1, mut s2) = (0.0, 0.0);
+        let thresholds = [0.01, 0.5, 1.0, 3.0, 7.0, 7.7, 9.0];
+        let mut above = [0usize; 7];
+        for _ in 0..n {
+            let x = z.sample(&mut rng);
+            assert!(x >= 0.0 && x.is_finite());
+            s1 += x;
+            s2 += x * x;
+            for (c, &t) in above.iter_mut().zip(&thresholds) {
+                if x > t {
+                    *c += 1;
+                }
+            }
+        }
+        let nf = n as f64;
+        let mean = s1 / nf;
+        assert!((mean - 1.0).abs() < 5.0 / libm::sqrt(nf), "mean {mean}");
+        let m2 = s2 / nf; // E x² = 2, Var x² = 20
+        assert!(
+            (m2 - 2.0).abs() < 5.0 * libm::sqrt(20.0 / nf),
+            "second moment {m2}"
+        );
+        for (c, &t) in above.iter().zip(&thresholds) {
+            let p = libm::exp(-t);
+            let se = libm::sqrt(p * (1.0 - p) / nf);
+            let got = *c as f64 / nf;
+            assert!(
+                (got - p).abs() < 5.0 * se + 1e-9,
+                "P(X > {t}) = {got}, expected {p}"
+            );
+        }
+    }
+
+    /// Gamma and beta variates have their mean and variance within 5 standard errors
+    /// (the variance's standard error from the fourth central moment).
+    #[test]
+    fn gamma_and_beta_moments() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(5);
+        let n = 200_000;
+        for a in [1.0, 2.0, 7.0, 300.0, 1e6] {
+            let xs: Vec<f64> = (0..n).map(|_| gamma(a, &mut rng)).collect();
+            let (m, v) = mean_var(&xs);
+            // Var = a; fourth central moment 3a² + 6a
+            let se_m = libm::sqrt(a / n as f64);
+            let se_v = libm::sqrt((3.0 * a * a + 6.0 * a - a * a) / n as f64);
+            assert!((m - a).abs() < 5.0 * se_m, "gamma({a}) mean {m}");
+            assert!((v - a).abs() < 5.0 * se_v, "gamma({a}) variance {v}");
+        }
+        for (a, b) in [(1.0, 1.0), (1.0, 999.0), (40.0, 3.0), (5e4, 5e4)] {
+            let xs: Vec<f64> = (0..n).map(|_| beta(a, b, &mut rng)).collect();
+            let (m, v) = mean_var(&xs);
+            let want_m = a / (a + b);
+            let want_v = a * b / ((a + b) * (a + b) * (a + b + 1.0));
+            assert!(
+                (m - want_m).abs() < 5.0 * libm::sqrt(want_v / n as f64),
+                "beta({a},{b}) mean {m}"
+            );
+            // the sample variance's standard error is Var · sqrt((κ − 1)/n), κ the
+            // beta distribution's kurtosis (≈ 9 for beta(1, 999)); 5.5 SE
+            let excess = 6.0 * ((a - b) * (a - b) * (a + b + 1.0) - a * b * (a + b + 2.0))
+                / (a * b * (a + b + 2.0) * (a + b + 3.0));
+            let se_v = want_v * libm::sqrt((2.0 + excess) / n as f64);
+            assert!(
+                (v - want_v).abs() < 5.5 * se_v,
+                "beta({a},{b}) variance {v} vs {want_v}"
+            );
+        }
+    }
+}
