@@ -40,7 +40,9 @@ pub mod kernel;
 pub mod observe;
 pub mod qmc;
 pub(crate) mod random;
+pub mod sample;
 pub mod scheme;
-pub mod tree;
+/// The flat-array sum tree (also at [`sample::sum_tree`]).
+pub use sample::sum_tree as tree;
 
 pub use error::{Error, Result};
