@@ -10,7 +10,8 @@
 //! * [`checkpoint`] — save and restore a scheme's state into a caller buffer;
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
 //! * [`exact`] — exact solutions used as validation targets (SPEC §3);
-//! * [`tree`] — a flat-array sum tree for weighted sampling;
+//! * [`sample`] — weighted samplers: the flat-array sum tree ([`tree`]) and Walker alias
+//!   tables;
 //! * [`observe`] — moments, concentrations, gel mass and replica statistics;
 //! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol') and their
 //!   randomisations.
