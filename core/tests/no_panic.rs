@@ -311,3 +311,37 @@ proptest! {
         }
     }
 }
+
+/// Kernel constants at the ends of the double range: a subnormal-sized factor made the
+/// bucketed layout's power-of-two scale underflow to 0 and its quantisation loop never
+/// end. Every scheme must return (Ok or Err) from a short run.
+#[test]
+fn extreme_kernel_constants_do_not_hang() {
+    // a huge constant runs every particle into the size limit at once: keep it small
+    const LIMIT: u64 = 1 << 16;
+    let mut rng = Pcg64Mcg::new(8);
+    for k0 in [f64::MIN_POSITIVE, 1e-320, 1e-300, 1e300, f64::MAX] {
+        let k = Coagulation::constant(k0).unwrap();
+        let _ = LowRank::<_, 1>::monodisperse(k, 10)
+            .map(|s| s.with_size_limit(LIMIT))
+            .and_then(|mut s| s.advance_to(1.0, &mut rng));
+        let _ = Bucketed::<_, 1, 2>::monodisperse(k, 10)
+            .map(|s| s.with_size_limit(LIMIT))
+            .and_then(|mut s| s.advance_to(1.0, &mut rng));
+        let _ = Inverse::monodisperse(k, 10)
+            .map(|s| s.with_size_limit(LIMIT))
+            .and_then(|mut s| s.advance_to(1.0, &mut rng));
+        let _ = AcceptanceRejection::monodisperse(k, 10)
+            .map(|s| s.with_size_limit(LIMIT))
+            .and_then(|mut s| s.advance_to(1.0, &mut rng));
+        let _ = MassFlow::new(
+            k,
+            NoFragmentation,
+            &[1.0; 8],
+            1.0,
+            0.1,
+            PointSource::niederreiter(),
+        )
+        .and_then(|mut s| s.advance_to(1.0, &mut rng));
+    }
+}

@@ -332,6 +332,18 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// finite, the counts are all zero or add up to more than [`MAX_PARTICLES`], the
     /// volume is not positive.
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
+        Self::build(kernel, counts, volume, None, super::DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// [`new`](Self::new) with the particle-doubling reference `n0` (default: the
+    /// particles given) and a memory budget for the size table.
+    fn build(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        n0: Option<u64>,
+        budget: usize,
+    ) -> Result<Self> {
         if kernel.rank() != R || R == 0 || W != 2 * R {
             return Err(Error::Unsupported {
                 what: "kernel rank differs from the scheme's R (or the kernel has no low-rank bound)",
@@ -349,15 +361,17 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         let m = (counts.len() as u64).next_power_of_two().max(64);
         super::within_budget(
             count_len(m).checked_mul(core::mem::size_of::<u32>()),
-            super::DEFAULT_MEMORY_BUDGET,
+            budget,
         )?;
+        // the doubling reference bounds the particles (and so the slots' weight)
+        let n0 = n0.unwrap_or(n).max(n);
         let mut s = Bucketed {
             floor: kernel.low_rank_floor().clamp(0.0, 1.0),
             kernel,
             raw: Vec::new(),
             buckets: Vec::new(),
             scale: [1.0; W],
-            qmax: ((1u64 << 60) / n).min(1 << 53),
+            qmax: ((1u64 << 60) / n0).min(1 << 53),
             counts: Vec::new(),
             lists: Vec::new(),
             row_total: [0; W],
@@ -379,12 +393,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             planned: 0,
             n_resync: 0,
             poisoned: None,
-            memory_budget: super::DEFAULT_MEMORY_BUDGET,
+            memory_budget: budget,
             rates_stale: true,
             m,
             size_limit: super::DEFAULT_SIZE_LIMIT,
             n,
-            n0: n,
+            n0,
             volume,
             time: 0.0,
             totals: StepReport::default(),
@@ -464,7 +478,10 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // singleton buckets has bound = squeeze and needs no acceptance draw
         for r in 0..W {
             self.scale[r] = if fmax[r] > 0.0 {
-                let mut sc = libm::exp2(libm::ceil(libm::log2(fmax[r] / self.qmax as f64)));
+                // (at least the smallest normal double: factors near it would make
+                // the power of two underflow to 0 and the loop below never end)
+                let mut sc = libm::exp2(libm::ceil(libm::log2(fmax[r] / self.qmax as f64)))
+                    .max(f64::MIN_POSITIVE);
                 while fmax[r] / sc > self.qmax as f64 {
                     sc *= 2.0;
                 }
@@ -606,6 +623,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             return Err(e);
         }
         let mut rates = self.rates();
+        if !rates.total.is_finite() {
+            return Err(super::rate_overflow(rates.total));
+        }
         // a small system grows a bucket at most events (every new size is a new slot),
         // and a rebuild costs O(buckets) against a scan of ≤ OVER_MAX grown buckets for
         // an overflow proposal: there the overflow may carry half the rate
@@ -986,6 +1006,58 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         {
             self.resync();
         }
+    }
+
+    /// Replaces the counts `N_i = counts[i − 1]` and the volume (a host that applies
+    /// growth or nucleation between steps); the particle number becomes the new
+    /// reference for particle doubling. Time, totals, size limit and memory budget are
+    /// kept. Errors (as for [`new`](Self::new), or a size beyond the size limit) leave
+    /// the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>
+    where
+        K: Clone,
+    {
+        if counts.len() as u64 > self.size_limit {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: self.size_limit as usize,
+            });
+        }
+        let fresh = Self::build(
+            self.kernel.clone(),
+            counts,
+            volume,
+            None,
+            self.memory_budget,
+        )?;
+        self.install(fresh);
+        Ok(())
+    }
+
+    /// Replaces the kernel (e.g. new parameters between outer steps): the buckets'
+    /// bounds are recomputed and the particles re-laid from their counts, with the
+    /// particle-doubling reference kept. Errors (rank differs, invalid factors) leave
+    /// the scheme unchanged.
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        let counts = self.counts();
+        let fresh = Self::build(
+            kernel,
+            &counts,
+            self.volume,
+            Some(self.n0),
+            self.memory_budget,
+        )?;
+        self.install(fresh);
+        Ok(())
+    }
+
+    /// Takes the state of `fresh`, keeping time, totals, size limit and budget.
+    fn install(&mut self, fresh: Self) {
+        let (time, totals, limit) = (self.time, self.totals, self.size_limit);
+        *self = fresh;
+        self.time = time;
+        self.totals = totals;
+        self.size_limit = limit;
     }
 
     /// Checks the memory budget for maximum size `m` and reserves the count array

@@ -241,6 +241,9 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
             for a in 0..occ {
                 total += self.count[a] as f64 * (self.row[a] - self.diag[a]).max(0.0);
             }
+            if !total.is_finite() {
+                break Err(super::rate_overflow(total));
+            }
             if total <= 0.0 {
                 self.time = t;
                 break Ok(());

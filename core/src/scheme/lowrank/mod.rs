@@ -195,6 +195,15 @@ pub(crate) fn bounded_rate<K: CoagulationKernel + ?Sized>(
     Ok(c)
 }
 
+/// The error of a total proposal rate that overflowed (kernel values near `f64::MAX`
+/// times many particles): no waiting time can be drawn from it.
+pub(crate) fn rate_overflow(value: f64) -> Error {
+    Error::InvalidRate {
+        name: "total proposal rate (overflowed: the kernel's values are too large)",
+        value,
+    }
+}
+
 /// Validates an initial count vector and returns its particle number.
 pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
     let mut n: u64 = 0;
@@ -466,7 +475,13 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> Scheme for LowRan
             for k in 0..R {
                 sa += root[0][k] * root[1][k];
             }
-            if sa.is_nan() || sa <= 0.0 || self.n < 2 {
+            if !sa.is_finite() {
+                // weights past f64::MAX: no waiting time can be drawn
+                rep.time = self.time;
+                self.totals.accumulate(&rep);
+                return Err(rate_overflow(sa));
+            }
+            if sa <= 0.0 || self.n < 2 {
                 self.time = t;
                 break;
             }

@@ -179,6 +179,9 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 break Ok(());
             }
             let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.volume);
+            if !rate.is_finite() {
+                break Err(super::rate_overflow(rate));
+            }
             let dt = exp1(rng) / rate;
             if self.time + dt > t {
                 self.time = t;
