@@ -26,6 +26,15 @@ fn z2() -> f64 {
     z()
 }
 
+/// `Σ i N_i` of a count vector.
+fn mass(counts: &[u64]) -> u64 {
+    counts
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (i as u64 + 1) * c)
+        .sum()
+}
+
 #[derive(Clone, Copy, Debug)]
 enum Method {
     LowRank,
@@ -276,12 +285,7 @@ fn capacity_error_leaves_state_unchanged() {
             Err(e) => {
                 assert!(matches!(e, Error::Capacity { .. }));
                 // the failing event was not applied; earlier events of this call were
-                let total: u64 = s
-                    .counts()
-                    .iter()
-                    .enumerate()
-                    .map(|(i, c)| (i as u64 + 1) * c)
-                    .sum();
+                let total = mass(s.counts());
                 assert_eq!(total % 1000, 0, "mass is conserved up to doubling");
                 assert!(s.counts().iter().enumerate().all(|(i, &c)| c == 0 || i < 8));
                 assert!(s.time() >= last.1);
@@ -464,7 +468,7 @@ fn bucketed_bad_input_and_capacity() {
             Err(e) => {
                 assert!(matches!(e, Error::Capacity { .. }));
                 let c = s.counts();
-                let mass: u64 = c.iter().enumerate().map(|(i, c)| (i as u64 + 1) * c).sum();
+                let mass = mass(&c);
                 assert_eq!(mass % 1000, 0, "mass is conserved up to doubling");
                 assert!(c.iter().enumerate().all(|(i, &n)| n == 0 || i < 100));
                 assert!(s.time() >= before.1);
@@ -494,22 +498,16 @@ fn bucketed_setters_validate_and_take_effect() {
     assert!(s.set_counts(&[5], 0.0).is_err());
     let bad = Coagulation::constant(f64::MIN_POSITIVE).unwrap();
     // a kernel of another rank is refused (brownian is rank 2)
-    let mut b2 = Bucketed::<_, 1, 2>::monodisperse(Coagulation::brownian(), 10);
-    assert!(b2.is_err());
-    b2 = Ok(Bucketed::<_, 1, 2>::monodisperse(bad, 10).unwrap());
-    assert!(b2.unwrap().set_kernel(Coagulation::brownian()).is_err());
+    assert!(Bucketed::<_, 1, 2>::monodisperse(Coagulation::brownian(), 10).is_err());
+    let mut tiny = Bucketed::<_, 1, 2>::monodisperse(bad, 10).unwrap();
+    assert!(tiny.set_kernel(Coagulation::brownian()).is_err());
     assert_eq!(before, (s.counts(), s.volume(), s.time()));
     s.set_counts(&[10, 20, 0, 5], 70.0).unwrap();
     assert_eq!(&s.counts()[..4], &[10, 20, 0, 5]);
     assert_eq!((s.particles(), s.volume(), s.time()), (35, 70.0, 0.5));
     s.advance_to(0.6, &mut rng).unwrap();
-    let mass: u64 = s
-        .counts()
-        .iter()
-        .enumerate()
-        .map(|(i, c)| (i as u64 + 1) * c)
-        .sum();
-    assert_eq!(mass % 70, 0, "mass conserved up to doubling");
+    let m = mass(&s.counts());
+    assert_eq!(m % 70, 0, "mass conserved up to doubling");
 }
 
 /// A kernel changed mid-run (additive to t = 0.5, then constant to t = 2) gives the
