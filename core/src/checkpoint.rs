@@ -190,6 +190,7 @@ pub(crate) mod tag {
     pub const LOWRANK: u64 = 2;
     pub const INVERSE: u64 = 3;
     pub const REJECTION: u64 = 4;
+    pub const BUCKETED: u64 = 5;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

@@ -12,6 +12,7 @@
 //! * [`exact`] — exact solutions used as validation targets (SPEC §3);
 //! * [`sample`] — weighted samplers: the flat-array sum tree ([`tree`]) and Walker alias
 //!   tables;
+//! * [`random`] — random variates and the seed policy (`seed, stream → generator`);
 //! * [`observe`] — moments, concentrations, gel mass and replica statistics;
 //! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol') and their
 //!   randomisations.
@@ -40,7 +41,7 @@ pub mod exact;
 pub mod kernel;
 pub mod observe;
 pub mod qmc;
-pub(crate) mod random;
+pub mod random;
 pub mod sample;
 pub mod scheme;
 /// The flat-array sum tree (also at [`sample::sum_tree`]).

@@ -22,6 +22,73 @@
 
 use libm::{pow, sqrt};
 
+/// What every population scheme lets a caller read between steps (the time is
+/// [`crate::scheme::Scheme::time`]). Concentrations are per unit volume; the schemes
+/// represent the number concentration as the weighted point measure of the module docs.
+///
+/// # Example
+/// ```
+/// use coagula_core::kernel::Coagulation;
+/// use coagula_core::observe::Observe;
+/// use coagula_core::scheme::lowrank::Inverse;
+/// // 6 monomers and 2 dimers in volume 2
+/// let s = Inverse::new(Coagulation::constant(1.0).unwrap(), &[6, 2], 2.0).unwrap();
+/// assert_eq!(s.particles(), 8);
+/// assert_eq!(s.moment(1.0), 5.0);
+/// assert_eq!(s.concentration(2.0, 2.0), 1.0);
+/// assert_eq!(s.number_density(1.0), 3.0);
+/// ```
+pub trait Observe {
+    /// The volume V the particles live in (size-count schemes). The mass-flow schemes
+    /// weight each particle by the mass it carries instead; they report 1.
+    fn volume(&self) -> f64;
+
+    /// Number of simulation particles now.
+    fn particles(&self) -> u64;
+
+    /// The moment `M_m = ∫ x^m c(x) dx` of any real order m (per unit volume).
+    fn moment(&self, order: f64) -> f64;
+
+    /// The sum concentration `C(t, a, b)`: the number concentration of the sizes in
+    /// `[a, b]` (Eibeck & Wagner eq. 5.2).
+    fn concentration(&self, a: f64, b: f64) -> f64;
+
+    /// The number concentration of size x (`C(t, x, x)`; for integer sizes `n_x`).
+    fn number_density(&self, x: f64) -> f64 {
+        self.concentration(x, x)
+    }
+
+    /// The gel-mass estimate, where the scheme defines one (size-count schemes: the
+    /// largest cluster's mass per volume, Eibeck & Wagner eq. 6.15); `None` otherwise.
+    fn gel_mass(&self) -> Option<f64>;
+
+    /// Totals of every `advance_to` so far.
+    fn totals(&self) -> crate::scheme::StepReport;
+}
+
+/// `C(a, b)` of a size-count state, `counts[i − 1] = N_i`: the sizes `⌈a⌉ ..= ⌊b⌋`,
+/// visited directly (O(b − a), not O(M)).
+pub fn concentration_of_counts(counts: &[u64], volume: f64, a: f64, b: f64) -> f64 {
+    if a.is_nan() || b.is_nan() || b < 1.0 || a > b {
+        return 0.0;
+    }
+    let lo = libm::ceil(a.max(1.0));
+    let hi = libm::floor(b).min(counts.len() as f64);
+    if lo > hi {
+        return 0.0;
+    }
+    let (lo, hi) = (lo as usize, hi as usize);
+    counts[lo - 1..hi].iter().map(|&n| n as f64 / volume).sum()
+}
+
+/// The largest cluster's mass per volume of a size-count state (0 when empty).
+pub fn largest_of_counts(counts: &[u64], volume: f64) -> f64 {
+    counts
+        .iter()
+        .rposition(|&c| c > 0)
+        .map_or(0.0, |i| (i + 1) as f64 / volume)
+}
+
 /// `x^m`, exact for small integer m (repeated multiplication) and through `libm::pow`
 /// otherwise.
 #[inline]

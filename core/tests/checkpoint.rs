@@ -5,7 +5,7 @@ use coagula_core::checkpoint::Checkpoint;
 use coagula_core::kernel::{BinaryUniform, Coagulation};
 use coagula_core::qmc::Randomization;
 use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Inverse, LowRank};
+use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use rand_pcg::Pcg64Mcg;
 
@@ -117,5 +117,36 @@ fn lowrank_and_baselines() {
         0.5,
         2.5,
         |s| s.counts().to_vec(),
+    );
+}
+
+#[test]
+fn bucketed_small_large_and_pipelined() {
+    let k = Coagulation::brownian();
+    // below 4096 particles: an exponential per proposal
+    split_equals_unbroken(
+        || Bucketed::<_, 2, 4>::monodisperse(k, 1000).unwrap(),
+        1.0,
+        5.0,
+        |s| s.counts(),
+    );
+    // batches, particle doublings and M doublings between the halves
+    let a = Coagulation::additive();
+    split_equals_unbroken(
+        || Bucketed::<_, 1, 2>::monodisperse(a, 20_000).unwrap(),
+        0.5,
+        2.5,
+        |s| s.counts(),
+    );
+    // a count array past 2^18 sizes: side u is drawn a proposal ahead, and that draw
+    // is part of the state
+    let mut probe = Bucketed::<_, 1, 2>::monodisperse(a, 100_000).unwrap();
+    probe.advance_to(5.2, &mut Pcg64Mcg::new(11)).unwrap();
+    assert!(probe.max_size() >= 1 << 18, "M = {}", probe.max_size());
+    split_equals_unbroken(
+        || Bucketed::<_, 1, 2>::monodisperse(a, 100_000).unwrap(),
+        5.2,
+        5.6,
+        |s| s.counts(),
     );
 }

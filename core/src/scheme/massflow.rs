@@ -572,6 +572,29 @@ impl<K: CoagulationKernel, F: FragmentationKernel> Scheme for MassFlow<K, F> {
     }
 }
 
+impl<K: CoagulationKernel, F: FragmentationKernel> crate::observe::Observe for MassFlow<K, F> {
+    /// 1: each particle carries the mass `M1 / N` instead of living in a volume.
+    fn volume(&self) -> f64 {
+        1.0
+    }
+    fn particles(&self) -> u64 {
+        self.x.len() as u64
+    }
+    fn moment(&self, order: f64) -> f64 {
+        MassFlow::moment(self, order)
+    }
+    fn concentration(&self, a: f64, b: f64) -> f64 {
+        MassFlow::concentration(self, a, b)
+    }
+    /// None: the scheme keeps every particle (no gel leaves the system).
+    fn gel_mass(&self) -> Option<f64> {
+        None
+    }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
+}
+
 impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
         use crate::checkpoint::{header, save_report, tag};

@@ -468,6 +468,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
 
     /// Re-derives the quantised bounds from `raw` and resyncs the buckets.
     fn requantise(&mut self) {
+        self.quantise();
+        self.resync();
+    }
+
+    /// The quantised bounds (`scale`, and each bucket's `q`, `hi`, `min`) from `raw`.
+    fn quantise(&mut self) {
         let mut fmax = [0.0f64; W];
         for ext in &self.raw {
             for r in 0..W {
@@ -501,7 +507,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
                 bk.hi[r] = q as f64 * self.scale[r];
             }
         }
-        self.resync();
     }
 
     /// Rebuilds the buckets: each bucket takes grid mode when at least 3/4 of its
@@ -689,6 +694,15 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         self.main = self.row_total;
         self.over.clear();
+        self.build_tables();
+        // a side-u draw made against the old tables is void
+        self.next_u = None;
+        self.pipeline = self.counts.len() >= PIPELINE_COUNTS;
+    }
+
+    /// Builds the alias tables from the buckets' `tab` slots and `main` (a function of
+    /// them alone, so a restored checkpoint rebuilds the very same tables).
+    fn build_tables(&mut self) {
         // component weights: c_k = T_{v,k} s_k s_{R+k}, S_A = Σ_k T_{u,k} c_k
         let mut c = [0.0; R];
         let mut sa = 0.0;
@@ -738,9 +752,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             self.poison();
         }
         self.rates_stale = false;
-        // a side-u draw made against the old tables is void
-        self.next_u = None;
-        self.pipeline = self.counts.len() >= PIPELINE_COUNTS;
     }
 
     /// A slot of the overflow of row r: bucket b with probability
@@ -1318,6 +1329,242 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K
         rep.time = self.time;
         self.totals.accumulate(&rep);
         Ok(rep)
+    }
+}
+
+impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkpoint::Checkpoint
+    for Bucketed<K, R, W>
+{
+    /// The counts, each bucket's slots and list order, the tables' slot counts and
+    /// the bookkeeping between resyncs — everything the next proposal depends on, so a
+    /// restored run continues bit for bit. The bounds and alias tables are rebuilt
+    /// from the kernel and the saved slot counts.
+    fn save(&self, w: &mut crate::checkpoint::Writer) {
+        use crate::checkpoint::{header, save_report, tag};
+        header(w, tag::BUCKETED);
+        for v in [R as u64, self.m, self.size_limit, self.n, self.n0] {
+            w.u64(v);
+        }
+        w.f64(self.volume);
+        w.f64(self.time);
+        save_report(w, &self.totals);
+        for v in [
+            self.since_resync,
+            self.planned,
+            u64::from(self.poisoned.is_some()),
+            u64::from(self.rates_stale),
+            u64::from(self.rates_changed),
+            u64::from(self.pipeline),
+        ] {
+            w.u64(v);
+        }
+        match self.next_u {
+            Some((k, b, s)) => {
+                w.u64(1);
+                w.u64(k as u64);
+                w.u64(b as u64);
+                w.u64(s);
+            }
+            None => w.u64(0),
+        }
+        for &v in &self.base_slack {
+            w.u64(v);
+        }
+        w.u64(self.over.len() as u64);
+        for &b in &self.over {
+            w.u64(b as u64);
+        }
+        w.u64(self.counts.len() as u64);
+        for &c in &self.counts {
+            w.u64(u64::from(c));
+        }
+        w.u64(self.buckets.len() as u64);
+        for bk in &self.buckets {
+            for v in [
+                bk.slots,
+                bk.tab,
+                bk.n,
+                bk.cap,
+                bk.judged,
+                u64::from(bk.grid),
+            ] {
+                w.u64(v);
+            }
+        }
+        for list in &self.lists {
+            w.u64(list.len() as u64);
+            for &off in list {
+                w.u64(u64::from(off));
+            }
+        }
+    }
+
+    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report, tag};
+        let bad = |what| Error::Checkpoint { what };
+        check_header(r, tag::BUCKETED)?;
+        if r.u64()? != R as u64 {
+            return Err(bad("different rank"));
+        }
+        let (m, size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
+        if !m.is_power_of_two() || m < 64 || m > 1 << 62 || n0 == 0 || n0 > MAX_PARTICLES {
+            return Err(bad("invalid maximum size or particle reference"));
+        }
+        super::within_budget(
+            count_len(m).checked_mul(core::mem::size_of::<u32>()),
+            self.memory_budget,
+        )?;
+        let (volume, time) = (r.f64()?, r.f64()?);
+        if !(volume > 0.0 && volume.is_finite() && time.is_finite()) {
+            return Err(bad("invalid volume or time"));
+        }
+        let totals = read_report(r)?;
+        let (since_resync, planned) = (r.u64()?, r.u64()?);
+        let flag = |r: &mut crate::checkpoint::Reader| -> Result<bool> {
+            match r.u64()? {
+                0 => Ok(false),
+                1 => Ok(true),
+                _ => Err(bad("invalid flag")),
+            }
+        };
+        let (poisoned, stale, changed, pipeline) = (flag(r)?, flag(r)?, flag(r)?, flag(r)?);
+        let next_u = if flag(r)? {
+            Some((r.usize()?, r.usize()?, r.u64()?))
+        } else {
+            None
+        };
+        let mut base_slack = [0u64; W];
+        for v in &mut base_slack {
+            *v = r.u64()?;
+        }
+        let nb = bucket_of(m) + 1;
+        let over_len = r.usize()?;
+        if over_len > OVER_MAX {
+            return Err(bad("overflow list too long"));
+        }
+        let mut over = Vec::new();
+        for _ in 0..over_len {
+            over.push(r.usize()?);
+        }
+        if r.usize()? != count_len(m) {
+            return Err(bad("count array of another length"));
+        }
+        let mut counts = Vec::new();
+        super::try_reserve(&mut counts, count_len(m))?;
+        for _ in 0..count_len(m) {
+            counts.push(u32::try_from(r.u64()?).map_err(|_| bad("count above 2^32"))?);
+        }
+        if r.usize()? != nb {
+            return Err(bad("bucket table of another length"));
+        }
+        // a fresh scheme of the same kernel supplies the bounds up to M
+        let mut s = Self::build(
+            self.kernel.clone(),
+            &[1],
+            volume,
+            Some(n0),
+            self.memory_budget,
+        )?;
+        s.extend_buckets(m)?;
+        s.quantise();
+        for bk in s.buckets.iter_mut() {
+            let (slots, tab, bn, cap, judged) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?, r.u64()?);
+            if tab > slots || bn > slots {
+                return Err(bad("bucket slots inconsistent"));
+            }
+            (bk.slots, bk.tab, bk.n, bk.cap, bk.judged) = (slots, tab, bn, cap, judged);
+            bk.grid = flag(r)?;
+        }
+        for list in s.lists.iter_mut() {
+            let len = r.usize()?;
+            let mut l = Vec::new();
+            super::try_reserve(&mut l, len.min(n as usize))?;
+            for _ in 0..len {
+                l.push(u32::try_from(r.u64()?).map_err(|_| bad("list offset"))?);
+            }
+            *list = l;
+        }
+        // every redundant piece must agree, or a later proposal would index out of
+        // range: particles, grid levels, list offsets, the overflow and the draw ahead
+        let mut total = 0u64;
+        for (b, bk) in s.buckets.iter().enumerate() {
+            total = total.checked_add(bk.n).ok_or(bad("particle number"))?;
+            if b == 0 {
+                if bk.n != 0 || bk.slots != 0 {
+                    return Err(bad("bucket 0 holds particles"));
+                }
+                continue;
+            }
+            let (lo, hi) = bucket_range(b);
+            let width = 1u64 << width_bits(b);
+            if bk.grid {
+                let cs = &counts[lo as usize..=hi as usize];
+                let sum: u64 = cs.iter().map(|&c| u64::from(c)).sum();
+                let mx = u64::from(cs.iter().copied().max().unwrap_or(0));
+                if sum != bk.n || mx > bk.cap || bk.cap.checked_mul(width) != Some(bk.slots) {
+                    return Err(bad("grid bucket inconsistent"));
+                }
+            } else {
+                let list = s
+                    .lists
+                    .get(b.wrapping_sub(SINGLE as usize))
+                    .ok_or(bad("a singleton bucket in list mode"))?;
+                if list.len() as u64 != bk.n || list.iter().any(|&o| u64::from(o) >= width) {
+                    return Err(bad("list bucket inconsistent"));
+                }
+            }
+        }
+        if total != n {
+            return Err(bad("counts do not add up"));
+        }
+        if over
+            .iter()
+            .any(|&b| b >= nb || s.buckets[b].slots == s.buckets[b].tab)
+        {
+            return Err(bad("overflow list inconsistent"));
+        }
+        if let Some((k, b, su)) = next_u
+            && (k >= R || b >= nb || su >= s.buckets[b].tab)
+        {
+            return Err(bad("draw ahead inconsistent"));
+        }
+        s.counts = counts;
+        s.over = over;
+        s.m = m;
+        s.n = n;
+        s.volume = volume;
+        s.slots_total = s.buckets.iter().map(|bk| bk.slots).sum();
+        s.planned = planned;
+        s.since_resync = since_resync;
+        s.base_slack = base_slack;
+        for rr in 0..W {
+            match (s.weight(rr, |bk| bk.slots), s.weight(rr, |bk| bk.tab)) {
+                (Some(t), Some(mn)) => {
+                    s.row_total[rr] = t;
+                    s.main[rr] = mn;
+                }
+                _ => return Err(bad("slot weights overflow")),
+            }
+        }
+        s.set_resync_threshold();
+        if !stale {
+            s.build_tables();
+            if s.poisoned.is_some() {
+                return Err(bad("slot weights overflow"));
+            }
+        }
+        s.rates_stale = stale;
+        s.rates_changed = changed;
+        s.pipeline = pipeline;
+        s.next_u = next_u;
+        if poisoned {
+            s.poison();
+        }
+        s.time = time;
+        s.totals = totals;
+        s.size_limit = size_limit;
+        *self = s;
+        Ok(())
     }
 }
 

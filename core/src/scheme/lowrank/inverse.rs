@@ -190,6 +190,11 @@ impl<K: CoagulationKernel> Inverse<K> {
         c
     }
 
+    /// Current number of simulation particles N.
+    pub fn particles(&self) -> u64 {
+        self.n
+    }
+
     /// The simulation volume V.
     pub fn volume(&self) -> f64 {
         self.volume

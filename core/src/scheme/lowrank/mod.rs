@@ -636,3 +636,35 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> 
 
 #[cfg(test)]
 mod tests;
+
+/// [`Observe`](crate::observe::Observe) for a size-count scheme from its inherent
+/// `counts`, `volume`, `moment` and `totals` (one definition for all four).
+macro_rules! observe_counts {
+    ([$($g:tt)*] $ty:ty) => {
+        impl<$($g)*> crate::observe::Observe for $ty {
+            fn volume(&self) -> f64 {
+                <$ty>::volume(self)
+            }
+            fn particles(&self) -> u64 {
+                <$ty>::particles(self)
+            }
+            fn moment(&self, order: f64) -> f64 {
+                <$ty>::moment(self, order)
+            }
+            fn concentration(&self, a: f64, b: f64) -> f64 {
+                crate::observe::concentration_of_counts(&self.counts(), <$ty>::volume(self), a, b)
+            }
+            fn gel_mass(&self) -> Option<f64> {
+                Some(crate::observe::largest_of_counts(&self.counts(), <$ty>::volume(self)))
+            }
+            fn totals(&self) -> StepReport {
+                <$ty>::totals(self)
+            }
+        }
+    };
+}
+
+observe_counts!([K: CoagulationKernel, const R: usize, T: ProposalTree<R>] LowRank<K, R, T>);
+observe_counts!([K: CoagulationKernel, const R: usize, const W: usize] Bucketed<K, R, W>);
+observe_counts!([K: CoagulationKernel] Inverse<K>);
+observe_counts!([K: CoagulationKernel] AcceptanceRejection<K>);

@@ -142,6 +142,11 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         &self.sizes
     }
 
+    /// Current number of simulation particles N.
+    pub fn particles(&self) -> u64 {
+        self.sizes.len() as u64
+    }
+
     /// The simulation volume V.
     pub fn volume(&self) -> f64 {
         self.volume
