@@ -1407,7 +1407,10 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
             return Err(bad("different rank"));
         }
         let (m, size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
-        if !m.is_power_of_two() || m < 64 || m > 1 << 62 || n0 == 0 || n0 > MAX_PARTICLES {
+        if !m.is_power_of_two()
+            || !(64..=1 << 62).contains(&m)
+            || !(1..=MAX_PARTICLES).contains(&n0)
+        {
             return Err(bad("invalid maximum size or particle reference"));
         }
         super::within_budget(
