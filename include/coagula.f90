@@ -19,11 +19,12 @@ module coagula
   integer(c_int32_t), parameter :: COAG_RANDOMIZATION_NONE = 0, COAG_RANDOMIZATION_SHIFT = 1, &
        COAG_RANDOMIZATION_MATOUSEK = 2, COAG_RANDOMIZATION_OWEN = 3
   integer(c_int32_t), parameter :: COAG_METHOD_LOWRANK = 0, COAG_METHOD_INVERSE = 1, &
-       COAG_METHOD_REJECTION = 2
+       COAG_METHOD_REJECTION = 2, COAG_METHOD_LOWRANK_TREE = 3
   integer(c_int32_t), parameter :: COAG_EXACT_CONSTANT = 0, COAG_EXACT_ADDITIVE = 1, &
        COAG_EXACT_MULTIPLICATIVE = 2, COAG_EXACT_MARCUS_LUSHNIKOV = 3, COAG_EXACT_COAG_FRAG = 4
 
   type, bind(c) :: coag_massflow_config
+     integer(c_size_t) :: struct_size
      real(c_double) :: dt
      real(c_double) :: mass
      integer(c_int32_t) :: points
@@ -33,17 +34,23 @@ module coagula
      integer(c_int64_t) :: stream
   end type coag_massflow_config
 
-  type, bind(c) :: coag_lowrank_config
+  type, bind(c) :: coag_counts_config
+     integer(c_size_t) :: struct_size
      integer(c_int32_t) :: method
      real(c_double) :: volume
      integer(c_int64_t) :: size_limit
+     integer(c_int64_t) :: memory_budget
      integer(c_int64_t) :: seed
      integer(c_int64_t) :: stream
-  end type coag_lowrank_config
+  end type coag_counts_config
 
+  ! set struct_size = c_sizeof(report) before passing a report (or call
+  ! coag_step_report_init)
   type, bind(c) :: coag_step_report
+     integer(c_size_t) :: struct_size
      real(c_double) :: time
      integer(c_int64_t) :: events, proposals, rejections, bound_violations, clipped, doublings
+     integer(c_int64_t) :: removed, bounces
   end type coag_step_report
 
   interface
@@ -95,10 +102,10 @@ module coagula
        type(coag_massflow_config), intent(out) :: out
        integer(c_int32_t) :: coag_massflow_default_config
      end function
-     function coag_lowrank_default_config(out) bind(c, name="coag_lowrank_default_config")
-       import :: coag_lowrank_config, c_int32_t
-       type(coag_lowrank_config), intent(out) :: out
-       integer(c_int32_t) :: coag_lowrank_default_config
+     function coag_counts_default_config(out) bind(c, name="coag_counts_default_config")
+       import :: coag_counts_config, c_int32_t
+       type(coag_counts_config), intent(out) :: out
+       integer(c_int32_t) :: coag_counts_default_config
      end function
      function coag_massflow_new(config, kernel, frag, sizes, n, out) bind(c, name="coag_massflow_new")
        import :: coag_massflow_config, c_ptr, c_double, c_size_t, c_int32_t
@@ -109,14 +116,19 @@ module coagula
        type(c_ptr), intent(out) :: out
        integer(c_int32_t) :: coag_massflow_new
      end function
-     function coag_lowrank_new(config, kernel, counts, n, out) bind(c, name="coag_lowrank_new")
-       import :: coag_lowrank_config, c_ptr, c_int64_t, c_size_t, c_int32_t
-       type(coag_lowrank_config), intent(in) :: config
+     function coag_counts_new(config, kernel, counts, n, out) bind(c, name="coag_counts_new")
+       import :: coag_counts_config, c_ptr, c_int64_t, c_size_t, c_int32_t
+       type(coag_counts_config), intent(in) :: config
        type(c_ptr), value :: kernel
        integer(c_int64_t), intent(in) :: counts(*)
        integer(c_size_t), value :: n
        type(c_ptr), intent(out) :: out
-       integer(c_int32_t) :: coag_lowrank_new
+       integer(c_int32_t) :: coag_counts_new
+     end function
+     function coag_step_report_init(out) bind(c, name="coag_step_report_init")
+       import :: coag_step_report, c_int32_t
+       type(coag_step_report), intent(out) :: out
+       integer(c_int32_t) :: coag_step_report_init
      end function
      subroutine coag_sim_free(sim) bind(c, name="coag_sim_free")
        import :: c_ptr
@@ -126,7 +138,7 @@ module coagula
        import :: c_ptr, c_double, coag_step_report, c_int32_t
        type(c_ptr), value :: sim
        real(c_double), value :: t
-       type(coag_step_report), intent(out) :: report
+       type(coag_step_report), intent(inout) :: report
        integer(c_int32_t) :: coag_sim_advance_to
      end function
      function coag_sim_time(sim, out) bind(c, name="coag_sim_time")

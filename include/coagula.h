@@ -138,7 +138,7 @@
 #define COAG_RANDOMIZATION_OWEN 3
 
 /*
- Osinsky's low-rank Monte Carlo.
+ Osinsky's low-rank Monte Carlo, bucketed layout (the default and fastest layout).
  */
 #define COAG_METHOD_LOWRANK 0
 
@@ -151,6 +151,11 @@
  Acceptance–rejection.
  */
 #define COAG_METHOD_REJECTION 2
+
+/*
+ Osinsky's low-rank Monte Carlo with the paper's per-size segment trees.
+ */
+#define COAG_METHOD_LOWRANK_TREE 3
 
 /*
  Opaque fragmentation handle (`coag_fragmentation` in C).
@@ -252,9 +257,62 @@ typedef struct {
 } coag_user_fragmentation;
 
 /*
- Configuration of the time-driven mass-flow scheme (Lécot et al. 2019).
+ What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
+ `coag_step_report_init`) before passing it; the library writes the fields that fit.
  */
 typedef struct {
+  /*
+   `sizeof(coag_step_report)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Time reached.
+   */
+  double time;
+  /*
+   Accepted events (coagulations and break-ups).
+   */
+  uint64_t events;
+  /*
+   Proposals, accepted or not.
+   */
+  uint64_t proposals;
+  /*
+   Proposals rejected by thinning.
+   */
+  uint64_t rejections;
+  /*
+   Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
+   */
+  uint64_t bound_violations;
+  /*
+   Probabilities above 1 that were clipped (time-driven scheme).
+   */
+  uint64_t clipped;
+  /*
+   Particle-number doublings.
+   */
+  uint64_t doublings;
+  /*
+   Particles that left the system (0 for the schemes that keep every particle).
+   */
+  uint64_t removed;
+  /*
+   Collisions that bounced instead of merging (0 for pure coagulation).
+   */
+  uint64_t bounces;
+} coag_step_report;
+
+/*
+ Configuration of the time-driven mass-flow scheme (Lécot et al. 2019). Fill it with
+ `coag_massflow_default_config`, which sets `struct_size`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_massflow_config)` as the caller compiled it (the ABI's growth rule:
+   fields are only ever appended).
+   */
+  size_t struct_size;
   /*
    Time step Δt > 0.
    */
@@ -286,9 +344,14 @@ typedef struct {
 } coag_massflow_config;
 
 /*
- Configuration of the size-count schemes (Osinsky 2023).
+ Configuration of the size-count schemes (low-rank, inverse, acceptance–rejection).
+ Fill it with `coag_counts_default_config`, which sets `struct_size`.
  */
 typedef struct {
+  /*
+   `sizeof(coag_counts_config)` as the caller compiled it.
+   */
+  size_t struct_size;
   /*
    `COAG_METHOD_*`.
    */
@@ -303,6 +366,10 @@ typedef struct {
    */
   uint64_t size_limit;
   /*
+   Memory budget in bytes for the growing size tables (0: the default, 2 GiB).
+   */
+  uint64_t memory_budget;
+  /*
    Seed of the sim's random stream.
    */
   uint64_t seed;
@@ -310,41 +377,7 @@ typedef struct {
    Stream id.
    */
   uint64_t stream;
-} coag_lowrank_config;
-
-/*
- What one `coag_sim_advance_to` call did.
- */
-typedef struct {
-  /*
-   Time reached.
-   */
-  double time;
-  /*
-   Accepted events (coagulations and break-ups).
-   */
-  uint64_t events;
-  /*
-   Proposals, accepted or not.
-   */
-  uint64_t proposals;
-  /*
-   Proposals rejected by thinning.
-   */
-  uint64_t rejections;
-  /*
-   Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
-   */
-  uint64_t bound_violations;
-  /*
-   Probabilities above 1 that were clipped (time-driven scheme).
-   */
-  uint64_t clipped;
-  /*
-   Particle-number doublings.
-   */
-  uint64_t doublings;
-} coag_step_report;
+} coag_counts_config;
 
 /*
  A host callback returning 64 uniformly random bits per call.
@@ -503,8 +536,16 @@ int32_t coag_fragmentation_new_user(const coag_user_fragmentation *desc, coag_fr
 void coag_fragmentation_free(coag_fragmentation *frag);
 
 /*
- Writes the default mass-flow configuration: Δt = 0.01, mass 1, Niederreiter points,
- no randomisation, adaptive sort, seed 0, stream 0.
+ Zero-fills a step report and sets its `struct_size`.
+
+ # Safety
+ `out` must be NULL or valid for writing the struct.
+ */
+int32_t coag_step_report_init(coag_step_report *out);
+
+/*
+ Writes the default mass-flow configuration (with `struct_size` set): Δt = 0.01,
+ mass 1, Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
 
  # Safety
  `out` must be NULL or valid for writing the struct.
@@ -512,13 +553,14 @@ void coag_fragmentation_free(coag_fragmentation *frag);
 int32_t coag_massflow_default_config(coag_massflow_config *out);
 
 /*
- Writes the default size-count configuration: low-rank method, volume = number of
- particles, default size limit, seed 0, stream 0.
+ Writes the default size-count configuration (with `struct_size` set): the
+ bucketed low-rank method, volume = number of particles, default size limit and
+ memory budget, seed 0, stream 0.
 
  # Safety
  `out` must be NULL or valid for writing the struct.
  */
-int32_t coag_lowrank_default_config(coag_lowrank_config *out);
+int32_t coag_counts_default_config(coag_counts_config *out);
 
 /*
  A time-driven mass-flow sim (Lécot et al. 2019) over the `n` particle sizes `sizes`
@@ -530,15 +572,23 @@ int32_t coag_lowrank_default_config(coag_lowrank_config *out);
 int32_t coag_massflow_new(const coag_massflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, coag_sim **out);
 
 /*
- A size-count sim (Osinsky 2023): `counts[i]` particles of size `i + 1`, `len`
- entries, with `config.method` choosing low-rank MC, the inverse method or
- acceptance–rejection. The low-rank method needs a kernel with a low-rank bound of
- rank 1..4; acceptance–rejection needs the kernel's supremum.
+ A size-count sim: `counts[i]` particles of size `i + 1`, `len` entries, with
+ `config.method` choosing the scheme — low-rank Monte Carlo (bucketed layout, the
+ default, or the per-size tree layout; the kernel needs a low-rank bound of rank
+ 1..4), the inverse method, or acceptance–rejection (the kernel needs its supremum).
 
  # Safety
  Pointers must be NULL or valid (`counts` for `len` values).
  */
-int32_t coag_lowrank_new(const coag_lowrank_config *config, const coag_kernel *kernel, const uint64_t *counts, size_t len, coag_sim **out);
+int32_t coag_counts_new(const coag_counts_config *config, const coag_kernel *kernel, const uint64_t *counts, size_t len, coag_sim **out);
+
+/*
+ The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).
+
+ # Safety
+ `sim` must be NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_method(const coag_sim *sim, int32_t *out);
 
 /*
  Releases a sim (NULL is a no-op).
@@ -551,7 +601,7 @@ void coag_sim_free(coag_sim *sim);
 /*
  Runs the sim until time `t` (≥ its current time): time-driven schemes take steps of
  Δt (a last shorter one lands on t), event-driven schemes process every event before
- t. `report` may be NULL.
+ t. `report` may be NULL; otherwise its `struct_size` must be set.
 
  # Safety
  `sim` must be NULL or live; `report` NULL or writable.
@@ -567,7 +617,7 @@ int32_t coag_sim_advance_to(coag_sim *sim, double t, coag_step_report *report);
 int32_t coag_sim_time(const coag_sim *sim, double *out);
 
 /*
- Totals of every `coag_sim_advance_to` so far.
+ Totals of every `coag_sim_advance_to` so far (`out->struct_size` must be set).
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.
@@ -583,7 +633,7 @@ int32_t coag_sim_totals(const coag_sim *sim, coag_step_report *out);
 int32_t coag_sim_moment(const coag_sim *sim, double m, double *out);
 
 /*
- The number concentration of sizes in `[a, b]`.
+ The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b)).
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.
@@ -657,7 +707,7 @@ int32_t coag_sim_set_counts(coag_sim *sim, const uint64_t *counts, size_t len, d
 
 /*
  Replaces the sim's coagulation kernel (e.g. new parameters between outer steps).
- For the low-rank method the new kernel must have the same rank.
+ For the low-rank methods the new kernel must have the same rank.
 
  # Safety
  `sim` and `kernel` NULL or live.
@@ -692,7 +742,8 @@ int32_t coag_sim_set_dt(coag_sim *sim, double dt);
 int32_t coag_sim_set_rng_callback(coag_sim *sim, coag_rng_callback next, void *user_data);
 
 /*
- Restarts the sim's own random stream from `seed` and `stream`.
+ Restarts the sim's own random stream from `seed` and `stream` (the seed policy of
+ `coagula_core::random::generator`, the same as the CLI's).
 
  # Safety
  `sim` NULL or live.

@@ -119,9 +119,9 @@ inline coag_massflow_config massflow_default_config() {
     return c;
 }
 
-inline coag_lowrank_config lowrank_default_config() {
-    coag_lowrank_config c;
-    check(coag_lowrank_default_config(&c));
+inline coag_counts_config counts_default_config() {
+    coag_counts_config c;
+    check(coag_counts_default_config(&c));
     return c;
 }
 
@@ -136,14 +136,15 @@ class Sim {
         return Sim(s);
     }
     /// A size-count scheme: counts[i] particles of size i + 1.
-    static Sim lowrank(const coag_lowrank_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
+    static Sim lowrank(const coag_counts_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
         coag_sim *s = nullptr;
-        check(coag_lowrank_new(&c, k.get(), counts.data(), counts.size(), &s));
+        check(coag_counts_new(&c, k.get(), counts.data(), counts.size(), &s));
         return Sim(s);
     }
 
     coag_step_report advance_to(double t) {
         coag_step_report r;
+        check(coag_step_report_init(&r));
         check(coag_sim_advance_to(s_.get(), t, &r));
         return r;
     }

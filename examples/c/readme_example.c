@@ -32,6 +32,7 @@ int main(void) {
     for (int step = 1; step <= 10; step++) {               /* the host's outer steps */
         double t = 0.1 * step, m2, exact;
         coag_step_report rep;
+        coag_step_report_init(&rep); /* sets rep.struct_size (the ABI's growth rule) */
         TRY(coag_sim_advance_to(sim, t, &rep));
         TRY(coag_sim_moment(sim, 2.0, &m2));
         TRY(coag_exact_moment(COAG_EXACT_COAG_FRAG, 2, t, &exact));

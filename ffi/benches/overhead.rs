@@ -17,13 +17,14 @@ struct CSim(*mut coag_sim);
 
 impl CSim {
     fn new(k: *const coag_kernel, seed: u64) -> Self {
-        let mut cfg = std::mem::MaybeUninit::<coag_lowrank_config>::uninit();
+        let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
         let mut s = std::ptr::null_mut();
         unsafe {
-            assert_eq!(coag_lowrank_default_config(cfg.as_mut_ptr()), COAG_OK);
+            assert_eq!(coag_counts_default_config(cfg.as_mut_ptr()), COAG_OK);
             let mut cfg = cfg.assume_init();
             cfg.seed = seed;
-            assert_eq!(coag_lowrank_new(&cfg, k, [N0].as_ptr(), 1, &mut s), COAG_OK);
+            cfg.method = COAG_METHOD_LOWRANK_TREE;
+            assert_eq!(coag_counts_new(&cfg, k, [N0].as_ptr(), 1, &mut s), COAG_OK);
         }
         CSim(s)
     }
@@ -50,7 +51,10 @@ fn overhead(c: &mut Criterion) {
         })
     });
     let cs = CSim::new(k, 1);
-    let mut rep = coag_step_report::default();
+    let mut rep = coag_step_report {
+        struct_size: std::mem::size_of::<coag_step_report>(),
+        ..Default::default()
+    };
     let mut t = 0.0;
     g.bench_function("c-abi", |b| {
         b.iter(|| unsafe {
@@ -86,7 +90,10 @@ fn overhead(c: &mut Criterion) {
                 CSim::new(k, seed)
             },
             |s| {
-                let mut rep = coag_step_report::default();
+                let mut rep = coag_step_report {
+                    struct_size: std::mem::size_of::<coag_step_report>(),
+                    ..Default::default()
+                };
                 black_box(unsafe { coag_sim_advance_to(s.0, 2e-3, &mut rep) });
                 s
             },

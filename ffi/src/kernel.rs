@@ -190,15 +190,21 @@ impl FragmentationKernel for Fragmentation {
     }
 }
 
-fn new_kernel(k: Kernel, out: *mut *mut coag_kernel) -> Result<(), Fail> {
-    write(out, Box::into_raw(Box::new(coag_kernel { k })));
+/// # Safety
+/// `out` checked non-null and writable (the C caller's contract).
+unsafe fn new_kernel(k: Kernel, out: *mut *mut coag_kernel) -> Result<(), Fail> {
+    // SAFETY: the function's contract.
+    unsafe { write(out, Box::into_raw(Box::new(coag_kernel { k }))) };
     Ok(())
 }
 
-fn builtin(make: coagula_core::Result<Coagulation>, out: *mut *mut coag_kernel) -> i32 {
+/// # Safety
+/// `out` must be NULL or writable (the C caller's contract).
+unsafe fn builtin(make: coagula_core::Result<Coagulation>, out: *mut *mut coag_kernel) -> i32 {
     guard(|| {
         non_null(out, "out")?;
-        new_kernel(Kernel::Builtin(make?), out)
+        // SAFETY: `out` checked non-null above; writable (caller contract).
+        unsafe { new_kernel(Kernel::Builtin(make?), out) }
     })
 }
 
@@ -208,7 +214,8 @@ fn builtin(make: coagula_core::Result<Coagulation>, out: *mut *mut coag_kernel) 
 /// `out` must be NULL or valid for writing one pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_kernel_new_constant(k0: f64, out: *mut *mut coag_kernel) -> i32 {
-    builtin(Coagulation::constant(k0), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Coagulation::constant(k0), out) }
 }
 
 /// Additive kernel `K = x + y`; bounds valid for sizes `≥ min_size` (0: all sizes,
@@ -221,7 +228,8 @@ pub unsafe extern "C" fn coag_kernel_new_additive(
     min_size: f64,
     out: *mut *mut coag_kernel,
 ) -> i32 {
-    builtin(Coagulation::additive().with_min_size(min_size), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Coagulation::additive().with_min_size(min_size), out) }
 }
 
 /// Multiplicative kernel `K = x y`.
@@ -230,7 +238,8 @@ pub unsafe extern "C" fn coag_kernel_new_additive(
 /// `out` must be NULL or valid for writing one pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_kernel_new_multiplicative(out: *mut *mut coag_kernel) -> i32 {
-    builtin(Ok(Coagulation::multiplicative()), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Ok(Coagulation::multiplicative()), out) }
 }
 
 /// Product kernel `K = (x y)^a`, `0 < a ≤ 1`.
@@ -239,7 +248,8 @@ pub unsafe extern "C" fn coag_kernel_new_multiplicative(out: *mut *mut coag_kern
 /// `out` must be NULL or valid for writing one pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_kernel_new_product(a: f64, out: *mut *mut coag_kernel) -> i32 {
-    builtin(Coagulation::product(a), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Coagulation::product(a), out) }
 }
 
 /// Homogeneous kernel of Eibeck & Wagner eq. 6.6, `1 < gamma ≤ 2`.
@@ -251,7 +261,8 @@ pub unsafe extern "C" fn coag_kernel_new_homogeneous(
     gamma: f64,
     out: *mut *mut coag_kernel,
 ) -> i32 {
-    builtin(Coagulation::homogeneous(gamma), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Coagulation::homogeneous(gamma), out) }
 }
 
 /// Free-molecular (ballistic) kernel; bounds valid for sizes `≥ min_size` (0: all
@@ -264,7 +275,8 @@ pub unsafe extern "C" fn coag_kernel_new_free_molecular(
     min_size: f64,
     out: *mut *mut coag_kernel,
 ) -> i32 {
-    builtin(Coagulation::free_molecular().with_min_size(min_size), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Coagulation::free_molecular().with_min_size(min_size), out) }
 }
 
 /// Brownian (continuum) kernel.
@@ -273,7 +285,8 @@ pub unsafe extern "C" fn coag_kernel_new_free_molecular(
 /// `out` must be NULL or valid for writing one pointer.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_kernel_new_brownian(out: *mut *mut coag_kernel) -> i32 {
-    builtin(Ok(Coagulation::brownian()), out)
+    // SAFETY: `out` as the caller passed it (NULL is checked).
+    unsafe { builtin(Ok(Coagulation::brownian()), out) }
 }
 
 /// A user kernel from C callbacks (see `coag_user_kernel`). Errors: `rate` NULL,
@@ -301,7 +314,8 @@ pub unsafe extern "C" fn coag_kernel_new_user(
                 "user kernel: rank above 8, or rank > 0 without factors",
             );
         }
-        new_kernel(Kernel::User(d), out)
+        // SAFETY: `out` checked non-null above; writable (caller contract).
+        unsafe { new_kernel(Kernel::User(d), out) }
     })
 }
 
@@ -322,7 +336,8 @@ pub unsafe extern "C" fn coag_kernel_rate(
         // SAFETY: checked non-null; a live handle from coag_kernel_new_*.
         let k = unsafe { &(*kernel).k };
         let v = coagula_core::kernel::checked_rate(k, x, y)?;
-        write(out, v);
+        // SAFETY: checked non-null; writable by the caller's contract.
+        unsafe { write(out, v) };
         Ok(())
     })
 }
@@ -339,8 +354,11 @@ pub unsafe extern "C" fn coag_kernel_free(kernel: *mut coag_kernel) {
     }
 }
 
-fn new_frag(f: Fragmentation, out: *mut *mut coag_fragmentation) -> Result<(), Fail> {
-    write(out, Box::into_raw(Box::new(coag_fragmentation { f })));
+/// # Safety
+/// `out` checked non-null and writable (the C caller's contract).
+unsafe fn new_frag(f: Fragmentation, out: *mut *mut coag_fragmentation) -> Result<(), Fail> {
+    // SAFETY: the function's contract.
+    unsafe { write(out, Box::into_raw(Box::new(coag_fragmentation { f }))) };
     Ok(())
 }
 
@@ -356,7 +374,8 @@ pub unsafe extern "C" fn coag_fragmentation_new_binary_uniform(
 ) -> i32 {
     guard(|| {
         non_null(out, "out")?;
-        new_frag(Fragmentation::Binary(BinaryUniform::new(lambda)?), out)
+        // SAFETY: `out` checked non-null above; writable (caller contract).
+        unsafe { new_frag(Fragmentation::Binary(BinaryUniform::new(lambda)?), out) }
     })
 }
 
@@ -383,7 +402,8 @@ pub unsafe extern "C" fn coag_fragmentation_new_user(
         if d.sup_rate.is_nan() {
             return fail(COAG_INVALID_ARGUMENT, "user fragmentation: sup_rate is NaN");
         }
-        new_frag(Fragmentation::User(d), out)
+        // SAFETY: `out` checked non-null above; writable (caller contract).
+        unsafe { new_frag(Fragmentation::User(d), out) }
     })
 }
 

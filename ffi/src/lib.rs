@@ -187,31 +187,96 @@ pub unsafe extern "C" fn coag_last_error_message(
     }
 }
 
-/// Writes `v` through `out` (checked non-null by the caller of this helper).
-pub(crate) fn write<T>(out: *mut T, v: T) {
-    // SAFETY: every caller checked `out` with `non_null` and the C caller guarantees
-    // that a non-null out-pointer is valid for writes.
+/// Writes `v` through `out`.
+///
+/// # Safety
+/// `out` must be non-null (checked with [`non_null`]) and valid for a write of `T`.
+pub(crate) unsafe fn write<T>(out: *mut T, v: T) {
+    // SAFETY: the caller's contract.
     unsafe { out.write(v) };
 }
 
 /// A slice from a (pointer, length) pair; NULL is allowed only with length 0.
-pub(crate) fn slice<'a, T>(p: *const T, len: usize, name: &str) -> Result<&'a [T], Fail> {
+///
+/// # Safety
+/// A non-null `p` must point to `len` readable, initialised elements that stay
+/// valid and unmutated for `'a`.
+pub(crate) unsafe fn slice<'a, T>(p: *const T, len: usize, name: &str) -> Result<&'a [T], Fail> {
     if len == 0 {
         return Ok(&[]);
     }
     non_null(p, name)?;
-    // SAFETY: non-null, and the C caller guarantees `len` readable elements.
+    if len
+        .checked_mul(std::mem::size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!("{name}: length {len} is not a buffer length"),
+        );
+    }
+    // SAFETY: non-null, length in range, and the caller's contract.
     Ok(unsafe { std::slice::from_raw_parts(p, len) })
 }
 
 /// A mutable slice from a (pointer, length) pair.
-pub(crate) fn slice_mut<'a, T>(p: *mut T, len: usize, name: &str) -> Result<&'a mut [T], Fail> {
+///
+/// # Safety
+/// A non-null `p` must point to `len` writable elements, not aliased for `'a`.
+pub(crate) unsafe fn slice_mut<'a, T>(
+    p: *mut T,
+    len: usize,
+    name: &str,
+) -> Result<&'a mut [T], Fail> {
     if len == 0 {
         return Ok(&mut []);
     }
     non_null(p, name)?;
-    // SAFETY: non-null, and the C caller guarantees `len` writable elements.
+    if len
+        .checked_mul(std::mem::size_of::<T>())
+        .is_none_or(|b| b > isize::MAX as usize)
+    {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!("{name}: length {len} is not a buffer length"),
+        );
+    }
+    // SAFETY: non-null, length in range, and the caller's contract.
     Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
+/// Reads a caller's config struct that starts with a `size_t struct_size` (the ABI's
+/// growth rule: a struct from an older header is shorter; its missing fields take
+/// their defaults from `default`). A size below `min` (the first version's) or above
+/// ours (a newer header than this library) is refused.
+///
+/// # Safety
+/// A non-null `p` must point to at least `struct_size` readable bytes.
+pub(crate) unsafe fn read_config<T: Copy>(
+    p: *const T,
+    name: &str,
+    min: usize,
+    default: T,
+) -> Result<T, Fail> {
+    non_null(p, name)?;
+    // SAFETY: non-null; every config begins with a size_t (caller contract).
+    let size = unsafe { p.cast::<usize>().read_unaligned() };
+    let ours = std::mem::size_of::<T>();
+    if size < min || size > ours {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!(
+                "{name}->struct_size is {size}: set it to sizeof the struct (this library: {min}..={ours} bytes); use the *_default_config function"
+            ),
+        );
+    }
+    let mut out = default;
+    // SAFETY: `size ≤ size_of::<T>()` bytes are readable at p (contract) and writable
+    // in `out`; T is plain old data (a repr(C) struct of numbers).
+    unsafe {
+        std::ptr::copy_nonoverlapping(p.cast::<u8>(), (&mut out as *mut T).cast::<u8>(), size)
+    };
+    Ok(out)
 }
 
 /// Exact solutions of SPEC §3 (validation targets for hosts).
@@ -251,7 +316,8 @@ pub unsafe extern "C" fn coag_exact_moment(solution: i32, m: u32, t: f64, out: *
     guard(|| {
         non_null(out, "out")?;
         let v = exact_of(solution)?.moment(m, t)?;
-        write(out, v);
+        // SAFETY: checked non-null; writable by the caller's contract.
+        unsafe { write(out, v) };
         Ok(())
     })
 }
@@ -265,7 +331,8 @@ pub unsafe extern "C" fn coag_exact_density(solution: i32, k: u64, t: f64, out: 
     guard(|| {
         non_null(out, "out")?;
         let v = exact_of(solution)?.number_density(k, t)?;
-        write(out, v);
+        // SAFETY: checked non-null; writable by the caller's contract.
+        unsafe { write(out, v) };
         Ok(())
     })
 }

@@ -4,14 +4,15 @@
 use crate::kernel::{Fragmentation, Kernel, coag_fragmentation, coag_kernel};
 use crate::rng::{Pcg64, Source, coag_rng_callback};
 use crate::{
-    COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, Fail, fail, guard, non_null, slice, slice_mut, write,
+    COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, Fail, fail, guard, non_null, read_config, slice,
+    slice_mut, write,
 };
-use coagula_core::checkpoint::{Checkpoint, Reader, Writer};
-use coagula_core::kernel::CoagulationKernel;
+use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::qmc::Randomization;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Inverse, LowRank};
-use coagula_core::scheme::massflow::{MassFlow, PointSource, Sorting};
-use coagula_core::scheme::{Scheme, StepReport};
+use coagula_core::random::{Purpose, generator, substream};
+use coagula_core::scheme::StepReport;
+use coagula_core::scheme::massflow::{PointSource, Sorting};
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
 use std::ffi::c_void;
 
 /// Niederreiter's (1,3)-sequence (Lécot et al.'s choice).
@@ -30,17 +31,31 @@ pub const COAG_RANDOMIZATION_MATOUSEK: i32 = 2;
 /// Owen's nested scrambling (hash-based).
 pub const COAG_RANDOMIZATION_OWEN: i32 = 3;
 
-/// Osinsky's low-rank Monte Carlo.
+/// Osinsky's low-rank Monte Carlo, bucketed layout (the default and fastest layout).
 pub const COAG_METHOD_LOWRANK: i32 = 0;
 /// Inverse method (Gillespie on sizes).
 pub const COAG_METHOD_INVERSE: i32 = 1;
 /// Acceptance–rejection.
 pub const COAG_METHOD_REJECTION: i32 = 2;
+/// Osinsky's low-rank Monte Carlo with the paper's per-size segment trees.
+pub const COAG_METHOD_LOWRANK_TREE: i32 = 3;
 
-/// Configuration of the time-driven mass-flow scheme (Lécot et al. 2019).
+/// The `COAG_METHOD_*` codes and the registry's schemes they name.
+const METHODS: [(i32, SchemeId); 4] = [
+    (COAG_METHOD_LOWRANK, SchemeId::LowRank),
+    (COAG_METHOD_INVERSE, SchemeId::Inverse),
+    (COAG_METHOD_REJECTION, SchemeId::Rejection),
+    (COAG_METHOD_LOWRANK_TREE, SchemeId::LowRankTree),
+];
+
+/// Configuration of the time-driven mass-flow scheme (Lécot et al. 2019). Fill it with
+/// `coag_massflow_default_config`, which sets `struct_size`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct coag_massflow_config {
+    /// `sizeof(coag_massflow_config)` as the caller compiled it (the ABI's growth rule:
+    /// fields are only ever appended).
+    pub struct_size: usize,
     /// Time step Δt > 0.
     pub dt: f64,
     /// Total mass M1 carried by the particles (> 0).
@@ -57,10 +72,13 @@ pub struct coag_massflow_config {
     pub stream: u64,
 }
 
-/// Configuration of the size-count schemes (Osinsky 2023).
+/// Configuration of the size-count schemes (low-rank, inverse, acceptance–rejection).
+/// Fill it with `coag_counts_default_config`, which sets `struct_size`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
-pub struct coag_lowrank_config {
+pub struct coag_counts_config {
+    /// `sizeof(coag_counts_config)` as the caller compiled it.
+    pub struct_size: usize,
     /// `COAG_METHOD_*`.
     pub method: i32,
     /// Simulation volume V (> 0); 0 means "the number of particles" (so that the
@@ -68,16 +86,21 @@ pub struct coag_lowrank_config {
     pub volume: f64,
     /// Largest particle size allowed (0: the default, 2^32).
     pub size_limit: u64,
+    /// Memory budget in bytes for the growing size tables (0: the default, 2 GiB).
+    pub memory_budget: u64,
     /// Seed of the sim's random stream.
     pub seed: u64,
     /// Stream id.
     pub stream: u64,
 }
 
-/// What one `coag_sim_advance_to` call did.
+/// What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
+/// `coag_step_report_init`) before passing it; the library writes the fields that fit.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
 pub struct coag_step_report {
+    /// `sizeof(coag_step_report)` as the caller compiled it.
+    pub struct_size: usize,
     /// Time reached.
     pub time: f64,
     /// Accepted events (coagulations and break-ups).
@@ -92,93 +115,156 @@ pub struct coag_step_report {
     pub clipped: u64,
     /// Particle-number doublings.
     pub doublings: u64,
+    /// Particles that left the system (0 for the schemes that keep every particle).
+    pub removed: u64,
+    /// Collisions that bounced instead of merging (0 for pure coagulation).
+    pub bounces: u64,
 }
 
-impl From<StepReport> for coag_step_report {
-    fn from(r: StepReport) -> Self {
-        coag_step_report {
-            time: r.time,
-            events: r.events,
-            proposals: r.proposals,
-            rejections: r.rejections,
-            bound_violations: r.bound_violations,
-            clipped: r.clipped,
-            doublings: r.doublings,
-        }
+/// Bytes of the first version of each config (the smallest `struct_size` accepted).
+const MASSFLOW_CONFIG_V1: usize = std::mem::size_of::<coag_massflow_config>();
+const COUNTS_CONFIG_V1: usize = std::mem::size_of::<coag_counts_config>();
+const STEP_REPORT_V1: usize = std::mem::size_of::<coag_step_report>();
+
+fn report_of(r: StepReport) -> coag_step_report {
+    coag_step_report {
+        struct_size: STEP_REPORT_V1,
+        time: r.time,
+        events: r.events,
+        proposals: r.proposals,
+        rejections: r.rejections,
+        bound_violations: r.bound_violations,
+        clipped: r.clipped,
+        doublings: r.doublings,
+        removed: r.removed,
+        bounces: r.bounces,
     }
 }
 
-pub(crate) enum Engine {
-    MassFlow(Box<MassFlow<Kernel, Fragmentation>>),
-    LowRank1(Box<LowRank<Kernel, 1>>),
-    LowRank2(Box<LowRank<Kernel, 2>>),
-    LowRank3(Box<LowRank<Kernel, 3>>),
-    LowRank4(Box<LowRank<Kernel, 4>>),
-    Inverse(Box<Inverse<Kernel>>),
-    Rejection(Box<AcceptanceRejection<Kernel>>),
+/// Writes `r` into the caller's report, as many bytes as its `struct_size` says.
+///
+/// # Safety
+/// `out` non-null and valid for `out->struct_size` bytes (caller contract).
+unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), Fail> {
+    // SAFETY: non-null (caller); a report begins with its size_t struct_size.
+    let size = unsafe { out.cast::<usize>().read_unaligned() };
+    if !(std::mem::size_of::<usize>() + std::mem::size_of::<f64>()..=STEP_REPORT_V1).contains(&size)
+    {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!(
+                "report->struct_size is {size}: set it to sizeof(coag_step_report) (or call coag_step_report_init)"
+            ),
+        );
+    }
+    let v = report_of(r);
+    // SAFETY: `size` bytes are writable at out (contract) and readable from v.
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            (&v as *const coag_step_report).cast::<u8>().add(8),
+            out.cast::<u8>().add(8),
+            size - 8,
+        )
+    };
+    Ok(())
 }
+
+/// The facade over every scheme, as the C ABI instantiates it.
+type Dyn = dyn Simulation<Kernel, Fragmentation, Source>;
 
 /// Opaque simulation handle (`coag_sim` in C).
 pub struct coag_sim {
-    engine: Engine,
+    sim: Box<Dyn>,
     /// The sim's own stream (kept even while a callback is installed).
     pcg: Pcg64,
     callback: Option<(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void)>,
 }
 
-macro_rules! with_engine {
-    ($e:expr, $s:ident => $body:expr) => {
-        match $e {
-            Engine::MassFlow($s) => $body,
-            Engine::LowRank1($s) => $body,
-            Engine::LowRank2($s) => $body,
-            Engine::LowRank3($s) => $body,
-            Engine::LowRank4($s) => $body,
-            Engine::Inverse($s) => $body,
-            Engine::Rejection($s) => $body,
-        }
-    };
-}
-
-macro_rules! with_counts_engine {
-    ($e:expr, $s:ident => $body:expr, $other:expr) => {
-        match $e {
-            Engine::LowRank1($s) => $body,
-            Engine::LowRank2($s) => $body,
-            Engine::LowRank3($s) => $body,
-            Engine::LowRank4($s) => $body,
-            Engine::Inverse($s) => $body,
-            Engine::Rejection($s) => $body,
-            Engine::MassFlow(_) => $other,
-        }
-    };
-}
-
-fn new_sim(engine: Engine, seed: u64, stream: u64, out: *mut *mut coag_sim) -> Result<(), Fail> {
+/// # Safety
+/// `out` checked non-null and writable (caller contract).
+unsafe fn new_sim(
+    sim: Box<Dyn>,
+    seed: u64,
+    stream: u64,
+    out: *mut *mut coag_sim,
+) -> Result<(), Fail> {
     let sim = coag_sim {
-        engine,
-        pcg: Pcg64::new(seed, stream),
+        sim,
+        pcg: generator(seed, stream),
         callback: None,
     };
-    write(out, Box::into_raw(Box::new(sim)));
+    // SAFETY: the function's contract.
+    unsafe { write(out, Box::into_raw(Box::new(sim))) };
     Ok(())
 }
 
 /// A reference to a live handle.
-fn handle<'a, T>(p: *const T, name: &str) -> Result<&'a T, Fail> {
+///
+/// # Safety
+/// A non-null `p` must be a live handle, not mutated for `'a`.
+unsafe fn handle<'a, T>(p: *const T, name: &str) -> Result<&'a T, Fail> {
     non_null(p, name)?;
-    // SAFETY: non-null; the C caller passes a live handle (documented contract).
+    // SAFETY: non-null; the function's contract.
     Ok(unsafe { &*p })
 }
 
-fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
+/// # Safety
+/// A non-null `p` must be a live handle used by this thread alone for `'a`.
+unsafe fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
     non_null(p, name)?;
-    // SAFETY: non-null; a live handle, used by one thread at a time (contract).
+    // SAFETY: non-null; the function's contract.
     Ok(unsafe { &mut *p })
 }
 
-/// Writes the default mass-flow configuration: Δt = 0.01, mass 1, Niederreiter points,
-/// no randomisation, adaptive sort, seed 0, stream 0.
+/// Zero-fills a step report and sets its `struct_size`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing the struct.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_step_report_init(out: *mut coag_step_report) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        // SAFETY: checked non-null; writable (contract).
+        unsafe {
+            write(
+                out,
+                coag_step_report {
+                    struct_size: STEP_REPORT_V1,
+                    ..Default::default()
+                },
+            )
+        };
+        Ok(())
+    })
+}
+
+fn default_massflow() -> coag_massflow_config {
+    coag_massflow_config {
+        struct_size: MASSFLOW_CONFIG_V1,
+        dt: 0.01,
+        mass: 1.0,
+        points: COAG_POINTS_NIEDERREITER,
+        randomization: COAG_RANDOMIZATION_NONE,
+        full_sort: 0,
+        seed: 0,
+        stream: 0,
+    }
+}
+
+fn default_counts() -> coag_counts_config {
+    coag_counts_config {
+        struct_size: COUNTS_CONFIG_V1,
+        method: COAG_METHOD_LOWRANK,
+        volume: 0.0,
+        size_limit: 0,
+        memory_budget: 0,
+        seed: 0,
+        stream: 0,
+    }
+}
+
+/// Writes the default mass-flow configuration (with `struct_size` set): Δt = 0.01,
+/// mass 1, Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
 ///
 /// # Safety
 /// `out` must be NULL or valid for writing the struct.
@@ -186,42 +272,54 @@ fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
 pub unsafe extern "C" fn coag_massflow_default_config(out: *mut coag_massflow_config) -> i32 {
     guard(|| {
         non_null(out, "out")?;
-        write(
-            out,
-            coag_massflow_config {
-                dt: 0.01,
-                mass: 1.0,
-                points: COAG_POINTS_NIEDERREITER,
-                randomization: COAG_RANDOMIZATION_NONE,
-                full_sort: 0,
-                seed: 0,
-                stream: 0,
-            },
-        );
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, default_massflow()) };
         Ok(())
     })
 }
 
-/// Writes the default size-count configuration: low-rank method, volume = number of
-/// particles, default size limit, seed 0, stream 0.
+/// Writes the default size-count configuration (with `struct_size` set): the
+/// bucketed low-rank method, volume = number of particles, default size limit and
+/// memory budget, seed 0, stream 0.
 ///
 /// # Safety
 /// `out` must be NULL or valid for writing the struct.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_lowrank_default_config(out: *mut coag_lowrank_config) -> i32 {
+pub unsafe extern "C" fn coag_counts_default_config(out: *mut coag_counts_config) -> i32 {
     guard(|| {
         non_null(out, "out")?;
-        write(
-            out,
-            coag_lowrank_config {
-                method: COAG_METHOD_LOWRANK,
-                volume: 0.0,
-                size_limit: 0,
-                seed: 0,
-                stream: 0,
-            },
-        );
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, default_counts()) };
         Ok(())
+    })
+}
+
+/// The point source of a mass-flow config (the scrambling draws from its own stream
+/// of the seed policy, so the sim's stream is the same with and without it).
+fn points_of(c: &coag_massflow_config) -> Result<PointSource, Fail> {
+    let kind = match c.randomization {
+        COAG_RANDOMIZATION_NONE => None,
+        COAG_RANDOMIZATION_SHIFT => Some(Randomization::DigitalShift),
+        COAG_RANDOMIZATION_MATOUSEK => Some(Randomization::Matousek),
+        COAG_RANDOMIZATION_OWEN => Some(Randomization::Owen),
+        r => return fail(COAG_INVALID_ARGUMENT, format!("unknown randomization {r}")),
+    };
+    let mut scramble = substream(c.seed, c.stream, Purpose::Scrambling);
+    Ok(match (c.points, kind) {
+        (COAG_POINTS_NIEDERREITER, None) => PointSource::niederreiter(),
+        (COAG_POINTS_SOBOL, None) => PointSource::sobol(),
+        (COAG_POINTS_NIEDERREITER, Some(r)) => {
+            PointSource::randomized_niederreiter(r, &mut scramble)
+        }
+        (COAG_POINTS_SOBOL, Some(r)) => PointSource::randomized_sobol(r, &mut scramble),
+        (COAG_POINTS_MONTE_CARLO, None) => PointSource::monte_carlo(),
+        (COAG_POINTS_MONTE_CARLO, Some(_)) => {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "Monte Carlo points cannot be randomised",
+            );
+        }
+        (p, _) => return fail(COAG_INVALID_ARGUMENT, format!("unknown points {p}")),
     })
 }
 
@@ -240,104 +338,101 @@ pub unsafe extern "C" fn coag_massflow_new(
     out: *mut *mut coag_sim,
 ) -> i32 {
     guard(|| {
-        let c = *handle(config, "config")?;
-        let k = handle(kernel, "kernel")?.k;
+        // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
+        let c = unsafe { read_config(config, "config", MASSFLOW_CONFIG_V1, default_massflow()) }?;
+        let k = unsafe { handle(kernel, "kernel") }?.k;
         let f = if frag.is_null() {
             Fragmentation::None
         } else {
-            handle(frag, "frag")?.f
+            unsafe { handle(frag, "frag") }?.f
         };
-        let x = slice(sizes, n, "sizes")?;
+        let x = unsafe { slice(sizes, n, "sizes") }?;
         non_null(out, "out")?;
-        let kind = match c.randomization {
-            COAG_RANDOMIZATION_NONE => None,
-            COAG_RANDOMIZATION_SHIFT => Some(Randomization::DigitalShift),
-            COAG_RANDOMIZATION_MATOUSEK => Some(Randomization::Matousek),
-            COAG_RANDOMIZATION_OWEN => Some(Randomization::Owen),
-            r => return fail(COAG_INVALID_ARGUMENT, format!("unknown randomization {r}")),
+        let opts = Options::default()
+            .with_dt(c.dt)
+            .with_points(points_of(&c)?)
+            .with_sorting(if c.full_sort != 0 {
+                Sorting::Full
+            } else {
+                Sorting::Adaptive
+            });
+        let init = Init::Sizes {
+            sizes: x,
+            mass: c.mass,
         };
-        // the scrambling draws from a stream of its own, so the sim's stream is the same
-        // with and without it
-        let mut scramble_rng = Source::Pcg(Pcg64::new(c.seed ^ 0x5c4a_3b1e_0000_0001, c.stream));
-        let points = match (c.points, kind) {
-            (COAG_POINTS_NIEDERREITER, None) => PointSource::niederreiter(),
-            (COAG_POINTS_SOBOL, None) => PointSource::sobol(),
-            (COAG_POINTS_NIEDERREITER, Some(r)) => {
-                PointSource::randomized_niederreiter(r, &mut scramble_rng)
-            }
-            (COAG_POINTS_SOBOL, Some(r)) => PointSource::randomized_sobol(r, &mut scramble_rng),
-            (COAG_POINTS_MONTE_CARLO, None) => PointSource::monte_carlo(),
-            (COAG_POINTS_MONTE_CARLO, Some(_)) => {
-                return fail(
-                    COAG_INVALID_ARGUMENT,
-                    "Monte Carlo points cannot be randomised",
-                );
-            }
-            (p, _) => return fail(COAG_INVALID_ARGUMENT, format!("unknown points {p}")),
-        };
-        let sorting = if c.full_sort != 0 {
-            Sorting::Full
-        } else {
-            Sorting::Adaptive
-        };
-        let mf = MassFlow::new(k, f, x, c.mass, c.dt, points)?.with_sorting(sorting);
-        new_sim(Engine::MassFlow(Box::new(mf)), c.seed, c.stream, out)
+        let sim = registry::build(SchemeId::MassFlow, k, f, &init, &opts)?;
+        // SAFETY: `out` checked non-null; writable (contract).
+        unsafe { new_sim(sim, c.seed, c.stream, out) }
     })
 }
 
-/// A size-count sim (Osinsky 2023): `counts[i]` particles of size `i + 1`, `len`
-/// entries, with `config.method` choosing low-rank MC, the inverse method or
-/// acceptance–rejection. The low-rank method needs a kernel with a low-rank bound of
-/// rank 1..4; acceptance–rejection needs the kernel's supremum.
+/// A size-count sim: `counts[i]` particles of size `i + 1`, `len` entries, with
+/// `config.method` choosing the scheme — low-rank Monte Carlo (bucketed layout, the
+/// default, or the per-size tree layout; the kernel needs a low-rank bound of rank
+/// 1..4), the inverse method, or acceptance–rejection (the kernel needs its supremum).
 ///
 /// # Safety
 /// Pointers must be NULL or valid (`counts` for `len` values).
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_lowrank_new(
-    config: *const coag_lowrank_config,
+pub unsafe extern "C" fn coag_counts_new(
+    config: *const coag_counts_config,
     kernel: *const coag_kernel,
     counts: *const u64,
     len: usize,
     out: *mut *mut coag_sim,
 ) -> i32 {
     guard(|| {
-        let c = *handle(config, "config")?;
-        let k = handle(kernel, "kernel")?.k;
-        let n = slice(counts, len, "counts")?;
+        // SAFETY (all three): NULL is checked; otherwise valid by the caller's contract.
+        let c = unsafe { read_config(config, "config", COUNTS_CONFIG_V1, default_counts()) }?;
+        let k = unsafe { handle(kernel, "kernel") }?.k;
+        let n = unsafe { slice(counts, len, "counts") }?;
         non_null(out, "out")?;
+        let Some(&(_, id)) = METHODS.iter().find(|(m, _)| *m == c.method) else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("unknown method {}", c.method),
+            );
+        };
         let total: u64 = n.iter().fold(0u64, |a, &b| a.saturating_add(b));
         let volume = if c.volume == 0.0 {
             total as f64
         } else {
             c.volume
         };
-        let limit = if c.size_limit == 0 {
-            coagula_core::scheme::lowrank::DEFAULT_SIZE_LIMIT
-        } else {
-            c.size_limit
+        let mut opts = Options::default();
+        if c.size_limit != 0 {
+            opts = opts.with_size_limit(c.size_limit);
+        }
+        if c.memory_budget != 0 {
+            opts = opts.with_memory_budget(usize::try_from(c.memory_budget).unwrap_or(usize::MAX));
+        }
+        let init = Init::Counts { counts: n, volume };
+        let sim = registry::build(id, k, Fragmentation::None, &init, &opts)?;
+        // SAFETY: `out` checked non-null; writable (contract).
+        unsafe { new_sim(sim, c.seed, c.stream, out) }
+    })
+}
+
+/// The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).
+///
+/// # Safety
+/// `sim` must be NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_method(sim: *const coag_sim, out: *mut i32) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        non_null(out, "out")?;
+        let id = s.sim.id();
+        let Some(&(m, _)) = METHODS.iter().find(|(_, i)| *i == id) else {
+            return fail(
+                COAG_UNSUPPORTED,
+                "method: a mass-flow sim has no COAG_METHOD",
+            );
         };
-        let engine = match c.method {
-            COAG_METHOD_LOWRANK => match k.rank() {
-                1 => Engine::LowRank1(Box::new(LowRank::new(k, n, volume)?.with_size_limit(limit))),
-                2 => Engine::LowRank2(Box::new(LowRank::new(k, n, volume)?.with_size_limit(limit))),
-                3 => Engine::LowRank3(Box::new(LowRank::new(k, n, volume)?.with_size_limit(limit))),
-                4 => Engine::LowRank4(Box::new(LowRank::new(k, n, volume)?.with_size_limit(limit))),
-                r => {
-                    return fail(
-                        COAG_UNSUPPORTED,
-                        format!("low-rank method: kernel rank {r} (need 1..4)"),
-                    );
-                }
-            },
-            COAG_METHOD_INVERSE => {
-                Engine::Inverse(Box::new(Inverse::new(k, n, volume)?.with_size_limit(limit)))
-            }
-            COAG_METHOD_REJECTION => Engine::Rejection(Box::new(
-                AcceptanceRejection::new(k, n, volume)?.with_size_limit(limit),
-            )),
-            m => return fail(COAG_INVALID_ARGUMENT, format!("unknown method {m}")),
-        };
-        new_sim(engine, c.seed, c.stream, out)
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, m) };
+        Ok(())
     })
 }
 
@@ -353,9 +448,29 @@ pub unsafe extern "C" fn coag_sim_free(sim: *mut coag_sim) {
     }
 }
 
+/// Runs `f` on a live sim (read-only) and writes its result to `out`.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or writable.
+unsafe fn read<T>(
+    sim: *const coag_sim,
+    out: *mut T,
+    f: impl FnOnce(&coag_sim) -> Result<T, Fail>,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        non_null(out, "out")?;
+        let v = f(s)?;
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, v) };
+        Ok(())
+    })
+}
+
 /// Runs the sim until time `t` (≥ its current time): time-driven schemes take steps of
 /// Δt (a last shorter one lands on t), event-driven schemes process every event before
-/// t. `report` may be NULL.
+/// t. `report` may be NULL; otherwise its `struct_size` must be set.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `report` NULL or writable.
@@ -366,18 +481,33 @@ pub unsafe extern "C" fn coag_sim_advance_to(
     report: *mut coag_step_report,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        if !report.is_null() {
+            // validate the report before the sim changes
+            // SAFETY: non-null; readable by contract.
+            let size = unsafe { report.cast::<usize>().read_unaligned() };
+            if !(16..=STEP_REPORT_V1).contains(&size) {
+                return fail(
+                    COAG_INVALID_ARGUMENT,
+                    format!(
+                        "report->struct_size is {size}: set it to sizeof(coag_step_report) (or call coag_step_report_init)"
+                    ),
+                );
+            }
+        }
         let mut rng = match s.callback {
             Some((f, d)) => Source::Callback(f, d),
             None => Source::Pcg(s.pcg.clone()),
         };
-        let r = with_engine!(&mut s.engine, e => e.advance_to(t, &mut rng));
+        let r = s.sim.advance_to(t, &mut rng);
         if let Source::Pcg(p) = rng {
             s.pcg = p;
         }
         let r = r?;
         if !report.is_null() {
-            write(report, coag_step_report::from(r));
+            // SAFETY: non-null, validated size; writable by contract.
+            unsafe { write_report(report, r) }?;
         }
         Ok(())
     })
@@ -389,28 +519,22 @@ pub unsafe extern "C" fn coag_sim_advance_to(
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_time(sim: *const coag_sim, out: *mut f64) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        write(out, with_engine!(&s.engine, e => e.time()));
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { read(sim, out, |s| Ok(s.sim.time())) }
 }
 
-/// Totals of every `coag_sim_advance_to` so far.
+/// Totals of every `coag_sim_advance_to` so far (`out->struct_size` must be set).
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_totals(sim: *const coag_sim, out: *mut coag_step_report) -> i32 {
     guard(|| {
-        let s = handle(sim, "sim")?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
         non_null(out, "out")?;
-        write(
-            out,
-            coag_step_report::from(with_engine!(&s.engine, e => e.totals())),
-        );
-        Ok(())
+        // SAFETY: non-null; writable for its struct_size (contract).
+        unsafe { write_report(out, s.sim.totals()) }
     })
 }
 
@@ -420,18 +544,18 @@ pub unsafe extern "C" fn coag_sim_totals(sim: *const coag_sim, out: *mut coag_st
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_moment(sim: *const coag_sim, m: f64, out: *mut f64) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        if !m.is_finite() {
-            return fail(COAG_INVALID_ARGUMENT, "moment order must be finite");
-        }
-        write(out, with_engine!(&s.engine, e => e.moment(m)));
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        read(sim, out, |s| {
+            if !m.is_finite() {
+                return fail(COAG_INVALID_ARGUMENT, "moment order must be finite");
+            }
+            Ok(s.sim.moment(m))
+        })
+    }
 }
 
-/// The number concentration of sizes in `[a, b]`.
+/// The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b)).
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
@@ -442,40 +566,14 @@ pub unsafe extern "C" fn coag_sim_concentration(
     b: f64,
     out: *mut f64,
 ) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        if a.is_nan() || b.is_nan() {
-            return fail(COAG_INVALID_ARGUMENT, "concentration bounds are NaN");
-        }
-        let v = match &s.engine {
-            Engine::MassFlow(e) => e.concentration(a, b),
-            other => {
-                let (counts, v) = counts_of(other);
-                coagula_core::observe::sum_concentration(
-                    counts
-                        .iter()
-                        .enumerate()
-                        .map(|(i, &c)| ((i + 1) as f64, c as f64 / v)),
-                    a,
-                    b,
-                )
+    // SAFETY: forwarded contract.
+    unsafe {
+        read(sim, out, |s| {
+            if a.is_nan() || b.is_nan() {
+                return fail(COAG_INVALID_ARGUMENT, "concentration bounds are NaN");
             }
-        };
-        write(out, v);
-        Ok(())
-    })
-}
-
-fn counts_of(e: &Engine) -> (Vec<u64>, f64) {
-    match e {
-        Engine::LowRank1(s) => (s.counts().to_vec(), s.volume()),
-        Engine::LowRank2(s) => (s.counts().to_vec(), s.volume()),
-        Engine::LowRank3(s) => (s.counts().to_vec(), s.volume()),
-        Engine::LowRank4(s) => (s.counts().to_vec(), s.volume()),
-        Engine::Inverse(s) => (s.counts(), s.volume()),
-        Engine::Rejection(s) => (s.counts(), s.volume()),
-        Engine::MassFlow(_) => (Vec::new(), 1.0),
+            Ok(s.sim.concentration(a, b))
+        })
     }
 }
 
@@ -486,22 +584,8 @@ fn counts_of(e: &Engine) -> (Vec<u64>, f64) {
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_gel_mass(sim: *const coag_sim, out: *mut f64) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        let v = match &s.engine {
-            Engine::MassFlow(_) => 0.0,
-            other => {
-                let (counts, v) = counts_of(other);
-                counts
-                    .iter()
-                    .rposition(|&c| c > 0)
-                    .map_or(0.0, |i| (i + 1) as f64 / v)
-            }
-        };
-        write(out, v);
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { read(sim, out, |s| Ok(s.sim.gel_mass().unwrap_or(0.0))) }
 }
 
 /// Number of simulation particles.
@@ -510,16 +594,8 @@ pub unsafe extern "C" fn coag_sim_gel_mass(sim: *const coag_sim, out: *mut f64) 
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_particle_count(sim: *const coag_sim, out: *mut u64) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        let n = match &s.engine {
-            Engine::MassFlow(e) => e.sizes().len() as u64,
-            other => counts_of(other).0.iter().sum(),
-        };
-        write(out, n);
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { read(sim, out, |s| Ok(s.sim.particles())) }
 }
 
 /// Length of the sim's state vector: the number of particles (mass-flow: read with
@@ -530,16 +606,15 @@ pub unsafe extern "C" fn coag_sim_particle_count(sim: *const coag_sim, out: *mut
 /// `sim` must be NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_state_len(sim: *const coag_sim, out: *mut usize) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        let n = match &s.engine {
-            Engine::MassFlow(e) => e.sizes().len(),
-            other => counts_of(other).0.len(),
-        };
-        write(out, n);
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        read(sim, out, |s| {
+            Ok(match s.sim.state() {
+                State::Sizes(x) => x.len(),
+                State::Counts(c, _) => c.len(),
+            })
+        })
+    }
 }
 
 /// Copies the particle sizes of a mass-flow sim (sorted ascending) into `buf`, which
@@ -554,21 +629,22 @@ pub unsafe extern "C" fn coag_sim_get_sizes(
     len: usize,
 ) -> i32 {
     guard(|| {
-        let s = handle(sim, "sim")?;
-        let Engine::MassFlow(e) = &s.engine else {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let State::Sizes(x) = s.sim.state() else {
             return fail(
                 COAG_UNSUPPORTED,
                 "sizes: not a mass-flow sim (use coag_sim_get_counts)",
             );
         };
-        let x = e.sizes();
         if len < x.len() {
             return fail(
                 crate::COAG_BUFFER_TOO_SMALL,
                 format!("sizes: buffer of {len} for {} particles", x.len()),
             );
         }
-        let out = slice_mut(buf, len, "buf")?;
+        // SAFETY: NULL checked; `len` writable doubles by contract.
+        let out = unsafe { slice_mut(buf, len, "buf") }?;
         out[..x.len()].copy_from_slice(x);
         Ok(())
     })
@@ -586,15 +662,10 @@ pub unsafe extern "C" fn coag_sim_set_sizes(
     len: usize,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        let x = slice(sizes, len, "sizes")?;
-        let Engine::MassFlow(e) = &mut s.engine else {
-            return fail(
-                COAG_UNSUPPORTED,
-                "sizes: not a mass-flow sim (use coag_sim_set_counts)",
-            );
-        };
-        e.set_sizes(x)?;
+        // SAFETY: NULL checked; live / readable by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        let x = unsafe { slice(sizes, len, "sizes") }?;
+        s.sim.set_sizes(x)?;
         Ok(())
     })
 }
@@ -613,25 +684,27 @@ pub unsafe extern "C" fn coag_sim_get_counts(
     volume: *mut f64,
 ) -> i32 {
     guard(|| {
-        let s = handle(sim, "sim")?;
-        if matches!(s.engine, Engine::MassFlow(_)) {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let State::Counts(counts, v) = s.sim.state() else {
             return fail(
                 COAG_UNSUPPORTED,
                 "counts: a mass-flow sim has sizes (use coag_sim_get_sizes)",
             );
-        }
-        let (counts, v) = counts_of(&s.engine);
+        };
         if len < counts.len() {
             return fail(
                 crate::COAG_BUFFER_TOO_SMALL,
                 format!("counts: buffer of {len} for {} sizes", counts.len()),
             );
         }
-        let out = slice_mut(buf, len, "buf")?;
+        // SAFETY: NULL checked; `len` writable values by contract.
+        let out = unsafe { slice_mut(buf, len, "buf") }?;
         out[..counts.len()].copy_from_slice(&counts);
         out[counts.len()..].iter_mut().for_each(|c| *c = 0);
         if !volume.is_null() {
-            write(volume, v);
+            // SAFETY: non-null; writable by contract.
+            unsafe { write(volume, v) };
         }
         Ok(())
     })
@@ -651,17 +724,16 @@ pub unsafe extern "C" fn coag_sim_set_counts(
     volume: f64,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        let n = slice(counts, len, "counts")?;
-        with_counts_engine!(&mut s.engine, e => e.set_counts(n, volume)?, {
-            return fail(COAG_UNSUPPORTED, "counts: a mass-flow sim has sizes (use coag_sim_set_sizes)");
-        });
+        // SAFETY: NULL checked; live / readable by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        let n = unsafe { slice(counts, len, "counts") }?;
+        s.sim.set_counts(n, volume)?;
         Ok(())
     })
 }
 
 /// Replaces the sim's coagulation kernel (e.g. new parameters between outer steps).
-/// For the low-rank method the new kernel must have the same rank.
+/// For the low-rank methods the new kernel must have the same rank.
 ///
 /// # Safety
 /// `sim` and `kernel` NULL or live.
@@ -671,17 +743,10 @@ pub unsafe extern "C" fn coag_sim_set_kernel(
     kernel: *const coag_kernel,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        let k = handle(kernel, "kernel")?.k;
-        match &mut s.engine {
-            Engine::MassFlow(e) => e.set_kernel(k),
-            Engine::LowRank1(e) => e.set_kernel(k)?,
-            Engine::LowRank2(e) => e.set_kernel(k)?,
-            Engine::LowRank3(e) => e.set_kernel(k)?,
-            Engine::LowRank4(e) => e.set_kernel(k)?,
-            Engine::Inverse(e) => e.set_kernel(k)?,
-            Engine::Rejection(e) => e.set_kernel(k)?,
-        }
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        let k = unsafe { handle(kernel, "kernel") }?.k;
+        s.sim.set_kernel(k)?;
         Ok(())
     })
 }
@@ -696,19 +761,14 @@ pub unsafe extern "C" fn coag_sim_set_fragmentation(
     frag: *const coag_fragmentation,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
         let f = if frag.is_null() {
             Fragmentation::None
         } else {
-            handle(frag, "frag")?.f
+            unsafe { handle(frag, "frag") }?.f
         };
-        let Engine::MassFlow(e) = &mut s.engine else {
-            return fail(
-                COAG_UNSUPPORTED,
-                "fragmentation: only the mass-flow scheme breaks particles",
-            );
-        };
-        e.set_fragmentation(f);
+        s.sim.set_fragmentation(f)?;
         Ok(())
     })
 }
@@ -720,14 +780,9 @@ pub unsafe extern "C" fn coag_sim_set_fragmentation(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_set_dt(sim: *mut coag_sim, dt: f64) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        let Engine::MassFlow(e) = &mut s.engine else {
-            return fail(
-                COAG_UNSUPPORTED,
-                "dt: event-driven schemes have no time step",
-            );
-        };
-        e.set_dt(dt)?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.sim.set_dt(dt)?;
         Ok(())
     })
 }
@@ -746,21 +801,24 @@ pub unsafe extern "C" fn coag_sim_set_rng_callback(
     user_data: *mut c_void,
 ) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
         s.callback = next.map(|f| (f, user_data));
         Ok(())
     })
 }
 
-/// Restarts the sim's own random stream from `seed` and `stream`.
+/// Restarts the sim's own random stream from `seed` and `stream` (the seed policy of
+/// `coagula_core::random::generator`, the same as the CLI's).
 ///
 /// # Safety
 /// `sim` NULL or live.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_reseed(sim: *mut coag_sim, seed: u64, stream: u64) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        s.pcg = Pcg64::new(seed, stream);
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.pcg = generator(seed, stream);
         Ok(())
     })
 }
@@ -769,7 +827,7 @@ fn save_sim(s: &coag_sim, w: &mut Writer) {
     for p in s.pcg.parts() {
         w.u64(p);
     }
-    with_engine!(&s.engine, e => e.save(w));
+    s.sim.save(w);
 }
 
 /// Bytes a checkpoint of the sim needs now.
@@ -778,14 +836,14 @@ fn save_sim(s: &coag_sim, w: &mut Writer) {
 /// `sim` NULL or live; `out` NULL or writable.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_checkpoint_size(sim: *const coag_sim, out: *mut usize) -> i32 {
-    guard(|| {
-        let s = handle(sim, "sim")?;
-        non_null(out, "out")?;
-        let mut w = Writer::new(&mut []);
-        save_sim(s, &mut w);
-        write(out, w.needed());
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        read(sim, out, |s| {
+            let mut w = Writer::new(&mut []);
+            save_sim(s, &mut w);
+            Ok(w.needed())
+        })
+    }
 }
 
 /// Writes the sim's full state (including its own random stream) into `buf`;
@@ -802,7 +860,8 @@ pub unsafe extern "C" fn coag_sim_checkpoint(
     written: *mut usize,
 ) -> i32 {
     guard(|| {
-        let s = handle(sim, "sim")?;
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
         let mut need = Writer::new(&mut []);
         save_sim(s, &mut need);
         if len < need.needed() {
@@ -814,12 +873,14 @@ pub unsafe extern "C" fn coag_sim_checkpoint(
                 ),
             );
         }
-        let out = slice_mut(buf, len, "buf")?;
+        // SAFETY: NULL checked; `len` writable bytes by contract.
+        let out = unsafe { slice_mut(buf, len, "buf") }?;
         let mut w = Writer::new(out);
         save_sim(s, &mut w);
         let n = w.finish()?;
         if !written.is_null() {
-            write(written, n);
+            // SAFETY: non-null; writable by contract.
+            unsafe { write(written, n) };
         }
         Ok(())
     })
@@ -833,14 +894,15 @@ pub unsafe extern "C" fn coag_sim_checkpoint(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, len: usize) -> i32 {
     guard(|| {
-        let s = handle_mut(sim, "sim")?;
-        let data = slice(buf, len, "buf")?;
+        // SAFETY: NULL checked; live / readable by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        let data = unsafe { slice(buf, len, "buf") }?;
         let mut r = Reader::new(data);
         let parts = [r.u64()?, r.u64()?, r.u64()?, r.u64()?];
         let pcg = Pcg64::from_parts(parts).ok_or(coagula_core::Error::Checkpoint {
             what: "bad random stream",
         })?;
-        with_engine!(&mut s.engine, e => e.restore(&mut r)?);
+        s.sim.restore(&mut r)?;
         s.pcg = pcg;
         Ok(())
     })

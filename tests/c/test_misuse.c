@@ -76,30 +76,57 @@ int main(void) {
     EXPECT(coag_massflow_new(&mc, k, NULL, sizes, 4, &s), COAG_INVALID_ARGUMENT);
     CHECK(s == NULL, "no sim written on error");
 
-    coag_lowrank_config lc;
-    OK(coag_lowrank_default_config(&lc));
+    coag_counts_config lc;
+    OK(coag_counts_default_config(&lc));
     uint64_t counts[2] = {0, 0};
-    EXPECT(coag_lowrank_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT); /* no particles */
-    EXPECT(coag_lowrank_new(&lc, k, counts, 0, &s), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT); /* no particles */
+    EXPECT(coag_counts_new(&lc, k, counts, 0, &s), COAG_INVALID_ARGUMENT);
     lc.method = 42;
     counts[0] = 100;
-    EXPECT(coag_lowrank_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
     lc.method = COAG_METHOD_REJECTION;
     bad.rank = 0; /* a user kernel without sup cannot do acceptance-rejection */
     coag_kernel *nk;
     OK(coag_kernel_new_user(&bad, &nk));
-    EXPECT(coag_lowrank_new(&lc, nk, counts, 2, &s), COAG_UNSUPPORTED);
+    EXPECT(coag_counts_new(&lc, nk, counts, 2, &s), COAG_UNSUPPORTED);
     lc.method = COAG_METHOD_LOWRANK; /* ... nor low-rank MC without factors */
-    EXPECT(coag_lowrank_new(&lc, nk, counts, 2, &s), COAG_UNSUPPORTED);
+    EXPECT(coag_counts_new(&lc, nk, counts, 2, &s), COAG_UNSUPPORTED);
     lc.volume = NAN;
-    EXPECT(coag_lowrank_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
+    /* configs carry their size: a zeroed or a larger-than-ours struct is refused */
+    OK(coag_counts_default_config(&lc));
+    CHECK(lc.struct_size == sizeof lc, "default config sets struct_size: %zu", lc.struct_size);
+    lc.struct_size = 0;
+    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
+    lc.struct_size = sizeof lc + 8;
+    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
+    {
+        coag_massflow_config mc;
+        OK(coag_massflow_default_config(&mc));
+        mc.struct_size = 3;
+        double x[2] = {1.0, 1.0};
+        EXPECT(coag_massflow_new(&mc, k, NULL, x, 2, &s), COAG_INVALID_ARGUMENT);
+    }
 
     /* a working sim, then every misuse on it */
-    OK(coag_lowrank_default_config(&lc));
+    OK(coag_counts_default_config(&lc));
     lc.size_limit = 64;
-    OK(coag_lowrank_new(&lc, k, counts, 2, &s));
+    OK(coag_counts_new(&lc, k, counts, 2, &s));
     EXPECT(coag_sim_advance_to(NULL, 1.0, NULL), COAG_NULL_PARAMETER);
     EXPECT(coag_sim_advance_to(s, NAN, NULL), COAG_INVALID_ARGUMENT);
+    {
+        /* a report without its size is refused before the sim moves */
+        coag_step_report rep = {0};
+        EXPECT(coag_sim_advance_to(s, 0.1, &rep), COAG_INVALID_ARGUMENT);
+        OK(coag_sim_time(s, &d));
+        CHECK(d == 0.0, "sim unchanged by a refused report: t = %g", d);
+        EXPECT(coag_step_report_init(NULL), COAG_NULL_PARAMETER);
+        OK(coag_step_report_init(&rep));
+        CHECK(rep.struct_size == sizeof rep && rep.events == 0, "report init");
+        int method = -1;
+        OK(coag_sim_method(s, &method));
+        CHECK(method == COAG_METHOD_LOWRANK, "default method is bucketed low-rank: %d", method);
+    }
     OK(coag_sim_advance_to(s, 0.5, NULL));
     EXPECT(coag_sim_advance_to(s, 0.25, NULL), COAG_TIME_BACKWARDS);
     OK(coag_sim_time(s, &d));

@@ -41,12 +41,12 @@ int main(void) {
     coag_user_kernel desc = {nan_beyond_4, NULL, 0, NULL, 0, NULL, NULL};
     coag_kernel *nk;
     OK(coag_kernel_new_user(&desc, &nk));
-    coag_lowrank_config c;
-    OK(coag_lowrank_default_config(&c));
+    coag_counts_config c;
+    OK(coag_counts_default_config(&c));
     c.method = COAG_METHOD_INVERSE;
     uint64_t counts[1] = {1000};
     coag_sim *s;
-    OK(coag_lowrank_new(&c, nk, counts, 1, &s));
+    OK(coag_counts_new(&c, nk, counts, 1, &s));
     int st = COAG_OK;
     double t = 0.0;
     while (st == COAG_OK && t < 100.0) {
@@ -64,8 +64,8 @@ int main(void) {
     coag_user_kernel over = {twice_product, NULL, 1, half_product_factors, 0, NULL, NULL};
     coag_kernel *ok;
     OK(coag_kernel_new_user(&over, &ok));
-    OK(coag_lowrank_default_config(&c));
-    OK(coag_lowrank_new(&c, ok, counts, 1, &s));
+    OK(coag_counts_default_config(&c));
+    OK(coag_counts_new(&c, ok, counts, 1, &s));
     EXPECT(coag_sim_advance_to(s, 0.3, NULL), COAG_INVALID_RATE);
     double tm = -1.0;
     OK(coag_sim_time(s, &tm));
@@ -79,9 +79,9 @@ int main(void) {
     /* item 7: restore a small-M checkpoint into the grown sim, then grow again */
     coag_kernel *add;
     OK(coag_kernel_new_additive(1.0, &add));
-    OK(coag_lowrank_default_config(&c));
+    OK(coag_counts_default_config(&c));
     uint64_t mono[1] = {2000};
-    OK(coag_lowrank_new(&c, add, mono, 1, &s));
+    OK(coag_counts_new(&c, add, mono, 1, &s));
     OK(coag_sim_advance_to(s, 0.1, NULL));
     size_t need;
     OK(coag_sim_checkpoint_size(s, &need));

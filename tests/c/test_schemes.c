@@ -31,6 +31,7 @@ static void massflow_lecot(void) {
     for (int h = 1; h <= 10; h++) {
         double t = 0.1 * h, m2, m3, e2, e3;
         coag_step_report r;
+        coag_step_report_init(&r);
         OK(coag_sim_advance_to(s, t, &r));
         CHECK(r.proposals == 10u * N, "one proposal per particle and step, got %llu", (unsigned long long)r.proposals);
         OK(coag_sim_moment(s, 2.0, &m2));
@@ -81,21 +82,22 @@ static void counts_schemes(void) {
     OK(coag_kernel_new_user(&uk, &user));
     OK(coag_kernel_new_constant(1.0, &builtin));
     const coag_kernel *kernels[2] = {builtin, user};
-    const int methods[3] = {COAG_METHOD_LOWRANK, COAG_METHOD_INVERSE, COAG_METHOD_REJECTION};
+    const int methods[4] = {COAG_METHOD_LOWRANK, COAG_METHOD_LOWRANK_TREE, COAG_METHOD_INVERSE,
+                            COAG_METHOD_REJECTION};
     double e_m0, e_n1;
     OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 2.0, &e_m0));
     OK(coag_exact_density(COAG_EXACT_CONSTANT, 1, 2.0, &e_n1));
     for (int ki = 0; ki < 2; ki++) {
-        for (int mi = 0; mi < 3; mi++) {
+        for (int mi = 0; mi < 4; mi++) {
             stats m0 = {0}, n1 = {0};
             for (int r = 0; r < REPLICAS; r++) {
-                coag_lowrank_config c;
-                OK(coag_lowrank_default_config(&c));
+                coag_counts_config c;
+                OK(coag_counts_default_config(&c));
                 c.method = methods[mi];
                 c.seed = 1000 + r;
                 uint64_t counts[1] = {1 << 13};
                 coag_sim *s;
-                OK(coag_lowrank_new(&c, kernels[ki], counts, 1, &s));
+                OK(coag_counts_new(&c, kernels[ki], counts, 1, &s));
                 /* step by step, as a host integrator would */
                 for (int h = 1; h <= 20; h++) OK(coag_sim_advance_to(s, 0.1 * h, NULL));
                 double v, vol;
@@ -108,6 +110,7 @@ static void counts_schemes(void) {
                 stats_push(&n1, (double)buf[0] / vol);
                 free(buf);
                 coag_step_report tot;
+                coag_step_report_init(&tot);
                 OK(coag_sim_totals(s, &tot));
                 CHECK(tot.bound_violations == 0, "no violations, got %llu", (unsigned long long)tot.bound_violations);
                 coag_sim_free(s);
@@ -130,12 +133,12 @@ static void change_kernel_between_steps(void) {
     OK(coag_kernel_new_constant(2.0, &k2));
     stats m0 = {0};
     for (int r = 0; r < REPLICAS; r++) {
-        coag_lowrank_config c;
-        OK(coag_lowrank_default_config(&c));
+        coag_counts_config c;
+        OK(coag_counts_default_config(&c));
         c.seed = 7 + r;
         uint64_t counts[1] = {1 << 13};
         coag_sim *s;
-        OK(coag_lowrank_new(&c, k1, counts, 1, &s));
+        OK(coag_counts_new(&c, k1, counts, 1, &s));
         OK(coag_sim_advance_to(s, 1.0, NULL));
         OK(coag_sim_set_kernel(s, k2));
         OK(coag_sim_advance_to(s, 2.0, NULL));
@@ -163,11 +166,11 @@ static void host_randomness(void) {
     OK(coag_kernel_new_brownian(&k));
     uint64_t finals[2];
     for (int rep = 0; rep < 2; rep++) {
-        coag_lowrank_config c;
-        OK(coag_lowrank_default_config(&c));
+        coag_counts_config c;
+        OK(coag_counts_default_config(&c));
         uint64_t counts[1] = {5000};
         coag_sim *s;
-        OK(coag_lowrank_new(&c, k, counts, 1, &s));
+        OK(coag_counts_new(&c, k, counts, 1, &s));
         uint64_t state = 0x9E3779B97F4A7C15ULL;
         OK(coag_sim_set_rng_callback(s, host_rng, &state));
         OK(coag_sim_advance_to(s, 1.0, NULL));
@@ -184,13 +187,13 @@ static void host_randomness(void) {
 static void checkpoint_restore(void) {
     coag_kernel *k;
     OK(coag_kernel_new_free_molecular(1.0, &k));
-    coag_lowrank_config c;
-    OK(coag_lowrank_default_config(&c));
+    coag_counts_config c;
+    OK(coag_counts_default_config(&c));
     c.seed = 99;
     uint64_t counts[1] = {20000};
     coag_sim *a, *b;
-    OK(coag_lowrank_new(&c, k, counts, 1, &a));
-    OK(coag_lowrank_new(&c, k, counts, 1, &b));
+    OK(coag_counts_new(&c, k, counts, 1, &a));
+    OK(coag_counts_new(&c, k, counts, 1, &b));
     OK(coag_sim_advance_to(a, 1.0, NULL));
     size_t need, written;
     OK(coag_sim_checkpoint_size(a, &need));
@@ -258,11 +261,11 @@ static void checkpoint_restore(void) {
 static void host_modifies_state(void) {
     coag_kernel *k;
     OK(coag_kernel_new_constant(1.0, &k));
-    coag_lowrank_config c;
-    OK(coag_lowrank_default_config(&c));
+    coag_counts_config c;
+    OK(coag_counts_default_config(&c));
     uint64_t counts[1] = {10000};
     coag_sim *s;
-    OK(coag_lowrank_new(&c, k, counts, 1, &s));
+    OK(coag_counts_new(&c, k, counts, 1, &s));
     OK(coag_sim_advance_to(s, 1.0, NULL));
     size_t len;
     OK(coag_sim_state_len(s, &len));

@@ -24,7 +24,7 @@ int main() {
     double sum = 0, sum2 = 0;
     const int reps = 32;
     for (int r = 0; r < reps; ++r) {
-        auto c = coagula::lowrank_default_config();
+        auto c = coagula::counts_default_config();
         c.seed = 31 + r;
         auto sim = coagula::Sim::lowrank(c, k, {1u << 13});
         for (int h = 1; h <= 10; ++h) sim.advance_to(0.2 * h);

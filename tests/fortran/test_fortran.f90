@@ -6,7 +6,7 @@ program test_fortran
   use coagula
   implicit none
   type(c_ptr) :: k, f, sim
-  type(coag_lowrank_config) :: lc
+  type(coag_counts_config) :: lc
   type(coag_massflow_config) :: mc
   type(coag_step_report) :: rep
   integer(c_int64_t) :: counts(1)
@@ -18,13 +18,14 @@ program test_fortran
   nfail = 0
   nchecks = 0
   call ok(coag_kernel_new_constant(1.0_c_double, k))
+  call ok(coag_step_report_init(rep))
   s1 = 0
   s2 = 0
   do r = 1, reps
-     call ok(coag_lowrank_default_config(lc))
+     call ok(coag_counts_default_config(lc))
      lc%seed = int(100 + r, c_int64_t)
      counts(1) = 8192
-     call ok(coag_lowrank_new(lc, k, counts, 1_c_size_t, sim))
+     call ok(coag_counts_new(lc, k, counts, 1_c_size_t, sim))
      do h = 1, 10
         call ok(coag_sim_advance_to(sim, 0.2_c_double * h, rep))
      end do

@@ -17,6 +17,7 @@ pub(crate) mod clock;
 pub(crate) use crate::random::{Ziggurat, exp1, open_unit};
 pub mod lowrank;
 pub mod massflow;
+pub mod registry;
 
 use crate::error::Result;
 use rand_core::Rng;

@@ -1,0 +1,528 @@
+//! The object-safe facade over every scheme, and the one registry that builds them.
+//!
+//! The C ABI, the CLI and the conformance tests reach every scheme through
+//! [`Simulation`] trait objects made by [`build`]; the list of schemes is [`SCHEMES`].
+//! Adding a scheme is one entry in [`SCHEMES`], one arm in [`build`] and one
+//! [`Facet`] impl (what the scheme can read and replace) — the front ends pick it up.
+//!
+//! The facade is generic over the kernel type `K`, the fragmentation kernel `F` and the
+//! generator `G`, so a front end fixes them once (the C ABI: its kernel handles and its
+//! random source; the CLI: the built-in kernels and [`crate::random::Pcg64`]). Dispatch
+//! is dynamic per call (`advance_to`, an observation), never per random draw or kernel
+//! evaluation: inside a call the scheme runs monomorphised.
+//!
+//! # Example
+//! ```
+//! use coagula_core::kernel::{Coagulation, NoFragmentation};
+//! use coagula_core::random::{Pcg64, generator};
+//! use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+//! let k = Coagulation::constant(1.0).unwrap();
+//! let init = Init::Counts { counts: &[10_000], volume: 10_000.0 };
+//! let mut rng = generator(7, 0);
+//! // the same set-up on every size-count scheme of the registry
+//! for info in registry::SCHEMES.iter().filter(|s| s.accepts(&init)) {
+//!     let mut sim: Box<dyn Simulation<_, _, Pcg64>> =
+//!         registry::build(info.id, k, NoFragmentation, &init, &Options::default()).unwrap();
+//!     sim.advance_to(1.0, &mut rng).unwrap();
+//!     // N(t)/V = 1/(1 + t/2) for K = 1
+//!     assert!((sim.moment(0.0) - 1.0 / 1.5).abs() < 0.02, "{}", info.name);
+//! }
+//! ```
+
+use super::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use super::massflow::{MassFlow, PointSource, Sorting};
+use super::{Scheme, StepReport};
+use crate::checkpoint::{Checkpoint, Reader, Writer};
+use crate::error::{Error, Result};
+use crate::kernel::{CoagulationKernel, FragmentationKernel};
+use crate::observe::Observe;
+use alloc::borrow::Cow;
+use alloc::boxed::Box;
+use core::marker::PhantomData;
+use rand_core::Rng;
+
+/// Identifies a scheme of the registry.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum SchemeId {
+    /// Lécot et al. 2019: time-driven mass flow (QMC, MC, RQMC).
+    MassFlow,
+    /// Osinsky 2023: low-rank MC, bucketed layout (the default low-rank layout).
+    LowRank,
+    /// Osinsky 2023: low-rank MC with the paper's per-size trees (8-ary layout).
+    LowRankTree,
+    /// The inverse method (Gillespie on sizes), low-rank's baseline.
+    Inverse,
+    /// Acceptance–rejection with the kernel's supremum, low-rank's baseline.
+    Rejection,
+}
+
+/// What a scheme's state is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StateKind {
+    /// Particle sizes (read with [`State::Sizes`], replaced with `set_sizes`).
+    Sizes,
+    /// Counts `N_i` of integer sizes in a volume (`set_counts`).
+    Counts,
+}
+
+/// One registered scheme.
+#[derive(Clone, Copy, Debug)]
+pub struct SchemeInfo {
+    /// Its identifier.
+    pub id: SchemeId,
+    /// Its name in the CLI and the C ABI's documentation.
+    pub name: &'static str,
+    /// Its state.
+    pub state: StateKind,
+    /// What it is, in one line.
+    pub summary: &'static str,
+}
+
+impl SchemeInfo {
+    /// Whether the scheme starts from `init` (counts or sizes).
+    pub fn accepts(&self, init: &Init<'_>) -> bool {
+        matches!(
+            (self.state, init),
+            (StateKind::Counts, Init::Counts { .. }) | (StateKind::Sizes, Init::Sizes { .. })
+        )
+    }
+}
+
+/// Every scheme, in the order front ends list them.
+pub const SCHEMES: &[SchemeInfo] = &[
+    SchemeInfo {
+        id: SchemeId::MassFlow,
+        name: "massflow",
+        state: StateKind::Sizes,
+        summary: "Lecot et al. 2019: time-driven mass flow, QMC/MC/RQMC, coagulation-fragmentation",
+    },
+    SchemeInfo {
+        id: SchemeId::LowRank,
+        name: "lowrank",
+        state: StateKind::Counts,
+        summary: "Osinsky 2023: low-rank Monte Carlo, bucketed layout (the default)",
+    },
+    SchemeInfo {
+        id: SchemeId::LowRankTree,
+        name: "lowrank-tree",
+        state: StateKind::Counts,
+        summary: "Osinsky 2023: low-rank Monte Carlo with per-size segment trees",
+    },
+    SchemeInfo {
+        id: SchemeId::Inverse,
+        name: "inverse",
+        state: StateKind::Counts,
+        summary: "inverse method (Gillespie on sizes), the low-rank baseline",
+    },
+    SchemeInfo {
+        id: SchemeId::Rejection,
+        name: "rejection",
+        state: StateKind::Counts,
+        summary: "acceptance-rejection with the kernel's supremum, the low-rank baseline",
+    },
+];
+
+impl SchemeId {
+    /// The registry entry.
+    pub fn info(self) -> &'static SchemeInfo {
+        SCHEMES.iter().find(|s| s.id == self).unwrap_or(&SCHEMES[0])
+    }
+
+    /// The name (`"lowrank"`, ...).
+    pub fn name(self) -> &'static str {
+        self.info().name
+    }
+
+    /// The scheme of a name, if registered.
+    pub fn from_name(name: &str) -> Option<Self> {
+        SCHEMES.iter().find(|s| s.name == name).map(|s| s.id)
+    }
+}
+
+/// The initial state.
+#[derive(Clone, Copy, Debug)]
+pub enum Init<'a> {
+    /// `counts[i − 1] = N_i` particles of size i in volume `volume`.
+    Counts {
+        /// The counts.
+        counts: &'a [u64],
+        /// The volume V > 0.
+        volume: f64,
+    },
+    /// Particle sizes carrying the total mass `mass` (mass-flow schemes).
+    Sizes {
+        /// The sizes (each finite and > 0).
+        sizes: &'a [f64],
+        /// The mass M1 > 0 they carry.
+        mass: f64,
+    },
+}
+
+/// Settings of [`build`]; each scheme reads the ones that apply to it.
+#[derive(Clone, Debug)]
+#[non_exhaustive]
+pub struct Options {
+    /// Largest particle size (size-count schemes).
+    pub size_limit: u64,
+    /// Memory budget in bytes of the growing schemes.
+    pub memory_budget: usize,
+    /// Time step (time-driven schemes).
+    pub dt: f64,
+    /// Point source (mass flow).
+    pub points: PointSource,
+    /// Sorting strategy (mass flow).
+    pub sorting: Sorting,
+}
+
+impl Default for Options {
+    /// Size limit 2^32, memory budget 2 GiB, Δt = 0.01, Niederreiter points, adaptive
+    /// sorting.
+    fn default() -> Self {
+        Options {
+            size_limit: super::lowrank::DEFAULT_SIZE_LIMIT,
+            memory_budget: super::lowrank::DEFAULT_MEMORY_BUDGET,
+            dt: 0.01,
+            points: PointSource::niederreiter(),
+            sorting: Sorting::Adaptive,
+        }
+    }
+}
+
+impl Options {
+    /// Sets the size limit.
+    pub fn with_size_limit(mut self, limit: u64) -> Self {
+        self.size_limit = limit;
+        self
+    }
+    /// Sets the memory budget in bytes.
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.memory_budget = bytes;
+        self
+    }
+    /// Sets the time step.
+    pub fn with_dt(mut self, dt: f64) -> Self {
+        self.dt = dt;
+        self
+    }
+    /// Sets the point source.
+    pub fn with_points(mut self, points: PointSource) -> Self {
+        self.points = points;
+        self
+    }
+    /// Sets the sorting strategy.
+    pub fn with_sorting(mut self, sorting: Sorting) -> Self {
+        self.sorting = sorting;
+        self
+    }
+}
+
+/// A scheme's state, read through the facade.
+#[derive(Clone, Debug)]
+pub enum State<'a> {
+    /// Particle sizes, ascending.
+    Sizes(&'a [f64]),
+    /// Counts, `N_i` at index `i − 1`, and the volume.
+    Counts(Cow<'a, [u64]>, f64),
+}
+
+/// Every scheme behind one object-safe interface (see the module docs).
+pub trait Simulation<K, F, G: ?Sized>: Observe {
+    /// Which scheme this is.
+    fn id(&self) -> SchemeId;
+    /// Current time.
+    fn time(&self) -> f64;
+    /// [`Scheme::advance_to`].
+    fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport>;
+    /// The state (sizes or counts).
+    fn state(&self) -> State<'_>;
+    /// Largest size the state can hold now (size-count schemes' M), if any.
+    fn max_size(&self) -> Option<u64>;
+    /// Replaces counts and volume (size-count schemes; others: `Unsupported`).
+    fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>;
+    /// Replaces the sizes (mass flow; others: `Unsupported`).
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()>;
+    /// Replaces the coagulation kernel.
+    fn set_kernel(&mut self, kernel: K) -> Result<()>;
+    /// Replaces the fragmentation kernel (mass flow; others: `Unsupported`).
+    fn set_fragmentation(&mut self, frag: F) -> Result<()>;
+    /// Changes the time step (time-driven schemes; others: `Unsupported`).
+    fn set_dt(&mut self, dt: f64) -> Result<()>;
+    /// Writes the full state ([`Checkpoint::save`]).
+    fn save(&self, w: &mut Writer);
+    /// Restores a state written by `save` of the same scheme and set-up.
+    fn restore(&mut self, r: &mut Reader) -> Result<()>;
+}
+
+/// What a scheme exposes to the facade beyond [`Scheme`], [`Observe`] and
+/// [`Checkpoint`]: its state and what can be replaced. The defaults refuse.
+pub trait Facet<K, F> {
+    /// The state.
+    fn state(&self) -> State<'_>;
+    /// Largest size the state can hold now.
+    fn max_size(&self) -> Option<u64> {
+        None
+    }
+    /// Replaces counts and volume.
+    fn set_counts(&mut self, _counts: &[u64], _volume: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "counts: this scheme's state is particle sizes (use set_sizes)",
+        })
+    }
+    /// Replaces the sizes.
+    fn set_sizes(&mut self, _sizes: &[f64]) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "sizes: this scheme's state is counts of integer sizes (use set_counts)",
+        })
+    }
+    /// Replaces the coagulation kernel.
+    fn set_kernel(&mut self, kernel: K) -> Result<()>;
+    /// Replaces the fragmentation kernel.
+    fn set_fragmentation(&mut self, _frag: F) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "fragmentation: only the mass-flow scheme breaks particles",
+        })
+    }
+    /// Changes the time step.
+    fn set_dt(&mut self, _dt: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "dt: event-driven schemes have no time step",
+        })
+    }
+}
+
+/// A registered scheme behind the facade.
+struct Entry<S, K, F> {
+    s: S,
+    id: SchemeId,
+    _kf: PhantomData<fn(K, F)>,
+}
+
+impl<S: Observe, K, F> Observe for Entry<S, K, F> {
+    fn volume(&self) -> f64 {
+        self.s.volume()
+    }
+    fn particles(&self) -> u64 {
+        self.s.particles()
+    }
+    fn moment(&self, order: f64) -> f64 {
+        self.s.moment(order)
+    }
+    fn concentration(&self, a: f64, b: f64) -> f64 {
+        self.s.concentration(a, b)
+    }
+    fn number_density(&self, x: f64) -> f64 {
+        self.s.number_density(x)
+    }
+    fn gel_mass(&self) -> Option<f64> {
+        self.s.gel_mass()
+    }
+    fn totals(&self) -> StepReport {
+        self.s.totals()
+    }
+}
+
+impl<S, K, F, G> Simulation<K, F, G> for Entry<S, K, F>
+where
+    S: Scheme + Observe + Checkpoint + Facet<K, F>,
+    G: Rng + ?Sized,
+{
+    fn id(&self) -> SchemeId {
+        self.id
+    }
+    fn time(&self) -> f64 {
+        self.s.time()
+    }
+    fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport> {
+        self.s.advance_to(t, rng)
+    }
+    fn state(&self) -> State<'_> {
+        self.s.state()
+    }
+    fn max_size(&self) -> Option<u64> {
+        self.s.max_size()
+    }
+    fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+        self.s.set_counts(counts, volume)
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        self.s.set_sizes(sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        self.s.set_kernel(kernel)
+    }
+    fn set_fragmentation(&mut self, frag: F) -> Result<()> {
+        self.s.set_fragmentation(frag)
+    }
+    fn set_dt(&mut self, dt: f64) -> Result<()> {
+        self.s.set_dt(dt)
+    }
+    fn save(&self, w: &mut Writer) {
+        self.s.save(w)
+    }
+    fn restore(&mut self, r: &mut Reader) -> Result<()> {
+        self.s.restore(r)
+    }
+}
+
+/// The kernel types the registry accepts.
+pub trait RegistryKernel: CoagulationKernel + Clone + 'static {}
+impl<K: CoagulationKernel + Clone + 'static> RegistryKernel for K {}
+
+fn boxed<S, K, F, G>(s: S, id: SchemeId) -> Box<dyn Simulation<K, F, G>>
+where
+    S: Scheme + Observe + Checkpoint + Facet<K, F> + 'static,
+    K: 'static,
+    F: 'static,
+    G: Rng + ?Sized + 'static,
+{
+    Box::new(Entry {
+        s,
+        id,
+        _kf: PhantomData,
+    })
+}
+
+/// Runs `$body` with `$R` (and `$W = 2R`) bound to the kernel's rank, 1..=4.
+macro_rules! by_rank {
+    ($rank:expr, $R:ident, $W:ident => $body:expr) => {
+        match $rank {
+            1 => {
+                const $R: usize = 1;
+                const $W: usize = 2;
+                $body
+            }
+            2 => {
+                const $R: usize = 2;
+                const $W: usize = 4;
+                $body
+            }
+            3 => {
+                const $R: usize = 3;
+                const $W: usize = 6;
+                $body
+            }
+            4 => {
+                const $R: usize = 4;
+                const $W: usize = 8;
+                $body
+            }
+            _ => Err(Error::Unsupported {
+                what: "low-rank schemes: the kernel needs a low-rank bound of rank 1..4",
+            }),
+        }
+    };
+}
+
+/// Builds scheme `id` from `init` with `opts` — the one place that names every scheme.
+///
+/// Errors: `init` is of the other kind (counts for a sizes scheme or the reverse), the
+/// kernel lacks the bound the scheme needs (`Unsupported`), or the scheme's own
+/// constructor refuses the set-up.
+pub fn build<K, F, G>(
+    id: SchemeId,
+    kernel: K,
+    frag: F,
+    init: &Init<'_>,
+    opts: &Options,
+) -> Result<Box<dyn Simulation<K, F, G>>>
+where
+    K: RegistryKernel,
+    F: FragmentationKernel + Clone + 'static,
+    G: Rng + ?Sized + 'static,
+{
+    if !id.info().accepts(init) {
+        return Err(Error::Unsupported {
+            what: "initial state of the other kind (counts vs sizes) for this scheme",
+        });
+    }
+    match (id, *init) {
+        (SchemeId::MassFlow, Init::Sizes { sizes, mass }) => {
+            let s = MassFlow::new(kernel, frag, sizes, mass, opts.dt, opts.points.clone())?
+                .with_sorting(opts.sorting);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::LowRank, Init::Counts { counts, volume }) => {
+            by_rank!(kernel.rank(), R, W => {
+                let s = Bucketed::<K, R, W>::new(kernel, counts, volume)?
+                    .with_size_limit(opts.size_limit)
+                    .with_memory_budget(opts.memory_budget);
+                Ok(boxed::<_, K, F, G>(s, id))
+            })
+        }
+        (SchemeId::LowRankTree, Init::Counts { counts, volume }) => {
+            by_rank!(kernel.rank(), R, W => {
+                let _ = W;
+                let s = LowRank::<K, R>::new(kernel, counts, volume)?
+                    .with_size_limit(opts.size_limit)
+                    .with_memory_budget(opts.memory_budget);
+                Ok(boxed::<_, K, F, G>(s, id))
+            })
+        }
+        (SchemeId::Inverse, Init::Counts { counts, volume }) => {
+            let s = Inverse::new(kernel, counts, volume)?
+                .with_size_limit(opts.size_limit)
+                .with_memory_budget(opts.memory_budget);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::Rejection, Init::Counts { counts, volume }) => {
+            let s = AcceptanceRejection::new_with_memory_budget(
+                kernel,
+                counts,
+                volume,
+                opts.memory_budget,
+            )?
+            .with_size_limit(opts.size_limit);
+            Ok(boxed(s, id))
+        }
+        _ => Err(Error::Unsupported {
+            what: "initial state of the other kind for this scheme",
+        }),
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel> Facet<K, F> for MassFlow<K, F> {
+    fn state(&self) -> State<'_> {
+        State::Sizes(self.sizes())
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        MassFlow::set_sizes(self, sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        MassFlow::set_kernel(self, kernel);
+        Ok(())
+    }
+    fn set_fragmentation(&mut self, frag: F) -> Result<()> {
+        MassFlow::set_fragmentation(self, frag);
+        Ok(())
+    }
+    fn set_dt(&mut self, dt: f64) -> Result<()> {
+        MassFlow::set_dt(self, dt)
+    }
+}
+
+/// [`Facet`] of a size-count scheme from its inherent methods.
+macro_rules! counts_facet {
+    ([$($g:tt)*] $ty:ty, $counts:expr) => {
+        impl<$($g)*, F> Facet<K, F> for $ty {
+            fn state(&self) -> State<'_> {
+                let f: fn(&Self) -> Cow<'_, [u64]> = $counts;
+                State::Counts(f(self), self.volume())
+            }
+            fn max_size(&self) -> Option<u64> {
+                Some(self.max_size() as u64)
+            }
+            fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+                <$ty>::set_counts(self, counts, volume)
+            }
+            fn set_kernel(&mut self, kernel: K) -> Result<()> {
+                <$ty>::set_kernel(self, kernel)
+            }
+        }
+    };
+}
+
+counts_facet!([K: CoagulationKernel + Clone, const R: usize, const W: usize] Bucketed<K, R, W>, |s| Cow::Owned(s.counts()));
+counts_facet!([K: CoagulationKernel, const R: usize, T: super::lowrank::ProposalTree<R>] LowRank<K, R, T>, |s| Cow::Borrowed(s.counts()));
+counts_facet!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
+counts_facet!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));
