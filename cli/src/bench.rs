@@ -1,12 +1,8 @@
 //! `coagula bench lowrank`: Osinsky's tables 1–3 rerun side by side with the paper.
 
-use coagula_core::kernel::{Coagulation, CoagulationKernel};
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{
-    AcceptanceRejection, BinaryTree, Bucketed, Inverse, LowRank, ProposalTree, WideTree,
-};
-use rand_pcg::Pcg64Mcg;
-use rand_pcg::rand_core::SeedableRng;
+use coagula_core::kernel::{Coagulation, NoFragmentation};
+use coagula_core::random::{Pcg64, generator};
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
 use std::time::{Duration, Instant};
 
 /// One row of the paper's tables: time, max size M, seconds (inverse, AR, low-rank;
@@ -67,20 +63,22 @@ pub struct Cell {
     pub max_size: u64,
 }
 
+/// The facade as the CLI instantiates it.
+type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64>;
+
+/// Scheme `id` from `n0` monomers in volume n0, through the registry.
+fn monodisperse(id: SchemeId, k: Coagulation, n0: u64) -> Result<Box<Sim>, coagula_core::Error> {
+    let init = Init::Counts {
+        counts: &[n0],
+        volume: n0 as f64,
+    };
+    registry::build(id, k, NoFragmentation, &init, &Options::default())
+}
+
 /// Runs a scheme through the checkpoints, stopping (None for the rest) once the wall
 /// clock passes `budget`. Time is advanced in slices so the budget is checked often.
-fn run_checkpoints<S, F>(
-    sim: &mut S,
-    times: &[f64],
-    budget: Duration,
-    seed: u64,
-    max_size: F,
-) -> Vec<Option<Cell>>
-where
-    S: Scheme,
-    F: Fn(&S) -> u64,
-{
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+fn run_checkpoints(sim: &mut Sim, times: &[f64], budget: Duration, seed: u64) -> Vec<Option<Cell>> {
+    let mut rng = generator(seed, 0);
     let start = Instant::now();
     let mut collisions = 0u64;
     let mut out = Vec::new();
@@ -113,7 +111,7 @@ where
             out.push(Some(Cell {
                 seconds: start.elapsed().as_secs_f64(),
                 collisions,
-                max_size: max_size(sim),
+                max_size: sim.max_size().unwrap_or(0),
             }));
         }
     }
@@ -153,37 +151,15 @@ pub fn lowrank(
             continue;
         }
         let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
-        let (lr, tree, ar, inv) = match name {
-            "brownian" => bench_kernel::<_, 2, 4>(
-                Coagulation::brownian(),
-                n0,
-                &times,
-                budgets,
-                skip_baselines,
-                repeat,
-                seed,
-            ),
-            "ballistic" => bench_kernel::<_, 3, 6>(
-                Coagulation::free_molecular()
-                    .with_min_size(1.0)
-                    .expect("valid"),
-                n0,
-                &times,
-                budgets,
-                skip_baselines,
-                repeat,
-                seed,
-            ),
-            _ => bench_kernel::<_, 1, 2>(
-                Coagulation::additive(),
-                n0,
-                &times,
-                budgets,
-                skip_baselines,
-                repeat,
-                seed,
-            ),
+        let kernel = match name {
+            "brownian" => Coagulation::brownian(),
+            "ballistic" => Coagulation::free_molecular()
+                .with_min_size(1.0)
+                .expect("valid"),
+            _ => Coagulation::additive(),
         };
+        let (lr, tree, ar, inv) =
+            bench_kernel(kernel, n0, &times, budgets, skip_baselines, repeat, seed);
         println!();
         println!("{name}");
         println!(
@@ -248,8 +224,8 @@ pub fn lowrank(
 
 type Cells = Vec<Option<Cell>>;
 
-fn bench_kernel<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-    kernel: K,
+fn bench_kernel(
+    kernel: Coagulation,
     n0: u64,
     times: &[f64],
     budgets: Budgets,
@@ -258,10 +234,13 @@ fn bench_kernel<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
     seed: u64,
 ) -> (Cells, Cells, Cells, Cells) {
     let day = Duration::from_secs(24 * 3600);
+    let run = |id: SchemeId, budget: Duration, seed: u64| {
+        let mut s = monodisperse(id, kernel, n0).expect("valid set-up");
+        run_checkpoints(&mut *s, times, budget, seed)
+    };
     let mut lr_cells: Cells = vec![None; times.len()];
     for k in 0..u64::from(repeat) {
-        let mut lr = Bucketed::<K, R, W>::monodisperse(kernel, n0).expect("valid low-rank set-up");
-        let cells = run_checkpoints(&mut lr, times, day, seed + 10 * k, |s| s.max_size() as u64);
+        let cells = run(SchemeId::LowRank, day, seed + 10 * k);
         for (best, c) in lr_cells.iter_mut().zip(cells) {
             *best = match (*best, c) {
                 (Some(b), Some(c)) if b.seconds <= c.seconds => Some(b),
@@ -269,102 +248,57 @@ fn bench_kernel<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
             };
         }
     }
-    let mut tree = LowRank::<K, R>::monodisperse(kernel, n0).expect("valid low-rank set-up");
-    let tree_cells = run_checkpoints(&mut tree, times, day, seed + 3, |s| s.max_size() as u64);
-    drop(tree);
+    let tree_cells = run(SchemeId::LowRankTree, day, seed + 3);
     let none = vec![None; times.len()];
     if skip_baselines {
         return (lr_cells, tree_cells, none.clone(), none);
     }
-    let mut ar = AcceptanceRejection::monodisperse(kernel, n0).expect("valid AR set-up");
-    let ar_cells = run_checkpoints(
-        &mut ar,
-        times,
+    let ar_cells = run(
+        SchemeId::Rejection,
         Duration::from_secs_f64(budgets.ar),
         seed + 1,
-        |s| s.max_size(),
     );
-    drop(ar);
     if budgets.inverse <= 0.0 {
         return (lr_cells, tree_cells, ar_cells, none);
     }
-    let mut inv = Inverse::monodisperse(kernel, n0).expect("valid inverse set-up");
-    let inv_cells = run_checkpoints(
-        &mut inv,
-        times,
+    let inv_cells = run(
+        SchemeId::Inverse,
         Duration::from_secs_f64(budgets.inverse),
         seed + 2,
-        |s| s.max_size(),
     );
     (lr_cells, tree_cells, ar_cells, inv_cells)
 }
 
 /// Low-rank only, one kernel, to one time: for profiling.
 pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool, bucketed: bool) {
+    let kernel = match name {
+        "brownian" => Coagulation::brownian(),
+        "ballistic" => Coagulation::free_molecular()
+            .with_min_size(1.0)
+            .expect("valid"),
+        _ => Coagulation::additive(),
+    };
+    let id = match (bucketed, binary) {
+        (true, _) => SchemeId::LowRank,
+        (false, true) => SchemeId::LowRankBinaryTree,
+        (false, false) => SchemeId::LowRankTree,
+    };
     let start = Instant::now();
-    let fm = Coagulation::free_molecular()
-        .with_min_size(1.0)
-        .expect("valid");
-    let (events, m) = if bucketed {
-        match name {
-            "brownian" => single_b::<_, 2, 4>(Coagulation::brownian(), n0, t, seed),
-            "ballistic" => single_b::<_, 3, 6>(fm, n0, t, seed),
-            _ => single_b::<_, 1, 2>(Coagulation::additive(), n0, t, seed),
-        }
-    } else {
-        match (name, binary) {
-            ("brownian", false) => {
-                single::<_, 2, WideTree<2>>(Coagulation::brownian(), n0, t, seed)
-            }
-            ("brownian", true) => {
-                single::<_, 2, BinaryTree<2>>(Coagulation::brownian(), n0, t, seed)
-            }
-            ("ballistic", false) => single::<_, 3, WideTree<3>>(fm, n0, t, seed),
-            ("ballistic", true) => single::<_, 3, BinaryTree<3>>(fm, n0, t, seed),
-            (_, false) => single::<_, 1, WideTree<1>>(Coagulation::additive(), n0, t, seed),
-            (_, true) => single::<_, 1, BinaryTree<1>>(Coagulation::additive(), n0, t, seed),
-        }
-    };
+    let mut sim = monodisperse(id, kernel, n0).expect("valid");
+    let mut rng = generator(seed, 0);
+    let rep = sim.advance_to(t, &mut rng).expect("runs");
     let s = start.elapsed().as_secs_f64();
-    let tree = if bucketed {
-        "bucketed"
-    } else if binary {
-        "binary"
-    } else {
-        "wide"
-    };
-    println!(
-        "{name} t={t} ({tree} tree): {events} collisions, M={m}, {s:.3} s, {:.3e} coll/s",
-        events as f64 / s
-    );
-}
-
-fn single<K: CoagulationKernel, const R: usize, T: ProposalTree<R>>(
-    k: K,
-    n0: u64,
-    t: f64,
-    seed: u64,
-) -> (u64, usize) {
-    let mut sim = LowRank::<K, R, T>::monodisperse(k, n0).expect("valid");
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    let rep = sim.advance_to(t, &mut rng).expect("runs");
-    (rep.events, sim.max_size())
-}
-
-fn single_b<K: CoagulationKernel, const R: usize, const W: usize>(
-    k: K,
-    n0: u64,
-    t: f64,
-    seed: u64,
-) -> (u64, usize) {
-    let mut sim = Bucketed::<K, R, W>::monodisperse(k, n0).expect("valid");
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    let rep = sim.advance_to(t, &mut rng).expect("runs");
     eprintln!(
         "proposals {} rejections {} violations {}",
         rep.proposals, rep.rejections, rep.bound_violations
     );
-    (rep.events, sim.max_size())
+    println!(
+        "{name} t={t} ({}): {} collisions, M={}, {s:.3} s, {:.3e} coll/s",
+        id.name(),
+        rep.events,
+        sim.max_size().unwrap_or(0),
+        rep.events as f64 / s
+    );
 }
 
 /// `coagula bench lowrank-small`: the per-size tree and the bucketed layout on many
@@ -401,21 +335,23 @@ pub fn lowrank_small(
         let mut init = vec![0u64; len];
         init[0] = n0;
         let v = n0 as f64;
-        for layout in ["tree", "bucketed"] {
+        for (layout, id) in [
+            ("tree", SchemeId::LowRankTree),
+            ("bucketed", SchemeId::LowRank),
+        ] {
             let start = Instant::now();
             let (mut prop, mut ev) = (0u64, 0u64);
             let mut st = coagula_core::observe::Replicas::new();
             for r in 0..replicas {
-                let mut rng = Pcg64Mcg::seed_from_u64(r ^ (n0 << 32));
-                let (rep, nv) = if layout == "tree" {
-                    let mut s = LowRank::<_, 1>::new(k, &init, v)?;
-                    let rep = s.advance_to(t, &mut rng)?;
-                    (rep, s.particles() as f64 / s.volume())
-                } else {
-                    let mut s = Bucketed::<_, 1, 2>::new(k, &init, v)?;
-                    let rep = s.advance_to(t, &mut rng)?;
-                    (rep, s.particles() as f64 / s.volume())
+                let mut rng = generator(r ^ (n0 << 32), 0);
+                let init = Init::Counts {
+                    counts: &init,
+                    volume: v,
                 };
+                let mut s: Box<Sim> =
+                    registry::build(id, k, NoFragmentation, &init, &Options::default())?;
+                let rep = s.advance_to(t, &mut rng)?;
+                let nv = s.particles() as f64 / s.volume();
                 prop += rep.proposals;
                 ev += rep.events;
                 st.push(nv);

@@ -9,10 +9,9 @@ use coagula_core::kernel::{
 use coagula_core::observe::Replicas;
 use coagula_core::observe::{TEST_ALPHA, student_t_threshold};
 use coagula_core::qmc::Randomization;
+use coagula_core::random::{Purpose, generator, substream};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
-use rand_pcg::Pcg64Mcg;
-use rand_pcg::rand_core::SeedableRng;
 use rayon::prelude::*;
 
 /// Which points drive the scheme.
@@ -30,7 +29,7 @@ pub enum Points {
 
 impl Points {
     pub fn source(self, seed: u64) -> PointSource {
-        let mut rng = Pcg64Mcg::seed_from_u64(seed ^ 0x5eed_0000_0000_0001);
+        let mut rng = substream(seed, 0, Purpose::Scrambling);
         match self {
             Points::Qmc => PointSource::niederreiter(),
             Points::Sobol => PointSource::sobol(),
@@ -76,7 +75,7 @@ pub fn trajectory<K: CoagulationKernel, F: FragmentationKernel>(
         t_end / f64::from(steps),
         points.source(seed),
     )?;
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
+    let mut rng = generator(seed, 0);
     let mut out = Vec::with_capacity(checkpoints as usize);
     for h in 1..=checkpoints {
         let t = t_end * f64::from(h) / f64::from(checkpoints);
@@ -516,7 +515,7 @@ fn exact_cases(quick: bool, out: &mut Vec<crate::validate::Case>) {
                     Points::Rqmc.source(s + 7),
                 )
                 .expect("valid");
-                sim.advance_to(1.0, &mut Pcg64Mcg::new(1)).expect("runs");
+                sim.advance_to(1.0, &mut generator(1, 0)).expect("runs");
                 (sim.moment(0.0), sim.moment(2.0))
             })
             .collect();

@@ -1,13 +1,11 @@
 //! `coagula validate`: rerun the reproduction cases and compare with references.
 
 use coagula_core::exact::Exact;
-use coagula_core::kernel::{Coagulation, CoagulationKernel};
-use coagula_core::observe::{Replicas, moment_of_counts};
+use coagula_core::kernel::{Coagulation, NoFragmentation};
+use coagula_core::observe::Replicas;
 use coagula_core::observe::{TEST_ALPHA, student_t_threshold};
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
-use rand_pcg::Pcg64Mcg;
-use rand_pcg::rand_core::SeedableRng;
+use coagula_core::random::{Pcg64, generator};
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -63,61 +61,21 @@ pub fn run(quick: bool, json: bool) -> bool {
     all
 }
 
-#[derive(Clone, Copy)]
-enum Method {
-    LowRank,
-    Bucketed,
-    Rejection,
-    Inverse,
-}
-
-impl Method {
-    fn name(self) -> &'static str {
-        match self {
-            Method::LowRank => "lowrank",
-            Method::Bucketed => "lowrank-bucketed",
-            Method::Rejection => "rejection",
-            Method::Inverse => "inverse",
-        }
-    }
-}
-
-/// `(n_1, M0)` at time t from `n0` monomers, one replica.
-fn one<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-    method: Method,
-    k: K,
-    n0: u64,
-    t: f64,
-    seed: u64,
-) -> (f64, f64) {
-    let mut rng = Pcg64Mcg::seed_from_u64(seed);
-    let (counts, v) = match method {
-        Method::LowRank => {
-            let mut s = LowRank::<K, R>::monodisperse(k, n0).expect("valid");
-            s.advance_to(t, &mut rng).expect("runs");
-            (s.counts().to_vec(), s.volume())
-        }
-        Method::Bucketed => {
-            let mut s = Bucketed::<K, R, W>::monodisperse(k, n0).expect("valid");
-            s.advance_to(t, &mut rng).expect("runs");
-            (s.counts(), s.volume())
-        }
-        Method::Rejection => {
-            let mut s = AcceptanceRejection::monodisperse(k, n0).expect("valid");
-            s.advance_to(t, &mut rng).expect("runs");
-            (s.counts(), s.volume())
-        }
-        Method::Inverse => {
-            let mut s = Inverse::monodisperse(k, n0).expect("valid");
-            s.advance_to(t, &mut rng).expect("runs");
-            (s.counts(), s.volume())
-        }
+/// `(n_1, M0)` at time t from `n0` monomers, one replica of scheme `id`.
+fn one(id: SchemeId, k: Coagulation, n0: u64, t: f64, seed: u64) -> (f64, f64) {
+    let mut rng = generator(seed, 0);
+    let init = Init::Counts {
+        counts: &[n0],
+        volume: n0 as f64,
     };
-    (
-        counts.first().copied().unwrap_or(0) as f64 / v,
-        moment_of_counts(&counts, v, 0.0),
-    )
+    let mut s: Box<Sim> =
+        registry::build(id, k, NoFragmentation, &init, &Options::default()).expect("valid");
+    s.advance_to(t, &mut rng).expect("runs");
+    (s.number_density(1.0), s.moment(0.0))
 }
+
+/// The facade as the CLI instantiates it.
+type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64>;
 
 fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
     let n0: u64 = if quick { 1 << 13 } else { 1 << 16 };
@@ -138,15 +96,14 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
         ),
     ];
     for (name, k, e, t) in setups {
-        for method in [
-            Method::LowRank,
-            Method::Bucketed,
-            Method::Rejection,
-            Method::Inverse,
-        ] {
+        let counts = Init::Counts {
+            counts: &[1],
+            volume: 1.0,
+        };
+        for info in registry::SCHEMES.iter().filter(|s| s.accepts(&counts)) {
             let vals: Vec<(f64, f64)> = (0..reps)
                 .into_par_iter()
-                .map(|s| one::<_, 1, 2>(method, k, n0, t, s * 7919 + 1))
+                .map(|s| one(info.id, k, n0, t, s * 7919 + 1))
                 .collect();
             for (q, idx, exact) in [
                 ("n_1", 0, e.number_density(1, t).expect("valid")),
@@ -162,7 +119,7 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
                 out.push(Case {
                     case: format!(
                         "osinsky2023/{}-{name}-N0=2^{}",
-                        method.name(),
+                        info.name,
                         n0.trailing_zeros()
                     ),
                     quantity: format!(
@@ -186,50 +143,27 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
             ("linear", 1.0, 7.6e6),
         ];
         for (name, t, paper) in rows {
-            let mut rng = Pcg64Mcg::new(99);
             let n0 = 10_000_000;
-            let fm = Coagulation::free_molecular()
-                .with_min_size(1.0)
-                .expect("valid");
-            for bucketed in [false, true] {
-                let events = match (name, bucketed) {
-                    ("brownian", false) => {
-                        let mut s = LowRank::<_, 2>::monodisperse(Coagulation::brownian(), n0)
-                            .expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                    ("brownian", true) => {
-                        let mut s = Bucketed::<_, 2, 4>::monodisperse(Coagulation::brownian(), n0)
-                            .expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                    ("ballistic", false) => {
-                        let mut s = LowRank::<_, 3>::monodisperse(fm, n0).expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                    ("ballistic", true) => {
-                        let mut s = Bucketed::<_, 3, 6>::monodisperse(fm, n0).expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                    (_, false) => {
-                        let mut s = LowRank::<_, 1>::monodisperse(Coagulation::additive(), n0)
-                            .expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                    (_, true) => {
-                        let mut s = Bucketed::<_, 1, 2>::monodisperse(Coagulation::additive(), n0)
-                            .expect("valid");
-                        s.advance_to(t, &mut rng).expect("runs").events
-                    }
-                } as f64;
+            let k = match name {
+                "brownian" => Coagulation::brownian(),
+                "ballistic" => Coagulation::free_molecular()
+                    .with_min_size(1.0)
+                    .expect("valid"),
+                _ => Coagulation::additive(),
+            };
+            let init = Init::Counts {
+                counts: &[n0],
+                volume: n0 as f64,
+            };
+            for id in [SchemeId::LowRankTree, SchemeId::LowRank] {
+                let mut rng = generator(99, 0);
+                let mut s: Box<Sim> =
+                    registry::build(id, k, NoFragmentation, &init, &Options::default())
+                        .expect("valid");
+                let events = s.advance_to(t, &mut rng).expect("runs").events as f64;
                 let tol = 0.05 * 10f64.powf(paper.log10().floor());
-                let method = if bucketed {
-                    "lowrank-bucketed"
-                } else {
-                    "lowrank"
-                };
                 out.push(Case {
-                    case: format!("osinsky2023/{method}-{name}-table-t={t}"),
+                    case: format!("osinsky2023/{}-{name}-table-t={t}", id.name()),
                     quantity: "collisions from 1e7 monomers (reference: paper, 2 digits)".into(),
                     reference: paper,
                     value: events,

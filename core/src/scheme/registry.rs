@@ -29,7 +29,7 @@
 //! }
 //! ```
 
-use super::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use super::lowrank::{AcceptanceRejection, BinaryTree, Bucketed, Inverse, LowRank};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Scheme, StepReport};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
@@ -51,6 +51,8 @@ pub enum SchemeId {
     LowRank,
     /// Osinsky 2023: low-rank MC with the paper's per-size trees (8-ary layout).
     LowRankTree,
+    /// Osinsky 2023: low-rank MC with the paper's binary segment trees (for comparison).
+    LowRankBinaryTree,
     /// The inverse method (Gillespie on sizes), low-rank's baseline.
     Inverse,
     /// Acceptance–rejection with the kernel's supremum, low-rank's baseline.
@@ -108,6 +110,12 @@ pub const SCHEMES: &[SchemeInfo] = &[
         name: "lowrank-tree",
         state: StateKind::Counts,
         summary: "Osinsky 2023: low-rank Monte Carlo with per-size segment trees",
+    },
+    SchemeInfo {
+        id: SchemeId::LowRankBinaryTree,
+        name: "lowrank-binary-tree",
+        state: StateKind::Counts,
+        summary: "Osinsky 2023: low-rank Monte Carlo with the paper's binary segment trees",
     },
     SchemeInfo {
         id: SchemeId::Inverse,
@@ -454,6 +462,15 @@ where
             by_rank!(kernel.rank(), R, W => {
                 let _ = W;
                 let s = LowRank::<K, R>::new(kernel, counts, volume)?
+                    .with_size_limit(opts.size_limit)
+                    .with_memory_budget(opts.memory_budget);
+                Ok(boxed::<_, K, F, G>(s, id))
+            })
+        }
+        (SchemeId::LowRankBinaryTree, Init::Counts { counts, volume }) => {
+            by_rank!(kernel.rank(), R, W => {
+                let _ = W;
+                let s = LowRank::<K, R, BinaryTree<R>>::new(kernel, counts, volume)?
                     .with_size_limit(opts.size_limit)
                     .with_memory_budget(opts.memory_budget);
                 Ok(boxed::<_, K, F, G>(s, id))
