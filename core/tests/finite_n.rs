@@ -1,6 +1,6 @@
 //! The exact finite-N reference: the master equation of the Marcus–Lushnikov process
 //! *with the particle-doubling rule*, for N0 = V = 32 monomers, solved by
-//! uniformisation; every integer-size scheme must reproduce its E[N/V], E[N1/V] and
+//! uniformisation; every size-count scheme of the registry must reproduce its E[N/V], E[N1/V] and
 //! E[N2/V] within the suite's family-wise tolerance over 10^4 replicas.
 //!
 //! The large-N exact solutions cannot see O(1/N) errors (a wrong same-particle rule, a
@@ -17,11 +17,8 @@
 
 mod common;
 
-use coagula_core::kernel::{Coagulation, CoagulationKernel};
+use coagula_core::kernel::Coagulation;
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
-use common::counts_observation;
 use std::collections::HashMap;
 
 const N0: u64 = 32;
@@ -195,66 +192,26 @@ fn reference(kind: Kind, times: &[f64]) -> Vec<[f64; 3]> {
     results
 }
 
-/// Replica statistics of one scheme (see `common::replicas`).
-fn replicas<S: Scheme>(
-    seed: u64,
-    times: &[f64],
-    make: impl Fn() -> S,
-    observe: impl Fn(&S) -> (u64, u64, u64, f64),
-) -> Vec<[Replicas; 3]> {
-    common::replicas(seed, REPLICAS, times, make, observe)
-}
-
-/// Compares every integer-size scheme with the reference; returns the z-scores and
-/// the failures.
-fn check<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-    kind: Kind,
-    kernel: K,
-    times: &[f64],
-) -> (String, String) {
+/// Compares every size-count scheme of the registry with the reference; returns the
+/// z-scores and the failures.
+fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
     let exact = reference(kind, times);
     // family-wise: every comparison at TEST_ALPHA (see observe::TEST_ALPHA)
     let z_max = common::z_max(REPLICAS);
     let mut report = String::new();
     let mut failures = String::new();
-    let runs: Vec<(&str, Vec<[Replicas; 3]>)> = vec![
-        (
-            "LowRank",
-            replicas(
-                1,
-                times,
-                || LowRank::<K, R>::monodisperse(kernel, N0).unwrap(),
-                |s| counts_observation(s.counts(), s.volume()),
-            ),
-        ),
-        (
-            "Bucketed",
-            replicas(
-                2,
-                times,
-                || Bucketed::<K, R, W>::monodisperse(kernel, N0).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            ),
-        ),
-        (
-            "Inverse",
-            replicas(
-                3,
-                times,
-                || Inverse::monodisperse(kernel, N0).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            ),
-        ),
-        (
-            "AcceptanceRejection",
-            replicas(
-                4,
-                times,
-                || AcceptanceRejection::monodisperse(kernel, N0).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            ),
-        ),
-    ];
+    let runs: Vec<(&str, Vec<[Replicas; 3]>)> = common::count_schemes()
+        .enumerate()
+        .filter_map(|(i, info)| {
+            common::build(info.id, kernel, &[N0], N0 as f64)?;
+            let make = || common::build(info.id, kernel, &[N0], N0 as f64).unwrap();
+            Some((
+                info.name,
+                common::facade_replicas(i as u64 + 1, REPLICAS, times, make),
+            ))
+        })
+        .collect();
+    assert!(runs.len() >= 5, "every size-count scheme ran");
     for (name, stats) in &runs {
         for (ti, &t) in times.iter().enumerate() {
             for (q, label) in ["N/V", "N1/V", "N2/V"].iter().enumerate() {
@@ -302,7 +259,7 @@ fn reference_is_close_to_smoluchowski() {
 
 #[test]
 fn constant_kernel_schemes_match_the_finite_n_reference() {
-    let (report, failures) = check::<_, 1, 2>(
+    let (report, failures) = check(
         Kind::Constant,
         Coagulation::constant(1.0).unwrap(),
         &[0.5, 2.0, 8.0, 30.0],
@@ -316,8 +273,7 @@ fn constant_kernel_schemes_match_the_finite_n_reference() {
 /// time of the constant kernel is left out here.
 #[test]
 fn additive_kernel_schemes_match_the_finite_n_reference() {
-    let (report, failures) =
-        check::<_, 1, 2>(Kind::Additive, Coagulation::additive(), &[0.5, 2.0, 8.0]);
+    let (report, failures) = check(Kind::Additive, Coagulation::additive(), &[0.5, 2.0, 8.0]);
     println!("{report}");
     assert!(failures.is_empty(), "{failures}");
 }

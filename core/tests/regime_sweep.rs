@@ -10,11 +10,10 @@
 mod common;
 
 use coagula_core::exact::Exact;
-use coagula_core::kernel::{Coagulation, CoagulationKernel};
+use coagula_core::kernel::Coagulation;
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
-use common::{LABELS, counts_observation, mass, replicas, z_max};
+use coagula_core::scheme::registry::{SchemeId, State};
+use common::{LABELS, Sim, mass, z_max};
 use proptest::prelude::*;
 use rand_pcg::Pcg64Mcg;
 
@@ -28,9 +27,9 @@ const CASES: [(u64, usize, u64); 4] = [
 
 type Stats = Vec<[Replicas; 3]>;
 
-/// All four schemes on one case: (name, stats), the tree layout first.
-fn run_all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-    kernel: K,
+/// Every size-count scheme of the registry on one case: (name, stats).
+fn run_all(
+    kernel: Coagulation,
     (n0, len, reps): (u64, usize, u64),
     times: &[f64],
 ) -> Vec<(&'static str, Stats)> {
@@ -38,74 +37,43 @@ fn run_all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
     init[0] = n0;
     let v = n0 as f64;
     let init = &init;
-    let timed = |name: &'static str, f: &dyn Fn() -> Stats| {
-        let start = std::time::Instant::now();
-        let st = f();
-        eprintln!(
-            "N0 {n0} len {len} {name}: {:.2} s",
-            start.elapsed().as_secs_f64()
-        );
-        (name, st)
-    };
-    vec![
-        timed("LowRank", &|| {
-            replicas(
-                11,
-                reps,
-                times,
-                || LowRank::<K, R>::new(kernel, init, v).unwrap(),
-                |s| counts_observation(s.counts(), s.volume()),
-            )
-        }),
-        timed("Bucketed", &|| {
-            replicas(
-                12,
-                reps,
-                times,
-                || Bucketed::<K, R, W>::new(kernel, init, v).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            )
-        }),
-        timed("Inverse", &|| {
-            replicas(
-                13,
-                reps,
-                times,
-                || Inverse::new(kernel, init, v).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            )
-        }),
-        timed("AcceptanceRejection", &|| {
-            replicas(
-                14,
-                reps,
-                times,
-                || AcceptanceRejection::new(kernel, init, v).unwrap(),
-                |s| counts_observation(&s.counts(), s.volume()),
-            )
-        }),
-    ]
+    common::count_schemes()
+        .enumerate()
+        .filter_map(|(i, info)| {
+            common::build(info.id, kernel, init, v)?;
+            let start = std::time::Instant::now();
+            let st = common::facade_replicas(11 + i as u64, reps, times, || {
+                common::build(info.id, kernel, init, v).unwrap()
+            });
+            eprintln!(
+                "N0 {n0} len {len} {}: {:.2} s",
+                info.name,
+                start.elapsed().as_secs_f64()
+            );
+            Some((info.name, st))
+        })
+        .collect()
 }
 
 /// Compares the schemes of each case with the tree layout (Welch, degrees of freedom
 /// at least R − 1) and, at N0 = 10^5, every scheme with `exact`.
-fn sweep<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-    name: &str,
-    kernel: K,
-    exact: Exact,
-    times: &[f64],
-) {
+fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
     let mut failures = String::new();
     for case in CASES {
-        let runs = run_all::<K, R, W>(kernel, case, times);
+        let runs = run_all(kernel, case, times);
+        assert!(runs.len() >= 5, "every size-count scheme ran");
         let (n0, _, reps) = case;
         let z = z_max(reps);
-        let tree = &runs[0].1;
+        let tree = &runs
+            .iter()
+            .find(|(n, _)| *n == SchemeId::LowRankTree.name())
+            .expect("the tree layout is registered")
+            .1;
         for (scheme, stats) in &runs {
             for (ti, &t) in times.iter().enumerate() {
                 for q in 0..3 {
                     let (a, b) = (&tree[ti][q], &stats[ti][q]);
-                    if *scheme != "LowRank" {
+                    if *scheme != SchemeId::LowRankTree.name() {
                         let se = (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
                         let d = b.mean() - a.mean();
                         if d.abs() > z * se + 1e-15 {
@@ -142,7 +110,7 @@ fn sweep<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
 /// Constant kernel to t = 130: N/V ≈ 2/(2 + t) = 1/66, six doublings or more.
 #[test]
 fn constant_kernel_regime_sweep() {
-    sweep::<_, 1, 2>(
+    sweep(
         "constant",
         Coagulation::constant(1.0).unwrap(),
         Exact::constant(1.0).unwrap(),
@@ -154,7 +122,7 @@ fn constant_kernel_regime_sweep() {
 /// growing towards the count vector's end.
 #[test]
 fn additive_kernel_regime_sweep() {
-    sweep::<_, 1, 2>(
+    sweep(
         "additive",
         Coagulation::additive(),
         Exact::additive(),
@@ -162,25 +130,35 @@ fn additive_kernel_regime_sweep() {
     );
 }
 
-/// Runs `make()` to `t` twice with the same seed; checks the invariants of a run.
-fn invariants<S: Scheme>(
-    make: impl Fn() -> S,
-    counts: impl Fn(&S) -> Vec<u64>,
+/// Runs scheme `id` to `t` twice with the same seed, through the facade; checks the
+/// invariants of a run (skips a scheme the kernel cannot drive).
+fn invariants(
+    id: SchemeId,
+    k: Coagulation,
+    init: &[u64],
+    v: f64,
     t: f64,
     seed: u64,
     mass0: u64,
 ) -> Result<(), TestCaseError> {
+    if common::build(id, k, init, v).is_none() {
+        return Ok(());
+    }
     let run = || {
-        let mut s = make();
+        let mut s = common::build(id, k, init, v).unwrap();
         let mut rng = <Pcg64Mcg as rand_pcg::rand_core::SeedableRng>::seed_from_u64(seed);
         let rep = s.advance_to(t, &mut rng);
         (s, rep)
+    };
+    let counts = |s: &Sim| match s.state() {
+        State::Counts(c, _) => c.into_owned(),
+        State::Sizes(_) => unreachable!("a size-count scheme"),
     };
     let (a, ra) = run();
     let (b, rb) = run();
     let ra = ra.map_err(|e| TestCaseError::fail(format!("{e}")))?;
     prop_assert_eq!(Ok(ra), rb, "same seed, same report");
-    let (ca, cb) = (counts(&a), counts(&b));
+    let (ca, cb) = (counts(&*a), counts(&*b));
     prop_assert_eq!(&ca, &cb, "same seed, same counts");
     prop_assert_eq!(a.time(), t);
     let m = mass(&ca);
@@ -192,6 +170,7 @@ fn invariants<S: Scheme>(
     );
     prop_assert!(ca.iter().sum::<u64>() >= 1);
     prop_assert_eq!(1u64 << ra.doublings, m / mass0);
+    prop_assert_eq!(a.particles(), ca.iter().sum::<u64>());
     Ok(())
 }
 
@@ -215,21 +194,13 @@ proptest! {
         let v = init.iter().sum::<u64>() as f64;
         let mass0 = mass(&init);
         let init = &init;
-        fn all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-            k: K, init: &[u64], v: f64, t: f64, seed: u64, mass0: u64,
-        ) -> Result<(), TestCaseError> {
-            invariants(|| LowRank::<K, R>::new(k, init, v).unwrap(), |s| s.counts().to_vec(), t, seed, mass0)?;
-            invariants(|| Bucketed::<K, R, W>::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
-            invariants(|| Inverse::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
-            if k.sup_rate(1.0, 2.0).is_some() {
-                invariants(|| AcceptanceRejection::new(k, init, v).unwrap(), |s| s.counts(), t, seed, mass0)?;
-            }
-            Ok(())
-        }
-        match kernel {
-            0 => all::<_, 1, 2>(Coagulation::constant(1.0).unwrap(), init, v, t, seed, mass0)?,
-            1 => all::<_, 1, 2>(Coagulation::additive(), init, v, t / 20.0, seed, mass0)?,
-            _ => all::<_, 2, 4>(Coagulation::brownian(), init, v, t, seed, mass0)?,
+        let (k, t) = match kernel {
+            0 => (Coagulation::constant(1.0).unwrap(), t),
+            1 => (Coagulation::additive(), t / 20.0),
+            _ => (Coagulation::brownian(), t),
+        };
+        for info in common::count_schemes() {
+            invariants(info.id, k, init, v, t, seed, mass0)?;
         }
     }
 }

@@ -2,26 +2,43 @@
 //! family-wise thresholds (see `docs/design/statistical-tests.md`).
 #![allow(dead_code)]
 
+use coagula_core::Error;
+use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
-use coagula_core::scheme::Scheme;
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, SchemeInfo, Simulation};
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 
-/// `(N, N1, N2, V)` of a count vector `counts[i − 1] = N_i`.
-pub fn counts_observation(counts: &[u64], v: f64) -> (u64, u64, u64, f64) {
-    let at = |i: usize| counts.get(i).copied().unwrap_or(0);
-    (counts.iter().sum(), at(0), at(1), v)
+/// The facade as the tests instantiate it.
+pub type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>;
+
+/// The registry's size-count schemes (every one the tests must cover).
+pub fn count_schemes() -> impl Iterator<Item = &'static SchemeInfo> {
+    let probe = Init::Counts {
+        counts: &[1],
+        volume: 1.0,
+    };
+    registry::SCHEMES.iter().filter(move |s| s.accepts(&probe))
 }
 
-/// Replica statistics of N/V, N1/V, N2/V at each of `times`: `make` builds a fresh
-/// scheme, `observe` returns `(N, N1, N2, V)`; replica r runs on
-/// `Pcg64Mcg::seed_from_u64(seed · 0x9e3779b9 ^ r)`.
-pub fn replicas<S: Scheme>(
+/// Scheme `id` from `counts` in volume `v`; `None` when the kernel lacks the bound the
+/// scheme needs (acceptance–rejection without a supremum).
+pub fn build(id: SchemeId, k: Coagulation, counts: &[u64], v: f64) -> Option<Box<Sim>> {
+    let init = Init::Counts { counts, volume: v };
+    match registry::build(id, k, NoFragmentation, &init, &Options::default()) {
+        Ok(s) => Some(s),
+        Err(Error::Unsupported { .. }) => None,
+        Err(e) => panic!("{}: {e}", id.name()),
+    }
+}
+
+/// Replica statistics of N/V, n_1, n_2 read through the facade's `Observe`, at each of
+/// `times`; replica r runs on `Pcg64Mcg::seed_from_u64(seed · 0x9e3779b9 ^ r)`.
+pub fn facade_replicas(
     seed: u64,
     reps: u64,
     times: &[f64],
-    make: impl Fn() -> S,
-    observe: impl Fn(&S) -> (u64, u64, u64, f64),
+    make: impl Fn() -> Box<Sim>,
 ) -> Vec<[Replicas; 3]> {
     let mut stats = vec![[Replicas::new(), Replicas::new(), Replicas::new()]; times.len()];
     for r in 0..reps {
@@ -29,9 +46,13 @@ pub fn replicas<S: Scheme>(
         let mut s = make();
         for (ti, &t) in times.iter().enumerate() {
             s.advance_to(t, &mut rng).unwrap();
-            let (n, n1, n2, v) = observe(&s);
-            for (st, x) in stats[ti].iter_mut().zip([n, n1, n2]) {
-                st.push(x as f64 / v);
+            let obs = [
+                s.particles() as f64 / s.volume(),
+                s.number_density(1.0),
+                s.number_density(2.0),
+            ];
+            for (st, x) in stats[ti].iter_mut().zip(obs) {
+                st.push(x);
             }
         }
     }
