@@ -30,7 +30,7 @@ use libm::{pow, sqrt};
 /// ```
 /// use coagula_core::kernel::Coagulation;
 /// use coagula_core::observe::Observe;
-/// use coagula_core::scheme::lowrank::Inverse;
+/// use coagula_core::scheme::baseline::Inverse;
 /// // 6 monomers and 2 dimers in volume 2
 /// let s = Inverse::new(Coagulation::constant(1.0).unwrap(), &[6, 2], 2.0).unwrap();
 /// assert_eq!(s.particles(), 8);

@@ -5,7 +5,8 @@ use coagula_core::checkpoint::Checkpoint;
 use coagula_core::kernel::{BinaryUniform, Coagulation};
 use coagula_core::qmc::Randomization;
 use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
+use coagula_core::scheme::lowrank::{Bucketed, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use rand_pcg::Pcg64Mcg;
 

@@ -9,7 +9,8 @@
 
 use coagula_core::kernel::{BinaryUniform, Coagulation, CoagulationKernel};
 use coagula_core::qmc::Randomization;
-use coagula_core::scheme::lowrank::{AcceptanceRejection, Bucketed, Inverse, LowRank};
+use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
+use coagula_core::scheme::lowrank::{Bucketed, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use coagula_core::scheme::{Scheme, StepReport};
 use rand_pcg::Pcg64Mcg;

@@ -292,3 +292,32 @@ pub fn checked_rate<K: CoagulationKernel + ?Sized>(k: &K, x: f64, y: f64) -> Res
         })
     }
 }
+
+/// `K(x, y)` validated against a proposal bound: a negative or non-finite value is
+/// [`Error::InvalidRate`](crate::Error::InvalidRate), a value above `bound` (beyond
+/// rounding) is [`Error::BoundExceeded`](crate::Error::BoundExceeded) — a capped rate
+/// would bias the run silently.
+#[inline]
+pub(crate) fn bounded_rate<K: CoagulationKernel + ?Sized>(
+    kernel: &K,
+    x: f64,
+    y: f64,
+    bound: f64,
+    name: &'static str,
+) -> Result<f64> {
+    let c = kernel.rate(x, y);
+    if !(c >= 0.0 && c.is_finite()) {
+        return Err(crate::Error::InvalidRate {
+            name: "coagulation kernel",
+            value: c,
+        });
+    }
+    if c > bound * (1.0 + 1e-12) {
+        return Err(crate::Error::BoundExceeded {
+            name,
+            rate: c,
+            bound,
+        });
+    }
+    Ok(c)
+}

@@ -75,6 +75,7 @@
 
 pub mod net;
 mod niederreiter;
+pub mod points;
 mod scramble;
 mod sobol;
 mod sobol_table;

@@ -9,14 +9,21 @@
 //! Schemes:
 //! * [`massflow`] — the time-driven mass-flow scheme of Lécot et al. (2019): QMC, MC,
 //!   RQMC;
-//! * [`lowrank`] — Osinsky's low-rank Monte Carlo with segment trees, and the inverse and
-//!   acceptance–rejection baselines it is measured against (Osinsky 2023).
+//! * [`lowrank`] — Osinsky's low-rank Monte Carlo (Osinsky 2023), in the bucketed and
+//!   the per-size tree layouts;
+//! * [`baseline`] — the inverse method and acceptance–rejection, low-rank's baselines.
+//!
+//! Shared below them: [`population`] (the size-count population: validation, particle
+//! doubling, size limit, memory budget) and [`registry`] (the object-safe facade over
+//! every scheme, and the one place that builds them).
 
 pub(crate) mod clock;
 
 pub(crate) use crate::random::{Ziggurat, exp1, open_unit};
+pub mod baseline;
 pub mod lowrank;
 pub mod massflow;
+pub mod population;
 pub mod registry;
 
 use crate::error::Result;

@@ -29,7 +29,8 @@
 //! }
 //! ```
 
-use super::lowrank::{AcceptanceRejection, BinaryTree, Bucketed, Inverse, LowRank};
+use super::baseline::{AcceptanceRejection, Inverse};
+use super::lowrank::{BinaryTree, Bucketed, LowRank};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Scheme, StepReport};
 use crate::checkpoint::{Checkpoint, Reader, Writer};

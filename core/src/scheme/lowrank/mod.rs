@@ -1,6 +1,6 @@
-//! Low-rank Monte Carlo for Smoluchowski-class equations (Osinsky 2023, §2–3), and the
-//! two baselines it is measured against: the inverse method (Gillespie on sizes,
-//! [`Inverse`]) and acceptance–rejection ([`AcceptanceRejection`]).
+//! Low-rank Monte Carlo for Smoluchowski-class equations (Osinsky 2023, §2–3). Its
+//! baselines, the inverse method and acceptance–rejection, are in
+//! [`baseline`](crate::scheme::baseline).
 //!
 //! State: counts `N_i` of particles of integer size `i = 1..M` in a volume V; each
 //! unordered pair of distinct particles coagulates at rate `K(i, j)/V` (SPEC §1).
@@ -49,14 +49,16 @@
 //! ```
 
 pub mod bucketed;
-mod inverse;
-mod rejection;
 pub mod trees;
 
+pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
 pub use bucketed::Bucketed;
-pub use inverse::Inverse;
-pub use rejection::AcceptanceRejection;
 pub use trees::{BinaryTree, ProposalTree, WideTree};
+
+pub(crate) use super::population::{
+    check_counts, rate_overflow, try_reserve, try_resize, within_budget,
+};
+pub(crate) use crate::kernel::bounded_rate;
 
 use super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
 use crate::error::{Error, Result};
@@ -64,45 +66,6 @@ use crate::kernel::CoagulationKernel;
 use alloc::vec::Vec;
 use rand_core::Rng;
 use trees::Weights;
-
-/// Largest size the size-count schemes allow by default (2^32).
-pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
-
-/// Memory the growing size-count schemes may use by default: 2 GiB (their per-size
-/// arrays, trees and particle lists; set with `with_memory_budget`). Growth beyond it,
-/// or an allocation the system refuses, is [`Error::Capacity`] with the state as
-/// before the event — never an abort. (The core has no way to ask the machine; a host
-/// that knows its memory sets the budget.)
-pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
-
-/// `Err(Capacity)` unless `bytes` (None: overflowed) fits the budget.
-pub(crate) fn within_budget(bytes: Option<usize>, budget: usize) -> Result<()> {
-    match bytes {
-        Some(b) if b <= budget => Ok(()),
-        _ => Err(Error::Capacity {
-            name: "memory budget in bytes (raise it with with_memory_budget)",
-            capacity: budget,
-        }),
-    }
-}
-
-/// Grows `v` to `len` copies of `value` through `try_reserve` (a refused allocation is
-/// `Err(Capacity)`, `v` unchanged).
-pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Result<()> {
-    if len > v.len() {
-        try_reserve(v, len - v.len())?;
-        v.resize(len, value);
-    }
-    Ok(())
-}
-
-/// `v.try_reserve(additional)`, a refusal mapped to `Err(Capacity)`.
-pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
-    v.try_reserve(additional).map_err(|_| Error::Capacity {
-        name: "memory (the allocator refused)",
-        capacity: v.len().saturating_add(additional),
-    })
-}
 
 /// Low-rank Monte Carlo with a rank-`R` bound (Osinsky 2023). See the module docs.
 ///
@@ -166,57 +129,6 @@ pub(crate) fn factors_at<K: CoagulationKernel, const R: usize>(
 /// without it, so a kernel that turns NaN or exceeds its bound is caught
 /// (deterministic: the random stream is the same with or without the check).
 pub(crate) const SPOT_CHECK: u64 = 1024;
-
-/// `K(x, y)` validated against the proposal bound: a negative or non-finite value is
-/// [`Error::InvalidRate`], a value above `bound` (beyond rounding) is
-/// [`Error::BoundExceeded`] — a capped rate would bias the run silently.
-#[inline]
-pub(crate) fn bounded_rate<K: CoagulationKernel + ?Sized>(
-    kernel: &K,
-    x: f64,
-    y: f64,
-    bound: f64,
-    name: &'static str,
-) -> Result<f64> {
-    let c = kernel.rate(x, y);
-    if !(c >= 0.0 && c.is_finite()) {
-        return Err(Error::InvalidRate {
-            name: "coagulation kernel",
-            value: c,
-        });
-    }
-    if c > bound * (1.0 + 1e-12) {
-        return Err(Error::BoundExceeded {
-            name,
-            rate: c,
-            bound,
-        });
-    }
-    Ok(c)
-}
-
-/// The error of a total proposal rate that overflowed (kernel values near `f64::MAX`
-/// times many particles): no waiting time can be drawn from it.
-pub(crate) fn rate_overflow(value: f64) -> Error {
-    Error::InvalidRate {
-        name: "total proposal rate (overflowed: the kernel's values are too large)",
-        value,
-    }
-}
-
-/// Validates an initial count vector and returns its particle number.
-pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
-    let mut n: u64 = 0;
-    for &c in counts {
-        n = n.checked_add(c).ok_or(Error::Overflow {
-            name: "particle number",
-        })?;
-    }
-    if n == 0 {
-        return Err(Error::Empty);
-    }
-    Ok(n)
-}
 
 impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> {
     /// Starts from `n0` monomers in volume `V = n0` (so `n_1(0) = 1`).
@@ -666,5 +578,5 @@ macro_rules! observe_counts {
 
 observe_counts!([K: CoagulationKernel, const R: usize, T: ProposalTree<R>] LowRank<K, R, T>);
 observe_counts!([K: CoagulationKernel, const R: usize, const W: usize] Bucketed<K, R, W>);
-observe_counts!([K: CoagulationKernel] Inverse<K>);
-observe_counts!([K: CoagulationKernel] AcceptanceRejection<K>);
+observe_counts!([K: CoagulationKernel] crate::scheme::baseline::Inverse<K>);
+observe_counts!([K: CoagulationKernel] crate::scheme::baseline::AcceptanceRejection<K>);

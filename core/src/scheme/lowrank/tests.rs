@@ -5,6 +5,7 @@ use super::*;
 use crate::exact::Exact;
 use crate::kernel::{Coagulation, UserKernel};
 use crate::observe::Replicas;
+use crate::scheme::baseline::{AcceptanceRejection, Inverse};
 use alloc::format;
 use alloc::string::String;
 use rand_pcg::Pcg64Mcg;

@@ -4,6 +4,7 @@ use super::*;
 use crate::exact::Exact;
 use crate::kernel::{BinaryUniform, Coagulation, NoFragmentation};
 use crate::observe::Replicas;
+use crate::qmc::Randomization;
 use alloc::format;
 use alloc::string::String;
 use rand_pcg::Pcg64Mcg;

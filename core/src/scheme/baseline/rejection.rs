@@ -1,9 +1,12 @@
 //! Acceptance–rejection baseline (Osinsky 2023, §2): two distinct particles uniformly,
 //! accepted with `K(i, j) / C_max`; time advances at every proposal.
 
-use super::{DEFAULT_SIZE_LIMIT, check_counts};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
+use crate::scheme::population::{
+    DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT, check_counts, rate_overflow, try_reserve,
+    within_budget,
+};
 use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
 use crate::tree::Weight;
 use alloc::vec::Vec;
@@ -17,7 +20,7 @@ use rand_core::Rng;
 ///
 /// ```
 /// use coagula_core::kernel::Coagulation;
-/// use coagula_core::scheme::{Scheme, lowrank::AcceptanceRejection};
+/// use coagula_core::scheme::{Scheme, baseline::AcceptanceRejection};
 /// let mut rng = rand_pcg::Pcg64Mcg::new(3);
 /// let mut sim = AcceptanceRejection::monodisperse(Coagulation::constant(1.0).unwrap(), 10_000).unwrap();
 /// sim.advance_to(1.0, &mut rng).unwrap();
@@ -55,10 +58,10 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
     /// Starts from `counts[i - 1] = N_i` in volume `volume`. Errors if the kernel has no
     /// `sup_rate` (or a NaN one), the counts are empty, the volume is not positive, or
     /// the particle list (8 bytes a particle) would pass
-    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET) (see
+    /// [`DEFAULT_MEMORY_BUDGET`] (see
     /// [`new_with_memory_budget`](Self::new_with_memory_budget) for more).
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        Self::new_with_memory_budget(kernel, counts, volume, super::DEFAULT_MEMORY_BUDGET)
+        Self::new_with_memory_budget(kernel, counts, volume, DEFAULT_MEMORY_BUDGET)
     }
 
     /// [`new`](Self::new) with a memory budget of `bytes` for the particle list: the
@@ -97,9 +100,9 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             name: "particles (address space)",
             capacity: usize::MAX,
         })?;
-        super::within_budget(len.checked_mul(core::mem::size_of::<u64>()), budget)?;
+        within_budget(len.checked_mul(core::mem::size_of::<u64>()), budget)?;
         let mut sizes = Vec::new();
-        super::try_reserve(&mut sizes, len)?;
+        try_reserve(&mut sizes, len)?;
         for (i, &c) in counts.iter().enumerate() {
             sizes.extend(core::iter::repeat_n(i as u64 + 1, c as usize));
         }
@@ -185,7 +188,7 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
             }
             let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.volume);
             if !rate.is_finite() {
-                break Err(super::rate_overflow(rate));
+                break Err(rate_overflow(rate));
             }
             let dt = exp1(rng) / rate;
             if self.time + dt > t {
@@ -199,7 +202,7 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 q += 1;
             }
             let (x, y) = (self.sizes[p], self.sizes[q]);
-            let c = match super::bounded_rate(
+            let c = match crate::kernel::bounded_rate(
                 &self.kernel,
                 x as f64,
                 y as f64,
@@ -276,14 +279,14 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
             });
         }
         // room for the doublings to come (the list never passes N0)
-        super::within_budget(
+        within_budget(
             usize::try_from(n0)
                 .ok()
                 .and_then(|n| n.checked_mul(core::mem::size_of::<u64>())),
             self.memory_budget,
         )?;
         let room = n0 as usize - sizes.len();
-        super::try_reserve(&mut sizes, room)?;
+        try_reserve(&mut sizes, room)?;
         self.size_limit = size_limit;
         self.n0 = n0;
         self.volume = volume;

@@ -16,9 +16,12 @@
 //! returns NaN or a negative rate makes `advance_to` fail with the state as it was
 //! before that event.
 
-use super::{DEFAULT_SIZE_LIMIT, check_counts};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
+use crate::scheme::population::{
+    DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT, check_counts, rate_overflow, try_reserve,
+    try_resize, within_budget,
+};
 use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
 use alloc::vec;
 use alloc::vec::Vec;
@@ -33,7 +36,7 @@ pub const CACHE_DIM: usize = 2048;
 ///
 /// ```
 /// use coagula_core::kernel::Coagulation;
-/// use coagula_core::scheme::{Scheme, lowrank::Inverse};
+/// use coagula_core::scheme::{Scheme, baseline::Inverse};
 /// let mut rng = rand_pcg::Pcg64Mcg::new(5);
 /// let mut sim = Inverse::monodisperse(Coagulation::constant(1.0).unwrap(), 10_000).unwrap();
 /// sim.advance_to(1.0, &mut rng).unwrap();
@@ -89,9 +92,9 @@ impl<K: CoagulationKernel> Inverse<K> {
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
         let len = counts.len().next_power_of_two();
-        super::within_budget(
+        within_budget(
             len.checked_mul(core::mem::size_of::<u32>()),
-            super::DEFAULT_MEMORY_BUDGET,
+            DEFAULT_MEMORY_BUDGET,
         )?;
         let mut s = Inverse {
             kernel,
@@ -108,7 +111,7 @@ impl<K: CoagulationKernel> Inverse<K> {
             cache_max: (n.min(CACHE_DIM as u64) as usize)
                 .next_power_of_two()
                 .clamp(64, CACHE_DIM),
-            memory_budget: super::DEFAULT_MEMORY_BUDGET,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
             n,
             n0: n,
             volume,
@@ -116,7 +119,7 @@ impl<K: CoagulationKernel> Inverse<K> {
             size_limit: DEFAULT_SIZE_LIMIT,
             totals: StepReport::default(),
         };
-        super::try_resize(&mut s.slot, len, NONE)?;
+        try_resize(&mut s.slot, len, NONE)?;
         for (i, &c) in counts.iter().enumerate() {
             if c > 0 {
                 let d = s.rate(i as u64 + 1, i as u64 + 1)?;
@@ -168,7 +171,7 @@ impl<K: CoagulationKernel> Inverse<K> {
     fn grow_cache(&mut self, need: usize) {
         let dim = need.next_power_of_two().clamp(64, self.cache_max);
         let mut cache = Vec::new();
-        if super::try_resize(&mut cache, dim * dim, -1.0).is_err() {
+        if try_resize(&mut cache, dim * dim, -1.0).is_err() {
             // no memory for a larger cache: evaluate beyond it directly
             self.cache_max = self.dim.max(1);
             return;
@@ -247,7 +250,7 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 total += self.count[a] as f64 * (self.row[a] - self.diag[a]).max(0.0);
             }
             if !total.is_finite() {
-                break Err(super::rate_overflow(total));
+                break Err(rate_overflow(total));
             }
             if total <= 0.0 {
                 self.time = t;
@@ -368,20 +371,20 @@ impl<K: CoagulationKernel> Inverse<K> {
         let need = usize::try_from(x).unwrap_or(usize::MAX);
         if need > self.slot.len() {
             let len = need.checked_next_power_of_two().unwrap_or(usize::MAX);
-            super::within_budget(
+            within_budget(
                 len.checked_mul(core::mem::size_of::<u32>()),
                 self.memory_budget,
             )?;
-            super::try_resize(&mut self.slot, len, NONE)?;
+            try_resize(&mut self.slot, len, NONE)?;
         }
-        super::try_reserve(&mut self.size, 1)?;
-        super::try_reserve(&mut self.count, 1)?;
-        super::try_reserve(&mut self.row, 1)?;
-        super::try_reserve(&mut self.diag, 1)
+        try_reserve(&mut self.size, 1)?;
+        try_reserve(&mut self.count, 1)?;
+        try_reserve(&mut self.row, 1)?;
+        try_reserve(&mut self.diag, 1)
     }
 
     /// Sets the memory budget in bytes of the size index (default
-    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET)): a size beyond it makes
+    /// [`DEFAULT_MEMORY_BUDGET`]): a size beyond it makes
     /// `advance_to` fail with [`Error::Capacity`], the state as before the event.
     pub fn with_memory_budget(mut self, bytes: usize) -> Self {
         self.memory_budget = bytes;
@@ -477,12 +480,12 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         }
         let max = size.iter().copied().max().unwrap_or(1) as usize;
         let len = max.checked_next_power_of_two().unwrap_or(usize::MAX);
-        super::within_budget(
+        within_budget(
             len.checked_mul(core::mem::size_of::<u32>()),
             self.memory_budget,
         )?;
         let mut slot = Vec::new();
-        super::try_resize(&mut slot, len, NONE)?;
+        try_resize(&mut slot, len, NONE)?;
         for (a, &s) in size.iter().enumerate() {
             if slot[s as usize - 1] != NONE {
                 return Err(Error::Checkpoint {

@@ -1,0 +1,170 @@
+//! The size-count population shared by the low-rank schemes and their baselines: the
+//! particle number N, its doubling reference N0, the volume V, the size limit and the
+//! memory budget — with the rules they obey, in one place:
+//!
+//! * **validation**: counts with at least one particle and no overflow, a positive finite
+//!   volume ([`Population::new`]);
+//! * **particle doubling**: when fewer than `N0/2` particles remain, every count, N and
+//!   V double, which keeps the statistical error constant at constant cost
+//!   ([`Population::doubling_due`], [`Population::double`]);
+//! * **size limit**: a merge beyond it is [`Error::Capacity`] ([`Population::merged`]);
+//! * **memory**: growth is checked against the budget and allocates with `try_reserve`,
+//!   so running out is [`Error::Capacity`] with the state as before, never an abort.
+
+use crate::error::{Error, Result};
+use alloc::vec::Vec;
+
+/// Largest size the size-count schemes allow by default (2^32).
+pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
+
+/// Memory the growing size-count schemes may use by default: 2 GiB (their per-size
+/// arrays, trees and particle lists; set with `with_memory_budget`). Growth beyond it,
+/// or an allocation the system refuses, is [`Error::Capacity`] with the state as
+/// before the event — never an abort. (The core has no way to ask the machine; a host
+/// that knows its memory sets the budget.)
+pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
+
+/// N, N0, V and the limits of a size-count population (the counts themselves live in
+/// each scheme's own layout).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Population {
+    /// Simulation particles now.
+    pub n: u64,
+    /// The particle-doubling reference: doubling happens when `n < n0 / 2`.
+    pub n0: u64,
+    /// The volume V.
+    pub volume: f64,
+    /// Largest particle size allowed.
+    pub size_limit: u64,
+    /// Bytes the growing tables may use.
+    pub memory_budget: usize,
+}
+
+impl Population {
+    /// The population of `counts[i − 1] = N_i` in `volume`, with the default limits;
+    /// errors for no particles, an overflowing total or a volume that is not positive
+    /// and finite.
+    pub fn new(counts: &[u64], volume: f64) -> Result<Self> {
+        crate::error::positive("volume", volume)?;
+        let n = check_counts(counts)?;
+        Ok(Population {
+            n,
+            n0: n,
+            volume,
+            size_limit: DEFAULT_SIZE_LIMIT,
+            memory_budget: DEFAULT_MEMORY_BUDGET,
+        })
+    }
+
+    /// Fewer than `N0/2` particles remain: the counts must double.
+    #[inline]
+    pub fn doubling_due(&self) -> bool {
+        self.n < self.n0 / 2
+    }
+
+    /// Doubles N and V (the scheme doubles its counts).
+    #[inline]
+    pub fn double(&mut self) {
+        self.n *= 2;
+        self.volume *= 2.0;
+    }
+
+    /// The size of `x` merged with `y`, or [`Error::Capacity`] beyond the size limit
+    /// (saturating: a limit near `u64::MAX` cannot let the sum wrap).
+    #[inline]
+    pub fn merged(&self, x: u64, y: u64) -> Result<u64> {
+        let s = x.saturating_add(y);
+        if s > self.size_limit || s == u64::MAX {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: usize::try_from(self.size_limit).unwrap_or(usize::MAX),
+            });
+        }
+        Ok(s)
+    }
+
+    /// `Err(Capacity)` unless `bytes` (None: overflowed) fits the memory budget.
+    pub fn within_budget(&self, bytes: Option<usize>) -> Result<()> {
+        within_budget(bytes, self.memory_budget)
+    }
+}
+
+/// `Err(Capacity)` unless `bytes` (None: overflowed) fits the budget.
+pub(crate) fn within_budget(bytes: Option<usize>, budget: usize) -> Result<()> {
+    match bytes {
+        Some(b) if b <= budget => Ok(()),
+        _ => Err(Error::Capacity {
+            name: "memory budget in bytes (raise it with with_memory_budget)",
+            capacity: budget,
+        }),
+    }
+}
+
+/// Grows `v` to `len` copies of `value` through `try_reserve` (a refused allocation is
+/// `Err(Capacity)`, `v` unchanged).
+pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Result<()> {
+    if len > v.len() {
+        try_reserve(v, len - v.len())?;
+        v.resize(len, value);
+    }
+    Ok(())
+}
+
+/// `v.try_reserve(additional)`, a refusal mapped to `Err(Capacity)`.
+pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
+    v.try_reserve(additional).map_err(|_| Error::Capacity {
+        name: "memory (the allocator refused)",
+        capacity: v.len().saturating_add(additional),
+    })
+}
+
+/// Validates an initial count vector and returns its particle number.
+pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
+    let mut n: u64 = 0;
+    for &c in counts {
+        n = n.checked_add(c).ok_or(Error::Overflow {
+            name: "particle number",
+        })?;
+    }
+    if n == 0 {
+        return Err(Error::Empty);
+    }
+    Ok(n)
+}
+
+/// The error of a total proposal rate that overflowed (kernel values near `f64::MAX`
+/// times many particles): no waiting time can be drawn from it.
+pub(crate) fn rate_overflow(value: f64) -> Error {
+    Error::InvalidRate {
+        name: "total proposal rate (overflowed: the kernel's values are too large)",
+        value,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn population_rules() {
+        assert!(Population::new(&[0, 0], 1.0).is_err());
+        assert!(Population::new(&[u64::MAX, 1], 1.0).is_err());
+        assert!(Population::new(&[3], 0.0).is_err());
+        assert!(Population::new(&[3], f64::INFINITY).is_err());
+        let mut p = Population::new(&[6, 2], 8.0).unwrap();
+        assert_eq!((p.n, p.n0), (8, 8));
+        p.n = 4;
+        assert!(!p.doubling_due());
+        p.n = 3;
+        assert!(p.doubling_due());
+        p.double();
+        assert_eq!((p.n, p.volume), (6, 16.0));
+        assert_eq!(p.merged(3, 4).unwrap(), 7);
+        p.size_limit = 6;
+        assert!(matches!(p.merged(3, 4), Err(Error::Capacity { .. })));
+        p.size_limit = u64::MAX;
+        assert!(p.merged(u64::MAX - 1, 5).is_err());
+        assert!(p.within_budget(None).is_err());
+        assert!(p.within_budget(Some(10)).is_ok());
+    }
+}
