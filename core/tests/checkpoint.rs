@@ -129,7 +129,7 @@ fn bucketed_small_large_and_pipelined() {
         || Bucketed::<_, 2, 4>::monodisperse(k, 1000).unwrap(),
         1.0,
         5.0,
-        |s| s.counts(),
+        |s| s.counts().into_owned(),
     );
     // batches, particle doublings and M doublings between the halves
     let a = Coagulation::additive();
@@ -137,7 +137,7 @@ fn bucketed_small_large_and_pipelined() {
         || Bucketed::<_, 1, 2>::monodisperse(a, 20_000).unwrap(),
         0.5,
         2.5,
-        |s| s.counts(),
+        |s| s.counts().into_owned(),
     );
     // a count array past 2^18 sizes: side u is drawn a proposal ahead, and that draw
     // is part of the state
@@ -148,6 +148,6 @@ fn bucketed_small_large_and_pipelined() {
         || Bucketed::<_, 1, 2>::monodisperse(a, 100_000).unwrap(),
         5.2,
         5.6,
-        |s| s.counts(),
+        |s| s.counts().into_owned(),
     );
 }

@@ -119,14 +119,24 @@ fn size_count_schemes_refuse_bad_input() {
     inv.advance_to(1.0, &mut rng).unwrap();
     ar.advance_to(1.0, &mut rng).unwrap();
     for t in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 0.5, -1.0] {
-        let before = (lr.counts().to_vec(), bk.counts(), inv.counts(), ar.counts());
+        let before = (
+            lr.counts().to_vec(),
+            bk.counts().to_vec(),
+            inv.counts(),
+            ar.counts(),
+        );
         assert!(lr.advance_to(t, &mut rng).is_err());
         assert!(bk.advance_to(t, &mut rng).is_err());
         assert!(inv.advance_to(t, &mut rng).is_err());
         assert!(ar.advance_to(t, &mut rng).is_err());
         assert_eq!(
             before,
-            (lr.counts().to_vec(), bk.counts(), inv.counts(), ar.counts())
+            (
+                lr.counts().to_vec(),
+                bk.counts().to_vec(),
+                inv.counts(),
+                ar.counts()
+            )
         );
         assert_eq!(lr.time(), 1.0);
     }

@@ -80,7 +80,7 @@ fn a_kernel_turning_nan_mid_run_loses_no_mass() {
     let mut lr = LowRank::<_, 1>::monodisperse(user(), 1000).unwrap();
     run_until_error(&mut lr, |s| s.counts().to_vec(), 1000, invalid_rate);
     let mut bk = Bucketed::<_, 1, 2>::monodisperse(user(), 1000).unwrap();
-    run_until_error(&mut bk, |s| s.counts(), 1000, invalid_rate);
+    run_until_error(&mut bk, |s| s.counts().into_owned(), 1000, invalid_rate);
 }
 
 /// Item 9: a kernel above its declared bound was capped at the bound and counted
@@ -169,7 +169,7 @@ fn an_exact_low_rank_kernel_is_spot_checked() {
     let mut lr = LowRank::<_, 1>::monodisperse(Exact, 10_000).unwrap();
     run_until_error(&mut lr, |s| s.counts().to_vec(), 10_000, invalid_rate);
     let mut bk = Bucketed::<_, 1, 2>::monodisperse(Exact, 10_000).unwrap();
-    run_until_error(&mut bk, |s| s.counts(), 10_000, invalid_rate);
+    run_until_error(&mut bk, |s| s.counts().into_owned(), 10_000, invalid_rate);
 }
 
 /// Item 7: restoring a checkpoint taken before the size table grew into a scheme
@@ -250,8 +250,8 @@ fn growth_past_the_memory_budget_is_a_capacity_error() {
     let mut bk = Bucketed::<_, 1, 2>::new(k, &init, v)
         .unwrap()
         .with_memory_budget(budget);
-    run_until_error(&mut bk, |s| s.counts(), m0, is_capacity);
-    check(bk.counts());
+    run_until_error(&mut bk, |s| s.counts().into_owned(), m0, is_capacity);
+    check(bk.counts().into_owned());
     let mut inv = Inverse::new(k, &init, v)
         .unwrap()
         .with_memory_budget(budget);

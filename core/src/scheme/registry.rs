@@ -30,7 +30,7 @@
 //! ```
 
 use super::baseline::{AcceptanceRejection, Inverse};
-use super::lowrank::{BinaryTree, Bucketed, LowRank};
+use super::lowrank::{BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, ProposalEngine};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Scheme, StepReport};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
@@ -540,7 +540,6 @@ macro_rules! counts_facet {
     };
 }
 
-counts_facet!([K: CoagulationKernel + Clone, const R: usize, const W: usize] Bucketed<K, R, W>, |s| Cow::Owned(s.counts()));
-counts_facet!([K: CoagulationKernel, const R: usize, T: super::lowrank::ProposalTree<R>] LowRank<K, R, T>, |s| Cow::Borrowed(s.counts()));
+counts_facet!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>, |s| s.counts());
 counts_facet!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));

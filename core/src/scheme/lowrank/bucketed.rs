@@ -59,9 +59,11 @@
 //! Why the layout is shaped so — the measurements behind each step — is in
 //! `docs/design/bucketed-layout.md`.
 //!
-//! The state is the counts `N_i` (see [`Bucketed::counts`]); M doubling and particle
-//! doubling work as in [`super::LowRank`]. Allocation happens when M doubles, when the
-//! particles double, and when a bucket's list outgrows its capacity (amortised).
+//! This is the proposal engine [`BucketedEngine`]; the scheme is
+//! [`Bucketed`](super::Bucketed), the event loop of [`LowRankMc`](super::LowRankMc) with
+//! the coagulation rule over it. M doubling and particle doubling work as for
+//! [`LowRank`](super::LowRank). Allocation happens when M doubles, when the particles
+//! double, and when a bucket's list outgrows its capacity (amortised).
 //!
 //! # Example
 //! ```
@@ -76,50 +78,24 @@
 //! assert!((sim.moment(0.0) - (-1.0f64).exp()).abs() < 0.025);
 //! ```
 
-use super::super::clock::Batch;
-use super::super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
-use super::{SPOT_CHECK, bounded_rate, check_counts};
+use super::bound::{
+    SINGLE, bucket_extremes, bucket_of, bucket_range, count_len, quantise_up, quantum, width_bits,
+};
+use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
+use super::rule::Outcome;
+use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use crate::random::{below, geometric};
+use crate::random::{below, geometric, open_unit};
 use crate::sample::alias::{Alias, AliasScratch};
+use crate::scheme::population::{Population, try_reserve, within_budget};
+use alloc::borrow::Cow;
 use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
-/// log2 of the buckets per octave.
-const SUB_BITS: u32 = 5;
-const SUB: u64 = 1 << SUB_BITS;
 /// A full bucket grows by 1/2^GROW of its slots.
 const GROW: u32 = 4;
-/// Sizes below this are their own bucket.
-const SINGLE: u64 = 2 * SUB;
-
-/// The bucket of size `x ≥ 1`.
-#[inline]
-fn bucket_of(x: u64) -> usize {
-    if x < SINGLE {
-        x as usize
-    } else {
-        let g = 63 - x.leading_zeros();
-        let sh = g - SUB_BITS;
-        (sh as u64 * SUB + (x >> sh)) as usize
-    }
-}
-
-/// The sizes `lo..=hi` of bucket `b ≥ 1`.
-#[inline]
-fn bucket_range(b: usize) -> (u64, u64) {
-    let b = b as u64;
-    if b < SINGLE {
-        (b, b)
-    } else {
-        let sh = b / SUB - 1;
-        let m = b - sh * SUB;
-        (m << sh, ((m + 1) << sh) - 1)
-    }
-}
-
 /// One bucket: its particles, slots and bound data for the `2R` factor rows
 /// `[a_0 .. a_{R−1}, b_0 .. b_{R−1}]`, kept together so a proposal touches one record.
 ///
@@ -158,11 +134,8 @@ struct Bucket<const W: usize> {
     min: [f64; W],
 }
 
-/// Low-rank Monte Carlo over size buckets (see the module docs). `W` must be `2R`.
-pub struct Bucketed<K, const R: usize, const W: usize> {
-    kernel: K,
-    /// Acceptance floor ρ of the kernel (`K ≥ ρ (A + Aᵀ)`), for the squeeze.
-    floor: f64,
+/// The bucketed proposal engine (see the module docs). `W` must be `2R`.
+pub struct BucketedEngine<const R: usize, const W: usize> {
     /// Exact factor extremes per bucket, before quantisation: `[max, min]`.
     raw: Vec<[[f64; W]; 2]>,
     buckets: Vec<Bucket<W>>,
@@ -220,7 +193,6 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     /// the empties left by removals exceed `n/8` (the rule that keeps small systems'
     /// acceptance high). Recomputed whenever the slots change.
     n_resync: u64,
-    memory_budget: usize,
     /// An internal integer invariant failed (a weight would pass 2^63): every later
     /// call returns this error instead of a wrong result.
     poisoned: Option<Error>,
@@ -228,23 +200,14 @@ pub struct Bucketed<K, const R: usize, const W: usize> {
     rates_stale: bool,
     /// Current maximum size M (a power of two).
     m: u64,
-    size_limit: u64,
-    n: u64,
-    n0: u64,
-    volume: f64,
-    time: f64,
-    totals: StepReport,
-    zig: Ziggurat,
 }
 
-impl<K, const R: usize, const W: usize> core::fmt::Debug for Bucketed<K, R, W> {
+impl<const R: usize, const W: usize> core::fmt::Debug for BucketedEngine<R, W> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("Bucketed")
+        f.debug_struct("BucketedEngine")
             .field("rank", &R)
             .field("max_size", &self.m)
-            .field("particles", &self.n)
-            .field("volume", &self.volume)
-            .field("time", &self.time)
+            .field("buckets", &self.buckets.len())
             .finish_non_exhaustive()
     }
 }
@@ -278,15 +241,6 @@ fn prefetch<T>(r: &T) {
     let _ = r;
 }
 
-/// The proposal process between weight changes.
-#[derive(Clone, Copy, Debug)]
-struct Rates {
-    /// Proposals can happen (`S_A > 0` and two particles or more).
-    live: bool,
-    /// Mean time between proposals, `V / S_A`.
-    mean_dt: f64,
-}
-
 /// The two proposal streams' rates, in the units of `S_A`.
 #[derive(Clone, Copy, Debug)]
 struct StreamRates {
@@ -305,73 +259,34 @@ const OVER_MAX: usize = 32;
 /// Largest number of initial particles (counts are stored as `u32`).
 pub const MAX_PARTICLES: u64 = u32::MAX as u64;
 
-/// Length of the count array for maximum size m: it covers the whole bucket of m.
-fn count_len(m: u64) -> usize {
-    bucket_range(bucket_of(m)).1 as usize + 1
-}
-
-/// log2 of the width of bucket b.
-#[inline]
-fn width_bits(b: usize) -> u32 {
-    if (b as u64) < SINGLE {
-        0
-    } else {
-        (b as u64 / SUB - 1) as u32
-    }
-}
-
-impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
-    /// Starts from `n0` monomers in volume `V = n0` (so `n_1(0) = 1`).
-    pub fn monodisperse(kernel: K, n0: u64) -> Result<Self> {
-        Self::new(kernel, &[n0], n0 as f64)
-    }
-
-    /// Starts from `counts[i − 1] = N_i` in volume `volume`.
-    ///
-    /// Errors: the kernel's rank is not `R` (or `W ≠ 2R`), a factor is negative or not
-    /// finite, the counts are all zero or add up to more than [`MAX_PARTICLES`], the
-    /// volume is not positive.
-    pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        Self::build(kernel, counts, volume, None, super::DEFAULT_MEMORY_BUDGET)
-    }
-
-    /// [`new`](Self::new) with the particle-doubling reference `n0` (default: the
-    /// particles given) and a memory budget for the size table.
-    fn build(
-        kernel: K,
+impl<const R: usize, const W: usize> BucketedEngine<R, W> {
+    /// The engine over `counts[i − 1] = N_i` (see [`ProposalEngine::build`]); the
+    /// doubling reference `pop.n0` sets the quantisation (`qmax · n0 ≤ 2^60`).
+    fn with_counts<K: CoagulationKernel>(
+        kernel: &K,
         counts: &[u64],
-        volume: f64,
-        n0: Option<u64>,
-        budget: usize,
+        pop: &Population,
     ) -> Result<Self> {
         if kernel.rank() != R || R == 0 || W != 2 * R {
-            return Err(Error::Unsupported {
-                what: "kernel rank differs from the scheme's R (or the kernel has no low-rank bound)",
-            });
+            return Err(rank_mismatch());
         }
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
-        if n > MAX_PARTICLES {
+        if pop.n0 > MAX_PARTICLES {
             return Err(Error::OutOfRange {
                 name: "initial particle number",
-                value: n as f64,
+                value: pop.n0 as f64,
                 range: "[1, 2^32 - 1]",
             });
         }
         let m = (counts.len() as u64).next_power_of_two().max(64);
-        super::within_budget(
+        within_budget(
             count_len(m).checked_mul(core::mem::size_of::<u32>()),
-            budget,
+            pop.memory_budget,
         )?;
-        // the doubling reference bounds the particles (and so the slots' weight)
-        let n0 = n0.unwrap_or(n).max(n);
-        let mut s = Bucketed {
-            floor: kernel.low_rank_floor().clamp(0.0, 1.0),
-            kernel,
+        let mut s = BucketedEngine {
             raw: Vec::new(),
             buckets: Vec::new(),
             scale: [1.0; W],
-            qmax: ((1u64 << 60) / n0).min(1 << 53),
+            qmax: ((1u64 << 60) / pop.n0.max(1)).min(1 << 53),
             counts: Vec::new(),
             lists: Vec::new(),
             row_total: [0; W],
@@ -393,19 +308,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             planned: 0,
             n_resync: 0,
             poisoned: None,
-            memory_budget: budget,
             rates_stale: true,
             m,
-            size_limit: super::DEFAULT_SIZE_LIMIT,
-            n,
-            n0,
-            volume,
-            time: 0.0,
-            totals: StepReport::default(),
-            zig: Ziggurat::new(),
         };
-        super::try_resize(&mut s.counts, count_len(m), 0)?;
-        s.extend_buckets(m)?;
+        crate::scheme::population::try_resize(&mut s.counts, count_len(m), 0)?;
+        s.extend_buckets(kernel, m)?;
         for (i, &c) in counts.iter().enumerate() {
             s.counts[i + 1] = c as u32;
             s.buckets[bucket_of(i as u64 + 1)].n += c;
@@ -414,34 +321,14 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         Ok(s)
     }
 
-    /// Sets the largest particle size allowed (default
-    /// [`DEFAULT_SIZE_LIMIT`](super::DEFAULT_SIZE_LIMIT)); a collision that would pass it
-    /// makes `advance_to` fail with [`Error::Capacity`].
-    pub fn with_size_limit(mut self, limit: u64) -> Self {
-        self.size_limit = limit;
-        self
-    }
-
     /// Computes the exact factor extremes of the buckets needed for sizes up to `m`
     /// (all sizes of a bucket are evaluated: no monotonicity is assumed).
-    fn extend_buckets(&mut self, m: u64) -> Result<()> {
+    fn extend_buckets<K: CoagulationKernel>(&mut self, kernel: &K, m: u64) -> Result<()> {
         let nb = bucket_of(m) + 1;
-        let mut raw = Vec::with_capacity(nb.saturating_sub(self.raw.len()));
+        let mut raw = Vec::new();
+        try_reserve(&mut raw, nb.saturating_sub(self.raw.len()))?;
         for b in self.raw.len()..nb {
-            let mut ext = [[0.0; W], [f64::INFINITY; W]];
-            if b == 0 {
-                ext[1] = [0.0; W];
-            } else {
-                let (lo, hi) = bucket_range(b);
-                for x in lo..=hi {
-                    let (a, bb) = super::factors_at::<K, R>(&self.kernel, x as f64)?;
-                    for (r, &v) in a.iter().chain(&bb).enumerate() {
-                        ext[0][r] = ext[0][r].max(v);
-                        ext[1][r] = ext[1][r].min(v);
-                    }
-                }
-            }
-            raw.push(ext);
+            raw.push(bucket_extremes::<K, R, W>(kernel, b)?);
         }
         self.raw.extend(raw);
         for b in self.buckets.len()..nb {
@@ -483,26 +370,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         // a power of two, so integer-valued factors quantise exactly: then a pair of
         // singleton buckets has bound = squeeze and needs no acceptance draw
         for r in 0..W {
-            self.scale[r] = if fmax[r] > 0.0 {
-                // (at least the smallest normal double: factors near it would make
-                // the power of two underflow to 0 and the loop below never end)
-                let mut sc = libm::exp2(libm::ceil(libm::log2(fmax[r] / self.qmax as f64)))
-                    .max(f64::MIN_POSITIVE);
-                while fmax[r] / sc > self.qmax as f64 {
-                    sc *= 2.0;
-                }
-                sc
-            } else {
-                1.0
-            };
+            self.scale[r] = quantum(fmax[r], self.qmax);
         }
         for (bk, ext) in self.buckets.iter_mut().zip(&self.raw) {
             bk.min = ext[1];
             for r in 0..W {
-                let mut q = libm::ceil(ext[0][r] / self.scale[r]) as u64;
-                while (q as f64) * self.scale[r] < ext[0][r] {
-                    q += 1;
-                }
+                let q = quantise_up(ext[0][r], self.scale[r]);
                 bk.q[r] = q;
                 bk.hi[r] = q as f64 * self.scale[r];
             }
@@ -615,29 +488,25 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         for l in &mut self.lists {
             l.extend_from_within(..);
         }
-        self.n *= 2;
-        self.volume *= 2.0;
         self.resync();
     }
 
     /// Rebuilds the proposal tables if they are stale (or the overflow has grown past
     /// [`OVER_MAX`] buckets or 1/16 of the rate); returns the proposal rates and redraws
     /// the overflow countdown.
-    fn refresh<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Result<Rates> {
+    fn refresh_rates<Rn: Rng + ?Sized>(&mut self, pop: &Population, rng: &mut Rn) -> Result<f64> {
         if let Some(e) = self.poisoned {
             return Err(e);
         }
         let mut rates = self.rates();
         if !rates.total.is_finite() {
-            return Err(super::rate_overflow(rates.total));
+            return Err(crate::scheme::population::rate_overflow(rates.total));
         }
         // a small system grows a bucket at most events (every new size is a new slot),
         // and a rebuild costs O(buckets) against a scan of ≤ OVER_MAX grown buckets for
         // an overflow proposal: there the overflow may carry half the rate
-        let share = if self.n < SMALL_N { 2.0 } else { 16.0 };
-        if self.n >= 2
-            && rates.total > 0.0
-            && (self.rates_stale || rates.over > rates.total / share)
+        let share = if pop.n < SMALL_N { 2.0 } else { 16.0 };
+        if pop.n >= 2 && rates.total > 0.0 && (self.rates_stale || rates.over > rates.total / share)
         {
             self.rebuild_tables();
             if let Some(e) = self.poisoned {
@@ -649,10 +518,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         self.over_rate = rates.over;
         self.over_p = (rates.over / rates.total).clamp(0.0, 1.0);
         self.countdown = geometric(self.over_p, rng);
-        Ok(Rates {
-            live: rates.total > 0.0 && self.n >= 2,
-            mean_dt: self.volume / rates.total,
-        })
+        Ok(rates.total)
     }
 
     /// The streams' rates: main `Σ_k M_k M_{R+k} s_k s_{R+k}` and overflow (the sum
@@ -895,9 +761,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
     }
 
-    /// One proposal; returns whether it was accepted.
+    /// One proposal: the two slots and their occupants (see [`ProposalEngine::propose`]).
     #[inline(always)]
-    fn propose<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn, rep: &mut StepReport) -> Result<bool> {
+    fn draw<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Option<Candidate<Loc>> {
         // Main stream: side u first, so an empty slot rejects before side v is drawn.
         // With a count array beyond the caches, side u is drawn one proposal ahead and
         // its slot prefetched: the draw depends only on the tables, which stay fixed
@@ -914,31 +780,18 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             } else {
                 self.draw_u(rng, false)
             };
-            let Some(xu) = self.occupant(bu, su) else {
-                rep.rejections += 1;
-                return Ok(false);
-            };
+            let xu = self.occupant(bu, su)?;
             let (bv, sv) = self.draw_v(k, bu, rng);
-            let Some(xv) = self.occupant(bv, sv) else {
-                rep.rejections += 1;
-                return Ok(false);
-            };
+            let xv = self.occupant(bv, sv)?;
             ((bu, su, xu), (bv, sv, xv))
         } else {
             // the overflow stream's turn; then the count to its next one
             self.countdown = geometric(self.over_p, rng);
-            match self.draw_overflow(rng) {
-                Some(d) => d,
-                None => {
-                    rep.rejections += 1;
-                    return Ok(false);
-                }
-            }
+            self.draw_overflow(rng)?
         };
         if bu == bv && su == sv {
             // the particle with itself
-            rep.rejections += 1;
-            return Ok(false);
+            return None;
         }
         let (gu, gv) = (&self.buckets[bu], &self.buckets[bv]);
         let mut bound = 0.0;
@@ -947,42 +800,25 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             bound += gu.hi[kk] * gv.hi[R + kk] + gv.hi[kk] * gu.hi[R + kk];
             low += gu.min[kk] * gv.min[R + kk] + gv.min[kk] * gu.min[R + kk];
         }
-        // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
-        let squeeze = self.floor * low;
-        let evaluated = squeeze < bound && {
-            let u = bound * open_unit(rng);
-            u > squeeze && {
-                let c = bounded_rate(&self.kernel, xu as f64, xv as f64, bound, "low-rank bound")?;
-                if u > c {
-                    rep.rejections += 1;
-                    return Ok(false);
-                }
-                true
-            }
-        };
-        if !evaluated && (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK) {
-            // accepted without K: a spot check now and then
-            bounded_rate(&self.kernel, xu as f64, xv as f64, bound, "low-rank bound")?;
-        }
-        // (saturating: a size limit near u64::MAX must not let the sum wrap)
-        let x = xu.saturating_add(xv);
-        if x > self.size_limit || x == u64::MAX {
-            return Err(Error::Capacity {
-                name: "maximum particle size",
-                capacity: self.size_limit as usize,
-            });
-        }
+        Some(Candidate {
+            x: xu,
+            y: xv,
+            bound,
+            low,
+            at: ((bu, su), (bv, sv)),
+        })
+    }
+
+    /// Merges candidate `c` into one particle of size x (M already prepared).
+    #[inline(always)]
+    fn merge(&mut self, c: &Candidate<Loc>, x: u64) {
+        let ((bu, su), (bv, sv)) = c.at;
         let grows = x > self.m;
-        if grows {
-            // the fallible part first (new buckets' factors), so an error changes nothing
-            self.reserve_m(2 * self.m)?;
-            self.extend_buckets(2 * self.m)?;
-        }
         // list removals: the higher position first, so a swap-remove cannot move the other
         let ((b1, s1, x1), (b2, s2, x2)) = if bu == bv && su < sv {
-            ((bv, sv, xv), (bu, su, xu))
+            ((bv, sv, c.y), (bu, su, c.x))
         } else {
-            ((bu, su, xu), (bv, sv, xv))
+            ((bu, su, c.x), (bv, sv, c.y))
         };
         self.remove(b1, s1, x1);
         self.remove(b2, s2, x2);
@@ -990,107 +826,42 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
             self.double_m();
         }
         self.insert(x);
-        self.n -= 1;
-        if self.n < self.n0 / 2 {
-            self.double_particles();
-            rep.doublings += 1;
-        }
-        // every 256 events (the live weight costs O(buckets)): resync once the empties
-        // left by removals pass 1/64 of a row's weight — but no sooner than M/64 events
-        // after the last one, so the O(M) resync stays O(1) per event when M ≫ N
+    }
+
+    /// After an event: resync once the slots pass `3n/2` or the removals' empties
+    /// `n/8` (an O(1) test), and every 256 events once the empties left by removals pass
+    /// 1/64 of a row's weight — but no sooner than M/64 events after the last one, so
+    /// the O(M) resync stays O(1) per event when M ≫ N.
+    #[inline(always)]
+    fn after_event(&mut self, n: u64) {
         self.since_resync += 1;
-        if self.n < self.n_resync {
-            self.resync_for_slots();
-        } else if self.n & 255 == 0 && self.since_resync >= self.counts.len() as u64 >> 6 {
+        if n < self.n_resync {
+            self.resync_for_slots(n);
+        } else if n & 255 == 0 && self.since_resync >= self.counts.len() as u64 >> 6 {
             self.resync_if_sparse();
         }
-        Ok(true)
     }
 
     /// The slots have passed `3n/2` (resync now: this bounds every weight) or the
     /// removals' empties `n/8` (resync once a quarter of the buckets' count of events
     /// has passed since the last one, so the O(buckets) resync stays O(1) per event).
     #[cold]
-    fn resync_for_slots(&mut self) {
-        if 2 * self.slots_total > 3 * self.n
+    fn resync_for_slots(&mut self, n: u64) {
+        if 2 * self.slots_total > 3 * n
             || self.since_resync >= (self.buckets.len() as u64).div_ceil(4)
         {
             self.resync();
         }
     }
 
-    /// Replaces the counts `N_i = counts[i − 1]` and the volume (a host that applies
-    /// growth or nucleation between steps); the particle number becomes the new
-    /// reference for particle doubling. Time, totals, size limit and memory budget are
-    /// kept. Errors (as for [`new`](Self::new), or a size beyond the size limit) leave
-    /// the scheme unchanged.
-    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>
-    where
-        K: Clone,
-    {
-        if counts.len() as u64 > self.size_limit {
-            return Err(Error::Capacity {
-                name: "maximum particle size",
-                capacity: self.size_limit as usize,
-            });
-        }
-        let fresh = Self::build(
-            self.kernel.clone(),
-            counts,
-            volume,
-            None,
-            self.memory_budget,
-        )?;
-        self.install(fresh);
-        Ok(())
-    }
-
-    /// Replaces the kernel (e.g. new parameters between outer steps): the buckets'
-    /// bounds are recomputed and the particles re-laid from their counts, with the
-    /// particle-doubling reference kept. Errors (rank differs, invalid factors) leave
-    /// the scheme unchanged.
-    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
-        let counts = self.counts();
-        let fresh = Self::build(
-            kernel,
-            &counts,
-            self.volume,
-            Some(self.n0),
-            self.memory_budget,
-        )?;
-        self.install(fresh);
-        Ok(())
-    }
-
-    /// Takes the state of `fresh`, keeping time, totals, size limit and budget.
-    fn install(&mut self, fresh: Self) {
-        let (time, totals, limit) = (self.time, self.totals, self.size_limit);
-        *self = fresh;
-        self.time = time;
-        self.totals = totals;
-        self.size_limit = limit;
-    }
-
     /// Checks the memory budget for maximum size `m` and reserves the count array
     /// (before the event changes anything).
     #[cold]
-    fn reserve_m(&mut self, m: u64) -> Result<()> {
+    fn reserve_m(&mut self, m: u64, budget: usize) -> Result<()> {
         let len = count_len(m);
-        super::within_budget(
-            len.checked_mul(core::mem::size_of::<u32>()),
-            self.memory_budget,
-        )?;
+        within_budget(len.checked_mul(core::mem::size_of::<u32>()), budget)?;
         let more = len.saturating_sub(self.counts.len());
-        super::try_reserve(&mut self.counts, more)
-    }
-
-    /// Sets the memory budget in bytes of the size table (default
-    /// [`DEFAULT_MEMORY_BUDGET`](super::DEFAULT_MEMORY_BUDGET)): growing M past it
-    /// makes `advance_to` fail with [`Error::Capacity`], the state as before the event.
-    /// (The particles' own storage, at most 8 bytes each, is sized by the caller's N0.)
-    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
-        self.memory_budget = bytes;
-        self
+        try_reserve(&mut self.counts, more)
     }
 
     /// Doubles M (the new buckets' factors are already computed).
@@ -1194,20 +965,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
     /// An accepted event changed the proposal rates (or left fewer than two
     /// particles): the clock must restart after a refresh.
     #[inline(always)]
-    fn needs_refresh(&self) -> bool {
-        self.rates_stale || self.rates_changed || self.n < 2 || self.poisoned.is_some()
-    }
-
-    /// Books a failed call's report (the state and time are already those before the
-    /// failing proposal) and passes the error on.
-    fn fail(&mut self, e: Error, rep: &mut StepReport) -> Error {
-        rep.time = self.time;
-        self.totals.accumulate(rep);
-        e
+    fn stale(&self) -> bool {
+        self.rates_stale || self.rates_changed || self.poisoned.is_some()
     }
 
     /// The counts: `counts()[i − 1] = N_i`, for `i = 1..=M`.
-    pub fn counts(&self) -> Vec<u64> {
+    fn count_vec(&self) -> Vec<u64> {
         let mut out: Vec<u64> = self.counts[1..=self.m as usize]
             .iter()
             .map(|&c| u64::from(c))
@@ -1226,128 +989,88 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         }
         out
     }
-
-    /// The simulation volume V.
-    pub fn volume(&self) -> f64 {
-        self.volume
-    }
-
-    /// Current number of simulation particles N.
-    pub fn particles(&self) -> u64 {
-        self.n
-    }
-
-    /// Current maximum size M.
-    pub fn max_size(&self) -> usize {
-        self.m as usize
-    }
-
-    /// The moment `Σ_i i^m N_i / V`.
-    pub fn moment(&self, m: f64) -> f64 {
-        crate::observe::moment_of_counts(&self.counts(), self.volume, m)
-    }
-
-    /// Totals over the whole run.
-    pub fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
-impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for Bucketed<K, R, W> {
-    fn time(&self) -> f64 {
-        self.time
+/// Where a candidate's particles are: `(bucket, slot)` of each.
+type Loc = ((usize, u64), (usize, u64));
+
+impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> {
+    type Loc = Loc;
+    const TAG: u64 = crate::checkpoint::tag::BUCKETED;
+
+    fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
+        Self::with_counts(kernel, counts, pop)
     }
 
-    fn advance_to<Rn: Rng + ?Sized>(&mut self, t: f64, rng: &mut Rn) -> Result<StepReport> {
-        check_target(self.time, t)?;
-        let mut rep = StepReport::default();
-        let mut rates = self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
-        'epoch: loop {
-            if !rates.live {
-                self.time = t;
-                break;
-            }
-            // the rate is constant until the tables change: proposals in batches, with
-            // no clock per proposal (see `clock`) — except in a small system, where
-            // almost every event changes the rates and a batch's gamma and beta draws
-            // would cost more than an exponential per proposal
-            let batch = if self.n >= SMALL_N {
-                Batch::plan(self.time, rates.mean_dt, t, rng)
-            } else {
-                None
-            };
-            if let Some(batch) = batch {
-                let mut k = 0;
-                while k < batch.len {
-                    k += 1;
-                    rep.proposals += 1;
-                    match self.propose(rng, &mut rep) {
-                        Ok(true) => {
-                            rep.events += 1;
-                            if self.needs_refresh() {
-                                self.time = batch.time_of(k, rng);
-                                rates = self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
-                                continue 'epoch;
-                            }
-                        }
-                        Ok(false) => {}
-                        Err(e) => {
-                            self.time = batch.time_of(k - 1, rng);
-                            return Err(self.fail(e, &mut rep));
-                        }
-                    }
-                }
-                self.time = batch.end;
-                if batch.last {
-                    break;
-                }
-                continue;
-            }
-            // few proposals left before t: one exponential each
-            let dt = self.zig.sample(rng) * rates.mean_dt;
-            if self.time + dt > t {
-                self.time = t;
-                break;
-            }
-            let before = self.time;
-            self.time += dt;
-            rep.proposals += 1;
-            match self.propose(rng, &mut rep) {
-                Ok(true) => {
-                    rep.events += 1;
-                    if self.needs_refresh() {
-                        rates = self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
-                    }
-                }
-                Ok(false) => {}
-                Err(e) => {
-                    self.time = before;
-                    return Err(self.fail(e, &mut rep));
-                }
-            }
+    #[inline]
+    fn refresh<G: Rng + ?Sized>(&mut self, pop: &Population, rng: &mut G) -> Result<f64> {
+        self.refresh_rates(pop, rng)
+    }
+
+    /// The rate is constant until the tables change: proposals in batches, with no
+    /// clock per proposal (see `clock`) — except in a small system, where almost every
+    /// event changes the rates and a batch's gamma and beta draws would cost more than
+    /// an exponential per proposal.
+    #[inline]
+    fn batches(&self, pop: &Population) -> bool {
+        pop.n >= SMALL_N
+    }
+
+    #[inline(always)]
+    fn needs_refresh(&self) -> bool {
+        self.stale()
+    }
+
+    #[inline(always)]
+    fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<Loc>> {
+        self.draw(rng)
+    }
+
+    #[inline(always)]
+    fn prepare<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        outcome: &Outcome,
+        pop: &Population,
+    ) -> Result<()> {
+        let Outcome::Merge { size } = *outcome;
+        if size > self.m {
+            // the fallible part first (new buckets' factors), so an error changes nothing
+            self.reserve_m(2 * self.m, pop.memory_budget)?;
+            self.extend_buckets(kernel, 2 * self.m)?;
         }
-        rep.time = self.time;
-        self.totals.accumulate(&rep);
-        Ok(rep)
+        Ok(())
     }
-}
 
-impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkpoint::Checkpoint
-    for Bucketed<K, R, W>
-{
-    /// The counts, each bucket's slots and list order, the tables' slot counts and
-    /// the bookkeeping between resyncs — everything the next proposal depends on, so a
+    #[inline(always)]
+    fn apply(&mut self, c: &Candidate<Loc>, outcome: &Outcome) {
+        let Outcome::Merge { size } = *outcome;
+        self.merge(c, size);
+    }
+
+    #[cold]
+    fn double(&mut self, _pop: &Population) {
+        self.double_particles();
+    }
+
+    #[inline(always)]
+    fn settle(&mut self, pop: &Population) {
+        self.after_event(pop.n);
+    }
+
+    fn counts(&self) -> Cow<'_, [u64]> {
+        Cow::Owned(self.count_vec())
+    }
+
+    fn max_size(&self) -> u64 {
+        self.m
+    }
+
+    /// Each bucket's slots and list order, the tables' slot counts and the
+    /// bookkeeping between resyncs — everything the next proposal depends on, so a
     /// restored run continues bit for bit. The bounds and alias tables are rebuilt
     /// from the kernel and the saved slot counts.
-    fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
-        header(w, tag::BUCKETED);
-        for v in [R as u64, self.m, self.size_limit, self.n, self.n0] {
-            w.u64(v);
-        }
-        w.f64(self.volume);
-        w.f64(self.time);
-        save_report(w, &self.totals);
+    fn save(&self, w: &mut Writer) {
         for v in [
             self.since_resync,
             self.planned,
@@ -1399,31 +1122,23 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
         }
     }
 
-    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+    fn load<K: CoagulationKernel>(
+        kernel: &K,
+        m: u64,
+        pop: &Population,
+        r: &mut Reader,
+    ) -> Result<Self> {
         let bad = |what| Error::Checkpoint { what };
-        check_header(r, tag::BUCKETED)?;
-        if r.u64()? != R as u64 {
-            return Err(bad("different rank"));
+        let n = pop.n;
+        if !(1..=MAX_PARTICLES).contains(&pop.n0) {
+            return Err(bad("invalid particle reference"));
         }
-        let (m, size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?);
-        if !m.is_power_of_two()
-            || !(64..=1 << 62).contains(&m)
-            || !(1..=MAX_PARTICLES).contains(&n0)
-        {
-            return Err(bad("invalid maximum size or particle reference"));
-        }
-        super::within_budget(
+        within_budget(
             count_len(m).checked_mul(core::mem::size_of::<u32>()),
-            self.memory_budget,
+            pop.memory_budget,
         )?;
-        let (volume, time) = (r.f64()?, r.f64()?);
-        if !(volume > 0.0 && volume.is_finite() && time.is_finite()) {
-            return Err(bad("invalid volume or time"));
-        }
-        let totals = read_report(r)?;
         let (since_resync, planned) = (r.u64()?, r.u64()?);
-        let flag = |r: &mut crate::checkpoint::Reader| -> Result<bool> {
+        let flag = |r: &mut Reader| -> Result<bool> {
             match r.u64()? {
                 0 => Ok(false),
                 1 => Ok(true),
@@ -1453,22 +1168,16 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
             return Err(bad("count array of another length"));
         }
         let mut counts = Vec::new();
-        super::try_reserve(&mut counts, count_len(m))?;
+        try_reserve(&mut counts, count_len(m))?;
         for _ in 0..count_len(m) {
             counts.push(u32::try_from(r.u64()?).map_err(|_| bad("count above 2^32"))?);
         }
         if r.usize()? != nb {
             return Err(bad("bucket table of another length"));
         }
-        // a fresh scheme of the same kernel supplies the bounds up to M
-        let mut s = Self::build(
-            self.kernel.clone(),
-            &[1],
-            volume,
-            Some(n0),
-            self.memory_budget,
-        )?;
-        s.extend_buckets(m)?;
+        // a fresh engine of the same kernel supplies the bounds up to M
+        let mut s = Self::with_counts(kernel, &[1], pop)?;
+        s.extend_buckets(kernel, m)?;
         s.quantise();
         for bk in s.buckets.iter_mut() {
             let (slots, tab, bn, cap, judged) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?, r.u64()?);
@@ -1481,7 +1190,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
         for list in s.lists.iter_mut() {
             let len = r.usize()?;
             let mut l = Vec::new();
-            super::try_reserve(&mut l, len.min(n as usize))?;
+            try_reserve(&mut l, len.min(n as usize))?;
             for _ in 0..len {
                 l.push(u32::try_from(r.u64()?).map_err(|_| bad("list offset"))?);
             }
@@ -1534,8 +1243,6 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
         s.counts = counts;
         s.over = over;
         s.m = m;
-        s.n = n;
-        s.volume = volume;
         s.slots_total = s.buckets.iter().map(|bk| bk.slots).sum();
         s.planned = planned;
         s.since_resync = since_resync;
@@ -1563,24 +1270,28 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> crate::checkp
         if poisoned {
             s.poison();
         }
-        s.time = time;
-        s.totals = totals;
-        s.size_limit = size_limit;
-        *self = s;
-        Ok(())
+        Ok(s)
     }
 }
 
 #[cfg(test)]
 mod tests {
+    use super::super::Bucketed;
     use super::*;
+    use crate::scheme::Scheme;
 
     impl<K: CoagulationKernel, const R: usize, const W: usize> Bucketed<K, R, W> {
         /// Every redundant piece of state agrees with the counts.
         pub(crate) fn check_invariants(&self) {
-            let counts = self.counts();
-            let n: u64 = counts.iter().sum();
-            assert_eq!(n, self.n, "particle number");
+            self.engine.check_invariants(self.particles());
+        }
+    }
+
+    impl<const R: usize, const W: usize> BucketedEngine<R, W> {
+        /// Every redundant piece of state agrees with the counts (`n` particles).
+        pub(crate) fn check_invariants(&self, n: u64) {
+            let counts = self.count_vec();
+            assert_eq!(counts.iter().sum::<u64>(), n, "particle number");
             // the whole bucket of M, with the list buckets' counts restored
             let mut all = alloc::vec![0u32];
             all.extend(counts.iter().map(|&c| c as u32));
@@ -1616,11 +1327,7 @@ mod tests {
             let slots: u64 = self.buckets.iter().map(|bk| bk.slots).sum();
             assert_eq!(slots, self.slots_total, "slot total");
             // the resync rules' bound, on which the weights' headroom rests
-            assert!(
-                slots <= 5 * self.n.max(1),
-                "slots {slots} for {} particles",
-                self.n
-            );
+            assert!(slots <= 5 * n.max(1), "slots {slots} for {n} particles");
             for r in 0..W {
                 let t: u64 = self.buckets.iter().map(|bk| bk.q[r] * bk.slots).sum();
                 assert_eq!(t, self.row_total[r], "table row {r}");
@@ -1742,17 +1449,19 @@ mod tests {
     ) {
         let init: Vec<u64> = (0..120u64).map(|i| 1 + (i * 7) % 13).collect();
         let v = init.iter().sum::<u64>() as f64;
-        let mut s = Bucketed::<K, R, W>::new(kernel, &init, v).unwrap();
+        let sim = Bucketed::<K, R, W>::new(kernel, &init, v).unwrap();
+        let pop = sim.pop;
+        let mut s = sim.engine;
         let mut rng = <rand_pcg::Pcg64Mcg as rand_core::SeedableRng>::seed_from_u64(seed);
-        let _ = s.refresh(&mut rng);
+        let _ = s.refresh(&pop, &mut rng);
         assert!(!s.rates_stale);
         // grow some buckets (twice for one) without rebuilding the tables
         for b in [2, 9, 40, 70, 80, 2, 9, 40, 70, 80, 80] {
             s.grow(b);
         }
-        let _ = s.refresh(&mut rng);
+        let _ = s.refresh(&pop, &mut rng);
         assert!(!s.over.is_empty() && s.over_p > 0.0 && !s.rates_stale);
-        s.check_invariants();
+        s.check_invariants(pop.n);
         let nb = s.buckets.len();
         let cell = |bu: usize, gu: bool, bv: usize, gv: bool| {
             ((bu * nb + bv) * 2 + usize::from(gu)) * 2 + usize::from(gv)
@@ -1855,7 +1564,7 @@ mod tests {
             assert_eq!(bucket_of(lo), b);
             assert_eq!(bucket_of(hi), b);
             // width at most 1/32 of the lower end beyond the singletons
-            assert!(lo < SINGLE || (hi - lo + 1) * SUB <= lo);
+            assert!(lo < SINGLE || (hi - lo + 1) * super::super::bound::SUB <= lo);
             next = hi + 1;
         }
         assert_eq!(bucket_range(bucket_of(1 << 32)).0, 1 << 32);

@@ -18,18 +18,23 @@
 //! would halve every rate; the constant-kernel test `N(t)/V = 1/(1 + t/2)` in this
 //! module's tests decides for `V / S_A`.)
 //!
-//! **Trees.** All 2R vectors live in *one* tree, so a count change walks a single path
-//! and updates every component at once. [`LowRank`] keeps the paper's per-size weights,
-//! 8-ary with child sums in one cache line per node and component ([`WideTree`]), or the
-//! paper's binary layout ([`BinaryTree`]) for comparison (see [`trees`] for the
-//! measurements and the drift control).
+//! **One engine, many rules.** The scheme is [`LowRankMc`]: an event loop (the clock,
+//! the population with its particle doubling, the kernel) over three parts —
+//! * the **bound** ([`bound`]): the kernel's factors, validated, and their coarsening to
+//!   size buckets;
+//! * a **proposal engine** ([`ProposalEngine`]) that stores the particles and draws
+//!   pairs at rate `Â/V`: [`TreeEngine`] keeps the paper's per-size weights in one
+//!   segment tree (all 2R vectors together, so a count change walks a single path;
+//!   8-ary [`WideTree`] or the paper's [`BinaryTree`], see [`trees`]), [`BucketedEngine`]
+//!   the bound coarsened to log-linear buckets (≤ 1/32 wide) with integer weights, O(1)
+//!   alias tables over ≤ ~900 buckets and lazily emptied slots (see [`bucketed`]);
+//! * an **event rule** ([`EventRule`]) that accepts a proposed pair and names its
+//!   outcome: [`Coagulate`] (accept with `K/(Â + Âᵀ)`, squeezed with the kernel's
+//!   acceptance floor; merge).
 //!
-//! **Buckets (fastest).** [`Bucketed`] runs the same proposal scheme against a bound
-//! coarsened to log-linear size buckets (≤ 1/32 wide): integer weights, O(1) alias
-//! tables over ≤ ~900 buckets that stay in cache whatever M is, lazy removals (an empty
-//! slot is rejected — exact thinning), a squeeze with the kernel's acceptance floor, and
-//! a bucket picks its particle from a count grid or a list in O(1). `coagula bench
-//! lowrank` times both against the paper.
+//! [`Bucketed`] (the default and fastest layout) and [`LowRank`] (the per-size trees)
+//! are that scheme with the coagulation rule; `coagula bench lowrank` times both against
+//! the paper.
 //!
 //! **Growth.** When `i + j > M`, M doubles (arrays and tree grow; the only allocation,
 //! bounded by a caller-set size limit). When fewer than `N0/2` particles remain, every
@@ -48,356 +53,275 @@
 //! assert!((m0 - 1.0 / 1.5).abs() < 0.02);
 //! ```
 
+pub mod bound;
 pub mod bucketed;
+pub mod proposal;
+pub mod rule;
+pub mod tree;
 pub mod trees;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
-pub use bucketed::Bucketed;
+pub use bucketed::{BucketedEngine, MAX_PARTICLES};
+pub use proposal::{Candidate, ProposalEngine};
+pub use rule::{Coagulate, EventRule, Outcome, SPOT_CHECK};
+pub use tree::TreeEngine;
 pub use trees::{BinaryTree, ProposalTree, WideTree};
 
-pub(crate) use super::population::{
-    check_counts, rate_overflow, try_reserve, try_resize, within_budget,
-};
-pub(crate) use crate::kernel::bounded_rate;
-
-use super::{Scheme, StepReport, Ziggurat, check_target, open_unit};
+use super::clock::Batch;
+use super::population::Population;
+use super::{Scheme, StepReport, Ziggurat, check_target};
+use crate::checkpoint::{Checkpoint, Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use alloc::vec::Vec;
+use alloc::borrow::Cow;
+use core::marker::PhantomData;
 use rand_core::Rng;
-use trees::Weights;
 
-/// Low-rank Monte Carlo with a rank-`R` bound (Osinsky 2023). See the module docs.
-///
-/// `T` is the proposal-tree layout ([`WideTree`] by default, [`BinaryTree`] for
-/// comparison).
-pub struct LowRank<K, const R: usize, T = WideTree<R>> {
+/// Low-rank Monte Carlo (Osinsky 2023) over the proposal engine `E` with the event rule
+/// `Rl` (see the module docs). Use it through [`Bucketed`] or [`LowRank`].
+pub struct LowRankMc<K, const R: usize, E, Rl = Coagulate> {
     kernel: K,
-    exact_bound: bool,
-    /// `counts[i - 1] = N_i`, length M.
-    counts: Vec<u64>,
-    /// `fab[i - 1] = [[a_0(i), ..], [b_0(i), ..]]`: the weights of one particle of size i
-    /// (packed so that an update reads one cache line).
-    fab: Vec<Weights<R>>,
-    /// Proposal tree over the weights `u^k_i = a_k(i) N_i`, `v^k_i = b_k(i) N_i`.
-    tree: T,
-    /// Current maximum size M (a power of two; the tree's leaf count).
-    m: usize,
-    size_limit: u64,
-    n: u64,
-    n0: u64,
-    volume: f64,
+    pub(crate) engine: E,
+    rule: Rl,
+    pub(crate) pop: Population,
     time: f64,
     totals: StepReport,
     zig: Ziggurat,
-    memory_budget: usize,
+    _rank: PhantomData<[(); R]>,
 }
 
-impl<K, const R: usize, T> core::fmt::Debug for LowRank<K, R, T> {
+/// Low-rank MC with the paper's per-size trees ([`WideTree`] by default, [`BinaryTree`]
+/// for comparison).
+pub type LowRank<K, const R: usize, T = WideTree<R>> = LowRankMc<K, R, TreeEngine<R, T>>;
+
+/// Low-rank MC over size buckets, the default and fastest layout (see [`bucketed`]).
+/// `W` must be `2R`.
+pub type Bucketed<K, const R: usize, const W: usize> = LowRankMc<K, R, BucketedEngine<R, W>>;
+
+impl<K, const R: usize, E, Rl> core::fmt::Debug for LowRankMc<K, R, E, Rl> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.debug_struct("LowRank")
+        f.debug_struct("LowRankMc")
             .field("rank", &R)
-            .field("max_size", &self.m)
-            .field("particles", &self.n)
-            .field("volume", &self.volume)
+            .field("engine", &core::any::type_name::<E>())
+            .field("particles", &self.pop.n)
+            .field("volume", &self.pop.volume)
             .field("time", &self.time)
             .finish_non_exhaustive()
     }
 }
 
-/// The low-rank factors `(a(x), b(x))` of size x; a negative or non-finite one is an
-/// error.
-pub(crate) fn factors_at<K: CoagulationKernel, const R: usize>(
-    kernel: &K,
-    x: f64,
-) -> Result<([f64; R], [f64; R])> {
-    let (mut a, mut b) = ([0.0; R], [0.0; R]);
-    kernel.factors(x, &mut a, &mut b);
-    for &v in a.iter().chain(&b) {
-        if !(v >= 0.0 && v.is_finite()) {
-            return Err(Error::InvalidRate {
-                name: "low-rank factor",
-                value: v,
-            });
-        }
-    }
-    Ok((a, b))
-}
-
-/// A kernel whose bound is exact (or whose acceptance a squeeze decides) is still
-/// evaluated when the run's `SPOT_CHECK`-th proposal (and every multiple) is accepted
-/// without it, so a kernel that turns NaN or exceeds its bound is caught
-/// (deterministic: the random stream is the same with or without the check).
-pub(crate) const SPOT_CHECK: u64 = 1024;
-
-impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> {
+impl<K, const R: usize, E, Rl> LowRankMc<K, R, E, Rl>
+where
+    K: CoagulationKernel,
+    E: ProposalEngine<R>,
+    Rl: EventRule<K>,
+{
     /// Starts from `n0` monomers in volume `V = n0` (so `n_1(0) = 1`).
     pub fn monodisperse(kernel: K, n0: u64) -> Result<Self> {
         Self::new(kernel, &[n0], n0 as f64)
     }
 
-    /// Starts from `counts[i - 1] = N_i` in volume `volume`.
+    /// Starts from `counts[i − 1] = N_i` in volume `volume`.
     ///
-    /// Errors: the kernel's rank is not `R`, a factor is negative or not finite, the
-    /// counts are all zero, the volume is not positive.
+    /// Errors: the kernel's rank is not `R` (for the bucketed layout: or `W ≠ 2R`), a
+    /// factor is negative or not finite, the counts are all zero (or, bucketed, add up to
+    /// more than [`MAX_PARTICLES`]), the volume is not positive.
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        if kernel.rank() != R || R == 0 {
-            return Err(Error::Unsupported {
-                what: "kernel rank differs from the scheme's R (or the kernel has no low-rank bound)",
-            });
-        }
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
-        let m = counts.len().next_power_of_two().max(64);
-        within_budget(Self::bytes_for(m), DEFAULT_MEMORY_BUDGET)?;
-        let mut s = LowRank {
-            exact_bound: kernel.low_rank_is_exact(),
+        let pop = Population::new(counts, volume)?;
+        let engine = E::build(&kernel, counts, &pop)?;
+        Ok(LowRankMc {
+            rule: Rl::for_kernel(&kernel),
             kernel,
-            counts: Vec::new(),
-            fab: Vec::new(),
-            tree: T::build(8, |_| [[0.0; R]; 2])?,
-            m,
-            size_limit: DEFAULT_SIZE_LIMIT,
-            n,
-            n0: n,
-            volume,
+            engine,
+            pop,
             time: 0.0,
             totals: StepReport::default(),
             zig: Ziggurat::new(),
-            memory_budget: DEFAULT_MEMORY_BUDGET,
-        };
-        try_resize(&mut s.counts, m, 0)?;
-        s.counts[..counts.len()].copy_from_slice(counts);
-        s.extend_factors(m)?;
-        s.tree = T::build(m, |idx| s.leaf_value(idx))?;
-        Ok(s)
-    }
-
-    /// Sets the memory budget in bytes (default [`DEFAULT_MEMORY_BUDGET`]): growing the
-    /// size table past it makes `advance_to` fail with [`Error::Capacity`], the state
-    /// as before the event.
-    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
-        self.memory_budget = bytes;
-        self
-    }
-
-    /// Bytes of the per-size arrays and the tree for maximum size `m`.
-    fn bytes_for(m: usize) -> Option<usize> {
-        let per_size = core::mem::size_of::<u64>() + core::mem::size_of::<Weights<R>>();
-        m.checked_mul(per_size)?.checked_add(T::bytes(m)?)
+            _rank: PhantomData,
+        })
     }
 
     /// Sets the largest particle size allowed (default [`DEFAULT_SIZE_LIMIT`]); a
     /// collision that would pass it makes `advance_to` fail with [`Error::Capacity`].
     pub fn with_size_limit(mut self, limit: u64) -> Self {
-        self.size_limit = limit;
+        self.pop.size_limit = limit;
         self
     }
 
-    /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them
-    /// (nothing to do when the tables already cover `m`).
-    fn extend_factors(&mut self, m: usize) -> Result<()> {
-        let start = self.fab.len();
-        if m <= start {
-            return Ok(());
-        }
-        // validate all before the table changes
-        let mut new = Vec::new();
-        try_reserve(&mut new, m - start)?;
-        for i in start + 1..=m {
-            let (a, b) = factors_at::<K, R>(&self.kernel, i as f64)?;
-            new.push([a, b]);
-        }
-        try_reserve(&mut self.fab, new.len())?;
-        self.fab.extend(new);
-        Ok(())
+    /// Sets the memory budget in bytes (default [`DEFAULT_MEMORY_BUDGET`]): growing the
+    /// size table past it makes `advance_to` fail with [`Error::Capacity`], the state
+    /// as before the event. (The bucketed layout's particle lists, at most 8 bytes per
+    /// particle, are sized by the initial particles.)
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.pop.memory_budget = bytes;
+        self
     }
 
-    /// The weights of size index `idx` (zero past the count array).
-    #[inline]
-    fn leaf_value(&self, idx: usize) -> Weights<R> {
-        scale(
-            &self.fab[idx],
-            self.counts.get(idx).copied().unwrap_or(0) as f64,
-        )
-    }
-
-    /// Recomputes the tree from the exact counts, in place.
-    fn rebuild(&mut self) {
-        let (fab, counts) = (&self.fab, &self.counts);
-        self.tree.refill(|idx| scale(&fab[idx], counts[idx] as f64));
-    }
-
-    /// Changes `N` at index `idx` by `delta` and updates the tree.
-    #[inline]
-    fn change(&mut self, idx: usize, delta: i64) {
-        self.counts[idx] = (self.counts[idx] as i64 + delta) as u64;
-        let leaf = if T::NEEDS_LEAF {
-            self.leaf_value(idx)
-        } else {
-            [[0.0; R]; 2]
-        };
-        self.tree
-            .add(idx, &scale(&self.fab[idx], delta as f64), &leaf);
-    }
-
-    /// Grows the size table to `new_m`: budget, factors, counts and the new tree are
-    /// all prepared before anything the scheme uses changes.
-    fn grow(&mut self, new_m: usize) -> Result<()> {
-        // the old tree lives on while the new one is built
-        let bytes = Self::bytes_for(new_m).and_then(|b| b.checked_add(T::bytes(self.m)?));
-        within_budget(bytes, self.memory_budget)?;
-        self.extend_factors(new_m)?;
-        let more = new_m - self.counts.len();
-        try_reserve(&mut self.counts, more)?;
-        let tree = T::build(new_m, |idx| self.leaf_value(idx))?;
-        self.counts.resize(new_m, 0);
-        self.m = new_m;
-        self.tree = tree;
-        Ok(())
-    }
-
-    fn double_particles(&mut self) {
-        for c in &mut self.counts {
-            *c *= 2;
-        }
-        // doubling every leaf doubles every partial sum exactly
-        self.tree.double();
-        self.n *= 2;
-        self.volume *= 2.0;
-    }
-
-    /// One proposal; returns whether it was accepted. `self.time` must already include
-    /// the waiting time.
-    #[inline]
-    fn propose<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn, rep: &mut StepReport) -> Result<bool> {
-        let root = self.tree.totals();
-        let mut weights = [0.0; R];
-        let mut sa = 0.0;
-        for k in 0..R {
-            weights[k] = root[0][k] * root[1][k];
-            sa += weights[k];
-        }
-        let mut r = sa * open_unit(rng);
-        let mut k = R - 1;
-        for (kk, &w) in weights.iter().enumerate() {
-            r -= w;
-            if r <= 0.0 && w > 0.0 {
-                k = kk;
-                break;
-            }
-        }
-        let tu = root[0][k] * crate::tree::unit_f64(rng.next_u64());
-        let tv = root[1][k] * crate::tree::unit_f64(rng.next_u64());
-        let (i, j) = self.tree.descend_pair(k, tu, tv);
-        if self.counts[i] == 0 || self.counts[j] == 0 {
-            // a ghost weight left by rounding (see `trees`): thinning rejects it
-            rep.rejections += 1;
-            return Ok(false);
-        }
-        let spot =
-            self.exact_bound && (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK);
-        if !self.exact_bound || spot {
-            let (x, y) = ((i + 1) as f64, (j + 1) as f64);
-            let mut bound = 0.0;
-            for kk in 0..R {
-                bound += self.fab[i][0][kk] * self.fab[j][1][kk]
-                    + self.fab[j][0][kk] * self.fab[i][1][kk];
-            }
-            let c = bounded_rate(&self.kernel, x, y, bound, "low-rank bound")?;
-            if !spot && bound * open_unit(rng) > c {
-                rep.rejections += 1;
-                return Ok(false);
-            }
-        }
-        if i == j && (self.counts[i] as f64) * open_unit(rng) < 1.0 {
-            rep.rejections += 1;
-            return Ok(false);
-        }
-        let new_idx = i + j + 1; // size (i+1) + (j+1) has index i + j + 1
-        if new_idx as u64 + 1 > self.size_limit {
-            return Err(Error::Capacity {
-                name: "maximum particle size",
-                capacity: self.size_limit as usize,
-            });
-        }
-        if new_idx >= self.m {
-            self.grow(2 * self.m)?;
-        }
-        if i == j {
-            self.change(i, -2);
-        } else {
-            self.change(i, -1);
-            self.change(j, -1);
-        }
-        self.change(new_idx, 1);
-        self.n -= 1;
-        if self.n < self.n0 / 2 {
-            self.double_particles();
-            rep.doublings += 1;
-        }
-        if self.tree.wants_rebuild() {
-            self.rebuild();
-        }
-        Ok(true)
-    }
-
-    /// Number densities `n_i = N_i / V` are `counts()[i - 1] / volume()`.
-    pub fn counts(&self) -> &[u64] {
-        &self.counts
+    /// The counts: `counts()[i − 1] = N_i` (number densities `n_i = N_i / V`), for
+    /// `i = 1..=M`.
+    pub fn counts(&self) -> Cow<'_, [u64]> {
+        self.engine.counts()
     }
 
     /// The simulation volume V.
     pub fn volume(&self) -> f64 {
-        self.volume
+        self.pop.volume
     }
 
     /// Current number of simulation particles N.
     pub fn particles(&self) -> u64 {
-        self.n
+        self.pop.n
     }
 
-    /// Current maximum size M (the arrays' length).
+    /// Current maximum size M (the size table's length).
     pub fn max_size(&self) -> usize {
-        self.m
+        self.engine.max_size() as usize
     }
 
     /// The moment `Σ_i i^m N_i / V`.
     pub fn moment(&self, m: f64) -> f64 {
-        crate::observe::moment_of_counts(&self.counts, self.volume, m)
+        crate::observe::moment_of_counts(&self.counts(), self.pop.volume, m)
     }
 
     /// Totals over the whole run.
     pub fn totals(&self) -> StepReport {
         self.totals
     }
+
+    /// Replaces the kernel (e.g. new parameters between outer steps): the bound is
+    /// recomputed and the engine rebuilt from the counts, with the particle-doubling
+    /// reference kept. Errors (rank differs, invalid factors) leave the scheme
+    /// unchanged.
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        let engine = E::build(&kernel, &self.engine.counts(), &self.pop)?;
+        self.rule = Rl::for_kernel(&kernel);
+        self.kernel = kernel;
+        self.engine = engine;
+        Ok(())
+    }
+
+    /// Replaces the counts `N_i = counts[i − 1]` and the volume (a host that applies
+    /// growth or nucleation between steps); the particle number becomes the new
+    /// reference for particle doubling. Time, totals, size limit and memory budget are
+    /// kept. Errors (as for [`new`](Self::new), or a size beyond the size limit) leave
+    /// the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+        if counts.len() as u64 > self.pop.size_limit {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: usize::try_from(self.pop.size_limit).unwrap_or(usize::MAX),
+            });
+        }
+        let fresh = Population {
+            size_limit: self.pop.size_limit,
+            memory_budget: self.pop.memory_budget,
+            ..Population::new(counts, volume)?
+        };
+        self.engine = E::build(&self.kernel, counts, &fresh)?;
+        self.pop = fresh;
+        Ok(())
+    }
+
+    /// The mean waiting time between proposals and whether proposals happen at all,
+    /// after the engine's refresh.
+    #[inline]
+    fn refresh<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Result<(bool, f64)> {
+        let sa = self.engine.refresh(&self.pop, rng)?;
+        Ok((sa > 0.0 && self.pop.n >= 2, self.pop.volume / sa))
+    }
+
+    /// Books a failed call's report (the state and time are already those before the
+    /// failing proposal) and passes the error on.
+    fn fail(&mut self, e: Error, rep: &mut StepReport) -> Error {
+        rep.time = self.time;
+        self.totals.accumulate(rep);
+        e
+    }
+
+    /// One proposal; returns whether it was accepted (and then whether the proposal
+    /// rate must be refreshed). `self.time` already includes the waiting time.
+    #[inline(always)]
+    fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G, rep: &mut StepReport) -> Result<bool> {
+        let Some(c) = self.engine.propose(rng) else {
+            rep.rejections += 1;
+            return Ok(false);
+        };
+        let spot = (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK);
+        let Some(outcome) = self.rule.decide(&self.kernel, &c, spot, rng)? else {
+            rep.rejections += 1;
+            return Ok(false);
+        };
+        let Outcome::Merge { size } = outcome;
+        self.pop.check_size(size)?;
+        self.engine.prepare(&self.kernel, &outcome, &self.pop)?;
+        self.engine.apply(&c, &outcome);
+        self.pop.n -= 1;
+        if self.pop.doubling_due() {
+            self.pop.double();
+            self.engine.double(&self.pop);
+            rep.doublings += 1;
+        }
+        self.engine.settle(&self.pop);
+        Ok(true)
+    }
 }
 
-impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> Scheme for LowRank<K, R, T> {
+impl<K, const R: usize, E, Rl> Scheme for LowRankMc<K, R, E, Rl>
+where
+    K: CoagulationKernel,
+    E: ProposalEngine<R>,
+    Rl: EventRule<K>,
+{
     fn time(&self) -> f64 {
         self.time
     }
 
-    fn advance_to<Rn: Rng + ?Sized>(&mut self, t: f64, rng: &mut Rn) -> Result<StepReport> {
+    fn advance_to<G: Rng + ?Sized>(&mut self, t: f64, rng: &mut G) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
-        loop {
-            let root = self.tree.totals();
-            let mut sa = 0.0;
-            for k in 0..R {
-                sa += root[0][k] * root[1][k];
-            }
-            if !sa.is_finite() {
-                // weights past f64::MAX: no waiting time can be drawn
-                rep.time = self.time;
-                self.totals.accumulate(&rep);
-                return Err(rate_overflow(sa));
-            }
-            if sa <= 0.0 || self.n < 2 {
+        let (mut live, mut mean_dt) = self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
+        'epoch: loop {
+            if !live {
                 self.time = t;
                 break;
             }
-            let dt = self.zig.sample(rng) * self.volume / sa;
+            // the rate is constant until an event changes it: proposal times in
+            // batches where the engine allows (see `clock`)
+            let batch = if self.engine.batches(&self.pop) {
+                Batch::plan(self.time, mean_dt, t, rng)
+            } else {
+                None
+            };
+            if let Some(batch) = batch {
+                let mut k = 0;
+                while k < batch.len {
+                    k += 1;
+                    rep.proposals += 1;
+                    match self.propose(rng, &mut rep) {
+                        Ok(true) => {
+                            rep.events += 1;
+                            if self.engine.needs_refresh() || self.pop.n < 2 {
+                                self.time = batch.time_of(k, rng);
+                                (live, mean_dt) =
+                                    self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
+                                continue 'epoch;
+                            }
+                        }
+                        Ok(false) => {}
+                        Err(e) => {
+                            self.time = batch.time_of(k - 1, rng);
+                            return Err(self.fail(e, &mut rep));
+                        }
+                    }
+                }
+                self.time = batch.end;
+                if batch.last {
+                    break;
+                }
+                continue;
+            }
+            // one exponential per proposal
+            let dt = self.zig.sample(rng) * mean_dt;
             if self.time + dt > t {
                 self.time = t;
                 break;
@@ -406,13 +330,16 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> Scheme for LowRan
             self.time += dt;
             rep.proposals += 1;
             match self.propose(rng, &mut rep) {
-                Ok(true) => rep.events += 1,
+                Ok(true) => {
+                    rep.events += 1;
+                    if self.engine.needs_refresh() || self.pop.n < 2 {
+                        (live, mean_dt) = self.refresh(rng).map_err(|e| self.fail(e, &mut rep))?;
+                    }
+                }
                 Ok(false) => {}
                 Err(e) => {
                     self.time = before;
-                    rep.time = self.time;
-                    self.totals.accumulate(&rep);
-                    return Err(e);
+                    return Err(self.fail(e, &mut rep));
                 }
             }
         }
@@ -422,135 +349,64 @@ impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> Scheme for LowRan
     }
 }
 
-/// `w · c` component-wise.
-#[inline]
-fn scale<const R: usize>(w: &Weights<R>, c: f64) -> Weights<R> {
-    let mut out = [[0.0; R]; 2];
-    for p in 0..2 {
-        for k in 0..R {
-            out[p][k] = w[p][k] * c;
-        }
-    }
-    out
-}
-
-impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> crate::checkpoint::Checkpoint
-    for LowRank<K, R, T>
+impl<K, const R: usize, E, Rl> Checkpoint for LowRankMc<K, R, E, Rl>
+where
+    K: CoagulationKernel,
+    E: ProposalEngine<R>,
+    Rl: EventRule<K>,
 {
-    fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
-        header(w, tag::LOWRANK);
+    /// The common fields (rank, M, size limit, N, N0, V, time, totals), then the
+    /// engine's state. The kernel is not stored: restore into a scheme built with the
+    /// same kernel.
+    fn save(&self, w: &mut Writer) {
+        use crate::checkpoint::{header, save_report};
+        header(w, E::TAG);
         w.u64(R as u64);
-        w.u64(self.m as u64);
-        w.u64(self.size_limit);
-        w.u64(self.n);
-        w.u64(self.n0);
-        w.f64(self.volume);
+        w.u64(self.engine.max_size());
+        w.u64(self.pop.size_limit);
+        w.u64(self.pop.n);
+        w.u64(self.pop.n0);
+        w.f64(self.pop.volume);
         w.f64(self.time);
         save_report(w, &self.totals);
-        w.u64s(&self.counts);
-        self.tree.save(w);
+        self.engine.save(w);
     }
 
-    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
-        check_header(r, tag::LOWRANK)?;
+    fn restore(&mut self, r: &mut Reader) -> Result<()> {
+        use crate::checkpoint::{check_header, read_report};
+        let bad = |what| Error::Checkpoint { what };
+        check_header(r, E::TAG)?;
         if r.u64()? != R as u64 {
-            return Err(Error::Checkpoint {
-                what: "different rank",
-            });
+            return Err(bad("different rank"));
         }
-        let m = r.usize()?;
-        if !m.is_power_of_two() || m < 64 {
-            return Err(Error::Checkpoint {
-                what: "invalid maximum size",
-            });
+        let m = r.u64()?;
+        if !m.is_power_of_two() || !(64..=1 << 62).contains(&m) {
+            return Err(bad("invalid maximum size"));
         }
         let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
-        let totals = read_report(r)?;
-        let counts = r.u64s()?;
-        if counts.len() != m || counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)) != Some(n) {
-            return Err(Error::Checkpoint {
-                what: "counts do not add up",
-            });
+        if !(volume > 0.0 && volume.is_finite() && time.is_finite() && n0 > 0) {
+            return Err(bad("invalid volume, time or particle reference"));
         }
-        within_budget(Self::bytes_for(m), self.memory_budget)?;
-        let tree = T::load(m, r)?;
-        // a checkpoint taken before the size table grew has a smaller M: the factor
-        // table keeps its longer prefix (it depends only on the kernel)
-        self.extend_factors(m)?;
-        self.m = m;
-        self.size_limit = size_limit;
-        self.n = n;
-        self.n0 = n0;
-        self.volume = volume;
+        let totals = read_report(r)?;
+        let pop = Population {
+            n,
+            n0,
+            volume,
+            size_limit,
+            memory_budget: self.pop.memory_budget,
+        };
+        let engine = E::load(&self.kernel, m, &pop, r)?;
+        self.engine = engine;
+        self.pop = pop;
         self.time = time;
         self.totals = totals;
-        self.counts = counts;
-        self.tree = tree;
         Ok(())
     }
 }
-
-impl<K: CoagulationKernel, const R: usize, T: ProposalTree<R>> LowRank<K, R, T> {
-    /// Replaces the kernel (e.g. new parameters between outer steps): the factor tables
-    /// and the tree are rebuilt. Errors (rank differs, invalid factors) leave the scheme
-    /// unchanged.
-    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
-        if kernel.rank() != R {
-            return Err(Error::Unsupported {
-                what: "kernel rank differs from the scheme's R",
-            });
-        }
-        let old = core::mem::replace(&mut self.kernel, kernel);
-        let old_fab = core::mem::take(&mut self.fab);
-        if let Err(e) = self.extend_factors(self.m) {
-            self.kernel = old;
-            self.fab = old_fab;
-            return Err(e);
-        }
-        self.exact_bound = self.kernel.low_rank_is_exact();
-        self.rebuild();
-        Ok(())
-    }
-
-    /// Replaces the counts `N_i = counts[i − 1]` and the volume (a host that applies
-    /// growth or nucleation between steps). The particle number becomes the new
-    /// reference for particle doubling. Errors leave the scheme unchanged.
-    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
-        if counts.len() as u64 > self.size_limit {
-            return Err(Error::Capacity {
-                name: "maximum particle size",
-                capacity: self.size_limit as usize,
-            });
-        }
-        let m = counts.len().next_power_of_two().max(self.m);
-        let bytes = Self::bytes_for(m).and_then(|b| b.checked_add(T::bytes(self.m)?));
-        within_budget(bytes, self.memory_budget)?;
-        self.extend_factors(m)?;
-        let mut fresh = Vec::new();
-        try_resize(&mut fresh, m, 0)?;
-        fresh[..counts.len()].copy_from_slice(counts);
-        let fab = &self.fab;
-        let tree = T::build(m, |idx| scale(&fab[idx], fresh[idx] as f64))?;
-        self.m = m;
-        self.counts = fresh;
-        self.tree = tree;
-        self.n = n;
-        self.n0 = n;
-        self.volume = volume;
-        Ok(())
-    }
-}
-
-#[cfg(test)]
-mod tests;
 
 /// [`Observe`](crate::observe::Observe) for a size-count scheme from its inherent
-/// `counts`, `volume`, `moment` and `totals` (one definition for all four).
+/// `counts`, `volume`, `particles`, `moment` and `totals` (one definition for all).
 macro_rules! observe_counts {
     ([$($g:tt)*] $ty:ty) => {
         impl<$($g)*> crate::observe::Observe for $ty {
@@ -576,7 +432,9 @@ macro_rules! observe_counts {
     };
 }
 
-observe_counts!([K: CoagulationKernel, const R: usize, T: ProposalTree<R>] LowRank<K, R, T>);
-observe_counts!([K: CoagulationKernel, const R: usize, const W: usize] Bucketed<K, R, W>);
+observe_counts!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>);
 observe_counts!([K: CoagulationKernel] crate::scheme::baseline::Inverse<K>);
 observe_counts!([K: CoagulationKernel] crate::scheme::baseline::AcceptanceRejection<K>);
+
+#[cfg(test)]
+mod tests;

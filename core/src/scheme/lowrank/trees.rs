@@ -93,7 +93,7 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
 
     fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Result<Self> {
         let mut nodes = Vec::new();
-        super::try_resize(&mut nodes, 2 * m, [[0.0; R]; 2])?;
+        crate::scheme::population::try_resize(&mut nodes, 2 * m, [[0.0; R]; 2])?;
         let mut t = BinaryTree { nodes, m };
         t.refill(leaf);
         Ok(t)
@@ -268,7 +268,7 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
     fn build(m: usize, leaf: impl Fn(usize) -> Weights<R>) -> Result<Self> {
         let (start, count) = wide_levels(m);
         let mut rows = Vec::new();
-        super::try_resize(&mut rows, count, [[Row([0.0; B]); R]; 2])?;
+        crate::scheme::population::try_resize(&mut rows, count, [[Row([0.0; B]); R]; 2])?;
         let mut t = WideTree {
             rows,
             start,

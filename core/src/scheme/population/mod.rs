@@ -73,14 +73,20 @@ impl Population {
     /// (saturating: a limit near `u64::MAX` cannot let the sum wrap).
     #[inline]
     pub fn merged(&self, x: u64, y: u64) -> Result<u64> {
-        let s = x.saturating_add(y);
-        if s > self.size_limit || s == u64::MAX {
+        self.check_size(x.saturating_add(y))
+    }
+
+    /// `Err(Capacity)` for a particle beyond the size limit (or at `u64::MAX`, where a
+    /// saturated sum lands).
+    #[inline]
+    pub fn check_size(&self, size: u64) -> Result<u64> {
+        if size > self.size_limit || size == u64::MAX {
             return Err(Error::Capacity {
                 name: "maximum particle size",
                 capacity: usize::try_from(self.size_limit).unwrap_or(usize::MAX),
             });
         }
-        Ok(s)
+        Ok(size)
     }
 
     /// `Err(Capacity)` unless `bytes` (None: overflowed) fits the memory budget.

@@ -1,0 +1,115 @@
+//! The proposal engine: how a low-rank scheme stores its particles and draws ordered
+//! pairs at rate `Â(x_p, x_q)/V` from a rank-R bound `Â = Σ_k â_k b̂_kᵀ`.
+//!
+//! Two layouts implement it: [`TreeEngine`](super::TreeEngine) (the paper's per-size
+//! weights in one segment tree) and [`BucketedEngine`](super::BucketedEngine) (the bound
+//! coarsened to size buckets, alias tables, lazily emptied slots). The event loop in
+//! [`LowRankMc`](super::LowRankMc) owns the clock, the population and the kernel; an
+//! [`EventRule`](super::rule::EventRule) decides each proposal. A new rule (a
+//! temperature-dependent rate, a DSMC collision with velocities) reuses either engine.
+
+use super::rule::Outcome;
+use crate::checkpoint::{Reader, Writer};
+use crate::error::{Error, Result};
+use crate::kernel::CoagulationKernel;
+use crate::scheme::population::Population;
+use alloc::borrow::Cow;
+use rand_core::Rng;
+
+/// A proposed ordered pair of distinct particles: their sizes, the bound `Â + Âᵀ` at
+/// the pair (what the acceptance divides by) and a lower bound `low ≤ Â + Âᵀ` built
+/// from the smallest factors the engine's coarsening allows (equal to `bound` for the
+/// per-size layout), so that a rule can squeeze with the kernel's floor. `at` is where
+/// the engine keeps the two particles.
+#[derive(Clone, Copy, Debug)]
+pub struct Candidate<L> {
+    /// Size of the first particle.
+    pub x: u64,
+    /// Size of the second particle.
+    pub y: u64,
+    /// `Â(x, y) + Â(y, x)`.
+    pub bound: f64,
+    /// A lower bound of `bound` from the smallest factors (the squeeze's base).
+    pub low: f64,
+    /// The engine's handle on the two particles.
+    pub at: L,
+}
+
+/// A particle layout that proposes pairs from a rank-R bound (see the module docs).
+///
+/// The event loop calls, per proposal, [`propose`](Self::propose); after a rule accepts
+/// with an outcome, [`prepare`](Self::prepare) (the fallible part, before anything
+/// changes), [`apply`](Self::apply), then [`double`](Self::double) when the population
+/// is due for particle doubling, and [`settle`](Self::settle). Before the first
+/// proposal and whenever [`needs_refresh`](Self::needs_refresh) says so it calls
+/// [`refresh`](Self::refresh) for the current total rate.
+pub trait ProposalEngine<const R: usize>: Sized {
+    /// Where a candidate's particles live.
+    type Loc: Copy;
+    /// The checkpoint tag of a scheme on this engine.
+    const TAG: u64;
+
+    /// The engine over `counts[i − 1] = N_i` for the population `pop` (validated by the
+    /// caller), with the kernel's bound. Errors: a kernel without a rank-R bound,
+    /// invalid factors, the memory budget.
+    fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self>;
+
+    /// Prepares the proposal process (rebuilds what an event left stale) and returns
+    /// `S_A`: proposals then arrive at rate `S_A / V`. Errors: a total rate that
+    /// overflowed, a failed internal invariant.
+    fn refresh<G: Rng + ?Sized>(&mut self, pop: &Population, rng: &mut G) -> Result<f64>;
+
+    /// Whether proposal times may be drawn in batches (the rate stays fixed until an
+    /// accepted event asks for a refresh).
+    fn batches(&self, pop: &Population) -> bool;
+
+    /// An accepted event changed the proposal rate: refresh before the next proposal.
+    fn needs_refresh(&self) -> bool;
+
+    /// Draws one proposal; `None` when thinning rejects it (an empty slot, a rounding
+    /// ghost, the particle paired with itself).
+    fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<Self::Loc>>;
+
+    /// The fallible part of applying `outcome` (growing the size table for a new
+    /// largest size): on error nothing has changed.
+    fn prepare<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        outcome: &Outcome,
+        pop: &Population,
+    ) -> Result<()>;
+
+    /// Applies an accepted `outcome` of candidate `c` to the particles.
+    fn apply(&mut self, c: &Candidate<Self::Loc>, outcome: &Outcome);
+
+    /// Doubles every count (particle doubling; `pop` is already doubled).
+    fn double(&mut self, pop: &Population);
+
+    /// Housekeeping after an event (resyncs, drift control).
+    fn settle(&mut self, pop: &Population);
+
+    /// The counts, `N_i` at index `i − 1`, for `i = 1..=max_size()`.
+    fn counts(&self) -> Cow<'_, [u64]>;
+
+    /// Current maximum size M (a power of two).
+    fn max_size(&self) -> u64;
+
+    /// Writes the engine's state after the scheme's common fields.
+    fn save(&self, w: &mut Writer);
+
+    /// Reads an engine written by `save` for maximum size `m` and population `pop`,
+    /// validating it; the caller installs it only on success.
+    fn load<K: CoagulationKernel>(
+        kernel: &K,
+        m: u64,
+        pop: &Population,
+        r: &mut Reader,
+    ) -> Result<Self>;
+}
+
+/// The error of a kernel whose rank is not the scheme's R.
+pub(crate) fn rank_mismatch() -> Error {
+    Error::Unsupported {
+        what: "kernel rank differs from the scheme's R (or the kernel has no low-rank bound)",
+    }
+}

@@ -1,0 +1,95 @@
+//! Event rules: what happens to a proposed pair. A rule sees the candidate (sizes, the
+//! bound and its squeeze base) and the kernel, accepts or rejects — the thinning that
+//! turns proposals at rate `Â + Âᵀ` into events at rate K — and names the outcome.
+//!
+//! [`Coagulate`] is plain coagulation (Osinsky 2023): accept with `K/(Â + Âᵀ)`,
+//! squeezed with the kernel's acceptance floor ρ (`K ≥ ρ (Â + Âᵀ)`, so a uniform below
+//! `ρ · low` accepts without evaluating K), and merge the pair. The temperature-
+//! dependent scheme and DSMC are further rules over the same engines.
+
+use super::proposal::Candidate;
+use crate::error::Result;
+use crate::kernel::{CoagulationKernel, bounded_rate};
+use crate::random::open_unit;
+use rand_core::Rng;
+
+/// A kernel whose acceptance the squeeze decides is still evaluated when the run's
+/// `SPOT_CHECK`-th proposal (and every multiple) is accepted without it, so a kernel
+/// that turns NaN or exceeds its bound is caught (deterministic: the random stream is
+/// the same with or without the check).
+pub const SPOT_CHECK: u64 = 1024;
+
+/// What an accepted proposal does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Outcome {
+    /// The two particles merge into one of size `size`.
+    Merge {
+        /// The merged size.
+        size: u64,
+    },
+}
+
+/// Decides proposals (see the module docs).
+pub trait EventRule<K>: Sized {
+    /// The rule for `kernel` (e.g. its acceptance floor).
+    fn for_kernel(kernel: &K) -> Self;
+
+    /// Accepts (`Some(outcome)`) or rejects (`None`) candidate `c`. `spot` asks for a
+    /// kernel evaluation even if the squeeze accepts (see [`SPOT_CHECK`]). A kernel that
+    /// returns an invalid rate or exceeds the bound is an error.
+    fn decide<L, G: Rng + ?Sized>(
+        &mut self,
+        kernel: &K,
+        c: &Candidate<L>,
+        spot: bool,
+        rng: &mut G,
+    ) -> Result<Option<Outcome>>;
+}
+
+/// Plain coagulation: accept with `K/(Â + Âᵀ)`, merge.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coagulate {
+    /// The acceptance floor ρ ∈ [0, 1] of the kernel.
+    floor: f64,
+}
+
+impl<K: CoagulationKernel> EventRule<K> for Coagulate {
+    fn for_kernel(kernel: &K) -> Self {
+        let floor = if kernel.low_rank_is_exact() {
+            1.0
+        } else {
+            kernel.low_rank_floor().clamp(0.0, 1.0)
+        };
+        Coagulate { floor }
+    }
+
+    #[inline(always)]
+    fn decide<L, G: Rng + ?Sized>(
+        &mut self,
+        kernel: &K,
+        c: &Candidate<L>,
+        spot: bool,
+        rng: &mut G,
+    ) -> Result<Option<Outcome>> {
+        // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
+        let squeeze = self.floor * c.low;
+        let evaluated = squeeze < c.bound && {
+            let u = c.bound * open_unit(rng);
+            u > squeeze && {
+                let k = bounded_rate(kernel, c.x as f64, c.y as f64, c.bound, "low-rank bound")?;
+                if u > k {
+                    return Ok(None);
+                }
+                true
+            }
+        };
+        if !evaluated && spot {
+            // accepted without K: a spot check now and then
+            bounded_rate(kernel, c.x as f64, c.y as f64, c.bound, "low-rank bound")?;
+        }
+        Ok(Some(Outcome::Merge {
+            size: c.x.saturating_add(c.y),
+        }))
+    }
+}

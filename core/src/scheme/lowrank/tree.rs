@@ -1,0 +1,306 @@
+//! The per-size proposal engine of the paper (Osinsky 2023, §3): the weights
+//! `u^k_i = a_k(i) N_i`, `v^k_j = b_k(j) N_j` of every size in one segment tree
+//! ([`WideTree`](super::WideTree) or [`BinaryTree`](super::BinaryTree)), so a count
+//! change walks a single path. A proposal picks k ∝ `U_k V_k`, then i and j by descending
+//! the tree; the bound at the pair is exact per size (`low = bound`).
+
+use super::bound::factors_at;
+use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
+use super::rule::Outcome;
+use super::trees::{ProposalTree, Weights};
+use crate::checkpoint::{Reader, Writer};
+use crate::error::{Error, Result};
+use crate::kernel::CoagulationKernel;
+use crate::random::{open_unit, unit_f64};
+use crate::scheme::population::{
+    Population, rate_overflow, try_reserve, try_resize, within_budget,
+};
+use alloc::borrow::Cow;
+use alloc::vec::Vec;
+use rand_core::Rng;
+
+/// The per-size tree engine (see the module docs).
+pub struct TreeEngine<const R: usize, T> {
+    /// `counts[i - 1] = N_i`, length M.
+    counts: Vec<u64>,
+    /// `fab[i - 1] = [[a_0(i), ..], [b_0(i), ..]]`: the weights of one particle of size i
+    /// (packed so that an update reads one cache line).
+    fab: Vec<Weights<R>>,
+    /// Proposal tree over the weights `u^k_i = a_k(i) N_i`, `v^k_i = b_k(i) N_i`.
+    tree: T,
+    /// Current maximum size M (a power of two; the tree's leaf count).
+    m: usize,
+}
+
+impl<const R: usize, T> core::fmt::Debug for TreeEngine<R, T> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("TreeEngine")
+            .field("rank", &R)
+            .field("max_size", &self.m)
+            .finish_non_exhaustive()
+    }
+}
+
+/// `w · c` component-wise.
+#[inline]
+fn scale<const R: usize>(w: &Weights<R>, c: f64) -> Weights<R> {
+    let mut out = [[0.0; R]; 2];
+    for p in 0..2 {
+        for k in 0..R {
+            out[p][k] = w[p][k] * c;
+        }
+    }
+    out
+}
+
+impl<const R: usize, T: ProposalTree<R>> TreeEngine<R, T> {
+    /// Bytes of the per-size arrays and the tree for maximum size `m`.
+    fn bytes_for(m: usize) -> Option<usize> {
+        let per_size = core::mem::size_of::<u64>() + core::mem::size_of::<Weights<R>>();
+        m.checked_mul(per_size)?.checked_add(T::bytes(m)?)
+    }
+
+    /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them
+    /// (nothing to do when the tables already cover `m`).
+    fn extend_factors<K: CoagulationKernel>(&mut self, kernel: &K, m: usize) -> Result<()> {
+        let start = self.fab.len();
+        if m <= start {
+            return Ok(());
+        }
+        // validate all before the table changes
+        let mut new = Vec::new();
+        try_reserve(&mut new, m - start)?;
+        for i in start + 1..=m {
+            let (a, b) = factors_at::<K, R>(kernel, i as f64)?;
+            new.push([a, b]);
+        }
+        try_reserve(&mut self.fab, new.len())?;
+        self.fab.extend(new);
+        Ok(())
+    }
+
+    /// The weights of size index `idx` (zero past the count array).
+    #[inline]
+    fn leaf_value(&self, idx: usize) -> Weights<R> {
+        scale(
+            &self.fab[idx],
+            self.counts.get(idx).copied().unwrap_or(0) as f64,
+        )
+    }
+
+    /// Recomputes the tree from the exact counts, in place.
+    fn rebuild(&mut self) {
+        let (fab, counts) = (&self.fab, &self.counts);
+        self.tree.refill(|idx| scale(&fab[idx], counts[idx] as f64));
+    }
+
+    /// Changes `N` at index `idx` by `delta` and updates the tree.
+    #[inline]
+    fn change(&mut self, idx: usize, delta: i64) {
+        self.counts[idx] = (self.counts[idx] as i64 + delta) as u64;
+        let leaf = if T::NEEDS_LEAF {
+            self.leaf_value(idx)
+        } else {
+            [[0.0; R]; 2]
+        };
+        self.tree
+            .add(idx, &scale(&self.fab[idx], delta as f64), &leaf);
+    }
+
+    /// Grows the size table to `new_m`: budget, factors, counts and the new tree are
+    /// all prepared before anything the scheme uses changes.
+    fn grow<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        new_m: usize,
+        budget: usize,
+    ) -> Result<()> {
+        // the old tree lives on while the new one is built
+        let bytes = Self::bytes_for(new_m).and_then(|b| b.checked_add(T::bytes(self.m)?));
+        within_budget(bytes, budget)?;
+        self.extend_factors(kernel, new_m)?;
+        let more = new_m - self.counts.len();
+        try_reserve(&mut self.counts, more)?;
+        let tree = T::build(new_m, |idx| self.leaf_value(idx))?;
+        self.counts.resize(new_m, 0);
+        self.m = new_m;
+        self.tree = tree;
+        Ok(())
+    }
+}
+
+impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> {
+    /// The two sizes' indices.
+    type Loc = (usize, usize);
+    const TAG: u64 = crate::checkpoint::tag::LOWRANK;
+
+    fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
+        if kernel.rank() != R || R == 0 {
+            return Err(rank_mismatch());
+        }
+        let m = counts.len().next_power_of_two().max(64);
+        within_budget(Self::bytes_for(m), pop.memory_budget)?;
+        let mut s = TreeEngine {
+            counts: Vec::new(),
+            fab: Vec::new(),
+            tree: T::build(8, |_| [[0.0; R]; 2])?,
+            m,
+        };
+        try_resize(&mut s.counts, m, 0)?;
+        s.counts[..counts.len()].copy_from_slice(counts);
+        s.extend_factors(kernel, m)?;
+        s.tree = T::build(m, |idx| s.leaf_value(idx))?;
+        Ok(s)
+    }
+
+    #[inline]
+    fn refresh<G: Rng + ?Sized>(&mut self, _pop: &Population, _rng: &mut G) -> Result<f64> {
+        let root = self.tree.totals();
+        let mut sa = 0.0;
+        for k in 0..R {
+            sa += root[0][k] * root[1][k];
+        }
+        if !sa.is_finite() {
+            // weights past f64::MAX: no waiting time can be drawn
+            return Err(rate_overflow(sa));
+        }
+        Ok(sa)
+    }
+
+    /// No: every event changes the tree's totals.
+    #[inline]
+    fn batches(&self, _pop: &Population) -> bool {
+        false
+    }
+
+    #[inline]
+    fn needs_refresh(&self) -> bool {
+        true
+    }
+
+    #[inline]
+    fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<(usize, usize)>> {
+        let root = self.tree.totals();
+        let mut weights = [0.0; R];
+        let mut sa = 0.0;
+        for k in 0..R {
+            weights[k] = root[0][k] * root[1][k];
+            sa += weights[k];
+        }
+        let mut r = sa * open_unit(rng);
+        let mut k = R - 1;
+        for (kk, &w) in weights.iter().enumerate() {
+            r -= w;
+            if r <= 0.0 && w > 0.0 {
+                k = kk;
+                break;
+            }
+        }
+        let tu = root[0][k] * unit_f64(rng.next_u64());
+        let tv = root[1][k] * unit_f64(rng.next_u64());
+        let (i, j) = self.tree.descend_pair(k, tu, tv);
+        if self.counts[i] == 0 || self.counts[j] == 0 {
+            // a ghost weight left by rounding (see `trees`): thinning rejects it
+            return None;
+        }
+        if i == j && (self.counts[i] as f64) * open_unit(rng) < 1.0 {
+            // the particle with itself (probability 1/N_i)
+            return None;
+        }
+        let mut bound = 0.0;
+        for kk in 0..R {
+            bound +=
+                self.fab[i][0][kk] * self.fab[j][1][kk] + self.fab[j][0][kk] * self.fab[i][1][kk];
+        }
+        Some(Candidate {
+            x: (i + 1) as u64,
+            y: (j + 1) as u64,
+            bound,
+            low: bound,
+            at: (i, j),
+        })
+    }
+
+    fn prepare<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        outcome: &Outcome,
+        pop: &Population,
+    ) -> Result<()> {
+        let Outcome::Merge { size } = *outcome;
+        if size > self.m as u64 {
+            self.grow(kernel, 2 * self.m, pop.memory_budget)?;
+        }
+        Ok(())
+    }
+
+    #[inline]
+    fn apply(&mut self, c: &Candidate<(usize, usize)>, outcome: &Outcome) {
+        let Outcome::Merge { size } = *outcome;
+        let (i, j) = c.at;
+        if i == j {
+            self.change(i, -2);
+        } else {
+            self.change(i, -1);
+            self.change(j, -1);
+        }
+        self.change(size as usize - 1, 1);
+    }
+
+    fn double(&mut self, _pop: &Population) {
+        for c in &mut self.counts {
+            *c *= 2;
+        }
+        // doubling every leaf doubles every partial sum exactly
+        self.tree.double();
+    }
+
+    #[inline]
+    fn settle(&mut self, _pop: &Population) {
+        if self.tree.wants_rebuild() {
+            self.rebuild();
+        }
+    }
+
+    fn counts(&self) -> Cow<'_, [u64]> {
+        Cow::Borrowed(&self.counts)
+    }
+
+    fn max_size(&self) -> u64 {
+        self.m as u64
+    }
+
+    fn save(&self, w: &mut Writer) {
+        w.u64s(&self.counts);
+        self.tree.save(w);
+    }
+
+    fn load<K: CoagulationKernel>(
+        kernel: &K,
+        m: u64,
+        pop: &Population,
+        r: &mut Reader,
+    ) -> Result<Self> {
+        let m = usize::try_from(m).map_err(|_| Error::Checkpoint {
+            what: "invalid maximum size",
+        })?;
+        let counts = r.u64s()?;
+        if counts.len() != m
+            || counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)) != Some(pop.n)
+        {
+            return Err(Error::Checkpoint {
+                what: "counts do not add up",
+            });
+        }
+        within_budget(Self::bytes_for(m), pop.memory_budget)?;
+        let tree = T::load(m, r)?;
+        let mut s = TreeEngine {
+            counts,
+            fab: Vec::new(),
+            tree,
+            m,
+        };
+        s.extend_factors(kernel, m)?;
+        Ok(s)
+    }
+}
