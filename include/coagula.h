@@ -572,6 +572,29 @@ int32_t coag_counts_default_config(coag_counts_config *out);
 int32_t coag_massflow_new(const coag_massflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, coag_sim **out);
 
 /*
+ Bytes of caller-owned workspace a mass-flow sim of `n` particles needs (for
+ `coag_massflow_new_in`): `6 n` doubles. The LAPACK `lwork` habit: query, allocate,
+ construct.
+
+ # Safety
+ `out` must be NULL or writable.
+ */
+int32_t coag_massflow_workspace_size(size_t n, size_t *out);
+
+/*
+ `coag_massflow_new` in memory the caller owns: `workspace` (aligned for `double`,
+ `workspace_bytes` ≥ `coag_massflow_workspace_size(n)`) holds the particles, the
+ points and the scratch for the sim's whole life; no step allocates. The caller keeps
+ the buffer alive and untouched until `coag_sim_free` (the sim zeroes it first);
+ `sizes` must not overlap it.
+
+ # Safety
+ Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
+ used by nothing else until the sim is freed.
+ */
+int32_t coag_massflow_new_in(const coag_massflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, void *workspace, size_t workspace_bytes, coag_sim **out);
+
+/*
  A size-count sim: `counts[i]` particles of size `i + 1`, `len` entries, with
  `config.method` choosing the scheme — low-rank Monte Carlo (bucketed layout, the
  default, or the per-size tree layout; the kernel needs a low-rank bound of rank

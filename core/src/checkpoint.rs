@@ -148,6 +148,19 @@ impl<'a> Reader<'a> {
         (0..n).map(|_| self.f64()).collect()
     }
 
+    /// A length-prefixed run of `f64` read into `out`, whose length it must have (no
+    /// allocation).
+    pub fn f64s_into(&mut self, out: &mut [f64]) -> Result<()> {
+        let n = self.len(8)?;
+        if n != out.len() {
+            return Err(bad("different number of values"));
+        }
+        for o in out {
+            *o = self.f64()?;
+        }
+        Ok(())
+    }
+
     /// A `usize` stored as `u64`.
     pub fn usize(&mut self) -> Result<usize> {
         usize::try_from(self.u64()?).map_err(|_| bad("size does not fit"))

@@ -366,6 +366,103 @@ pub unsafe extern "C" fn coag_massflow_new(
     })
 }
 
+/// Bytes of caller-owned workspace a mass-flow sim of `n` particles needs (for
+/// `coag_massflow_new_in`): `6 n` doubles. The LAPACK `lwork` habit: query, allocate,
+/// construct.
+///
+/// # Safety
+/// `out` must be NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_massflow_workspace_size(n: usize, out: *mut usize) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        let Some(bytes) = coagula_core::scheme::massflow::workspace_len(n)
+            .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
+            .filter(|&b| b <= isize::MAX as usize)
+        else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("workspace for {n} particles overflows"),
+            );
+        };
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, bytes) };
+        Ok(())
+    })
+}
+
+/// `coag_massflow_new` in memory the caller owns: `workspace` (aligned for `double`,
+/// `workspace_bytes` ≥ `coag_massflow_workspace_size(n)`) holds the particles, the
+/// points and the scratch for the sim's whole life; no step allocates. The caller keeps
+/// the buffer alive and untouched until `coag_sim_free` (the sim zeroes it first);
+/// `sizes` must not overlap it.
+///
+/// # Safety
+/// Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
+/// used by nothing else until the sim is freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_massflow_new_in(
+    config: *const coag_massflow_config,
+    kernel: *const coag_kernel,
+    frag: *const coag_fragmentation,
+    sizes: *const f64,
+    n: usize,
+    workspace: *mut c_void,
+    workspace_bytes: usize,
+    out: *mut *mut coag_sim,
+) -> i32 {
+    guard(|| {
+        // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
+        let c = unsafe { read_config(config, "config", MASSFLOW_CONFIG_V1, default_massflow()) }?;
+        let k = unsafe { handle(kernel, "kernel") }?.k;
+        let f = if frag.is_null() {
+            Fragmentation::None
+        } else {
+            unsafe { handle(frag, "frag") }?.f
+        };
+        let x = unsafe { slice(sizes, n, "sizes") }?;
+        non_null(out, "out")?;
+        non_null(workspace, "workspace")?;
+        if !(workspace as usize).is_multiple_of(std::mem::align_of::<f64>()) {
+            return fail(COAG_INVALID_ARGUMENT, "workspace is not aligned for double");
+        }
+        let need = coagula_core::scheme::massflow::workspace_len(n)
+            .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
+            .unwrap_or(usize::MAX);
+        if workspace_bytes < need {
+            return fail(
+                crate::COAG_BUFFER_TOO_SMALL,
+                format!("workspace: {workspace_bytes} bytes for {n} particles, {need} needed"),
+            );
+        }
+        let (w0, s0) = (workspace as usize, sizes as usize);
+        if !x.is_empty() && w0 < s0 + 8 * n && s0 < w0 + need {
+            return fail(COAG_INVALID_ARGUMENT, "sizes overlap the workspace");
+        }
+        let opts = Options::default()
+            .with_dt(c.dt)
+            .with_points(points_of(&c)?)
+            .with_sorting(if c.full_sort != 0 {
+                Sorting::Full
+            } else {
+                Sorting::Adaptive
+            });
+        let init = Init::Sizes {
+            sizes: x,
+            mass: c.mass,
+        };
+        // SAFETY: non-null, aligned, `need` bytes valid and exclusively the sim's until
+        // coag_sim_free (contract); zeroed first so the slice is initialised.
+        let ws: &'static mut [f64] = unsafe {
+            std::ptr::write_bytes(workspace.cast::<u8>(), 0, need);
+            std::slice::from_raw_parts_mut(workspace.cast::<f64>(), need / 8)
+        };
+        let sim = registry::build_in(SchemeId::MassFlow, k, f, &init, &opts, ws)?;
+        // SAFETY: `out` checked non-null; writable (contract).
+        unsafe { new_sim(sim, c.seed, c.stream, out) }
+    })
+}
+
 /// A size-count sim: `counts[i]` particles of size `i + 1`, `len` entries, with
 /// `config.method` choosing the scheme — low-rank Monte Carlo (bucketed layout, the
 /// default, or the per-size tree layout; the kernel needs a low-rank bound of rank

@@ -20,22 +20,18 @@ pub enum PointSource {
     /// Sobol' under one randomisation for the whole run (biased, see above).
     ScrambledSobol(Scrambled<Sobol<u64>>),
     /// Niederreiter's sequence with an independent randomisation of every block (RQMC):
-    /// block n is block n of the sequence randomised by `kind` with random parameters
-    /// drawn from `(key, n)`.
+    /// block n is block n of the sequence randomised (with the kind of `work`) by random
+    /// parameters drawn from `(key, n)`; `work` is re-randomised in place per block.
     RerandomizedNiederreiter {
-        /// The unscrambled sequence.
-        seq: Niederreiter2<u64>,
-        /// The randomisation of every block.
-        kind: Randomization,
+        /// The sequence under its current block's randomisation.
+        work: Scrambled<Niederreiter2<u64>>,
         /// Key of the per-block random parameters.
         key: u64,
     },
     /// Sobol' with an independent randomisation of every block (RQMC).
     RerandomizedSobol {
-        /// The unscrambled sequence.
-        seq: Sobol<u64>,
-        /// The randomisation of every block.
-        kind: Randomization,
+        /// The sequence under its current block's randomisation.
+        work: Scrambled<Sobol<u64>>,
         /// Key of the per-block random parameters.
         key: u64,
     },
@@ -59,20 +55,20 @@ impl PointSource {
     /// replicas).
     pub fn randomized_niederreiter<R: Rng + ?Sized>(kind: Randomization, rng: &mut R) -> Self {
         let seq = Niederreiter2::new(3).expect("dimension 3 is supported");
+        let key = rng.next_u64();
         PointSource::RerandomizedNiederreiter {
-            seq,
-            kind,
-            key: rng.next_u64(),
+            work: Scrambled::new(seq, kind, &mut BlockRng::new(key, 0)),
+            key,
         }
     }
 
     /// Sobol' randomised by `kind`, independently for every step, key drawn from `rng`.
     pub fn randomized_sobol<R: Rng + ?Sized>(kind: Randomization, rng: &mut R) -> Self {
         let seq = Sobol::new(3).expect("dimension 3 is supported");
+        let key = rng.next_u64();
         PointSource::RerandomizedSobol {
-            seq,
-            kind,
-            key: rng.next_u64(),
+            work: Scrambled::new(seq, kind, &mut BlockRng::new(key, 0)),
+            key,
         }
     }
 
@@ -92,29 +88,31 @@ impl PointSource {
             }
             PointSource::ScrambledSobol(s) => crate::checkpoint::fingerprint([4, s.fingerprint()]),
             PointSource::MonteCarlo => 5,
-            PointSource::RerandomizedNiederreiter { kind, key, .. } => {
-                crate::checkpoint::fingerprint([6, kind_code(*kind), *key])
+            PointSource::RerandomizedNiederreiter { work, key } => {
+                crate::checkpoint::fingerprint([6, kind_code(work.kind()), *key])
             }
-            PointSource::RerandomizedSobol { kind, key, .. } => {
-                crate::checkpoint::fingerprint([7, kind_code(*kind), *key])
+            PointSource::RerandomizedSobol { work, key } => {
+                crate::checkpoint::fingerprint([7, kind_code(work.kind()), *key])
             }
         }
     }
 
     /// Writes block `n` (`2^m` points of dimension 3, row-major) into `out`; nothing for
     /// Monte Carlo points, which the scheme draws itself.
-    pub(crate) fn block(&self, n: u64, m: u32, out: &mut [f64]) -> Result<()> {
+    pub(crate) fn block(&mut self, n: u64, m: u32, out: &mut [f64]) -> Result<()> {
         match self {
             PointSource::Niederreiter(s) => s.block(n, m, out),
             PointSource::Sobol(s) => s.block(n, m, out),
             PointSource::ScrambledNiederreiter(s) => s.block(n, m, out),
             PointSource::ScrambledSobol(s) => s.block(n, m, out),
             PointSource::MonteCarlo => Ok(()),
-            PointSource::RerandomizedNiederreiter { seq, kind, key } => {
-                Scrambled::new(seq.clone(), *kind, &mut BlockRng::new(*key, n)).block(n, m, out)
+            PointSource::RerandomizedNiederreiter { work, key } => {
+                work.rerandomize(&mut BlockRng::new(*key, n));
+                work.block(n, m, out)
             }
-            PointSource::RerandomizedSobol { seq, kind, key } => {
-                Scrambled::new(seq.clone(), *kind, &mut BlockRng::new(*key, n)).block(n, m, out)
+            PointSource::RerandomizedSobol { work, key } => {
+                work.rerandomize(&mut BlockRng::new(*key, n));
+                work.block(n, m, out)
             }
         }
     }

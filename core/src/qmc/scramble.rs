@@ -87,12 +87,29 @@ impl<S: DigitalSequence> Scrambled<S> {
     pub fn new<R: Rng + ?Sized>(seq: S, kind: Randomization, rng: &mut R) -> Self {
         let dim = seq.dim();
         let b = S::Word::BITS;
-        let mut cols = Vec::with_capacity(dim * b as usize);
-        let mut param = Vec::with_capacity(dim);
+        let mut s = Scrambled {
+            seq,
+            kind,
+            cols: Vec::with_capacity(dim * b as usize),
+            param: Vec::with_capacity(dim),
+        };
+        s.rerandomize(rng);
+        s
+    }
+
+    /// Draws new random parameters from `rng`, in place: the same draws as
+    /// [`new`](Self::new) with this sequence and kind, and no allocation (the tables
+    /// keep their size), so an RQMC scheme can re-randomise every block without
+    /// touching the heap.
+    pub fn rerandomize<R: Rng + ?Sized>(&mut self, rng: &mut R) {
+        let dim = self.seq.dim();
+        let b = S::Word::BITS;
+        self.cols.clear();
+        self.param.clear();
         let mut rows = [0u64; 64];
         for j in 0..dim {
-            let c = seq.matrix(j);
-            match kind {
+            let c = self.seq.matrix(j);
+            match self.kind {
                 Randomization::Matousek => {
                     for (i, row) in rows.iter_mut().take(b as usize).enumerate() {
                         let i = i as u32;
@@ -105,20 +122,15 @@ impl<S: DigitalSequence> Scrambled<S> {
                         };
                         *row = diag | (rng.next_u64() & above);
                     }
-                    cols.extend(c.iter().map(|&x| lower_times(&rows[..b as usize], x)));
+                    self.cols
+                        .extend(c.iter().map(|&x| lower_times(&rows[..b as usize], x)));
                 }
-                _ => cols.extend_from_slice(c),
+                _ => self.cols.extend_from_slice(c),
             }
-            param.push(match kind {
+            self.param.push(match self.kind {
                 Randomization::None => S::Word::ZERO,
                 _ => S::Word::from_u64(rng.next_u64()),
             });
-        }
-        Scrambled {
-            seq,
-            kind,
-            cols,
-            param,
         }
     }
 

@@ -65,7 +65,6 @@ use super::{Scheme, StepReport, check_target};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::tree::{Weight, unit_f64};
-use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -81,8 +80,34 @@ pub enum Sorting {
     Full,
 }
 
+/// `f64`s of workspace a mass-flow scheme of `n` particles steps in (`6n`: the sizes,
+/// the next sizes, one block of 3-D points and the re-sort's scratch); `None` if it
+/// overflows. See [`MassFlow::new_in`].
+pub const fn workspace_len(n: usize) -> Option<usize> {
+    n.checked_mul(6)
+}
+
+/// The workspace split into (sizes, next sizes, points, scratch); `cur` says which half
+/// of the first `2n` holds the sizes.
+#[inline]
+fn split(ws: &mut [f64], n: usize, cur: usize) -> (&mut [f64], &mut [f64], &mut [f64], &mut [f64]) {
+    let (ab, rest) = ws.split_at_mut(2 * n);
+    let (pts, rest) = rest.split_at_mut(3 * n);
+    let scratch = &mut rest[..n];
+    let (a, b) = ab.split_at_mut(n);
+    if cur == 0 {
+        (a, b, pts, scratch)
+    } else {
+        (b, a, pts, scratch)
+    }
+}
+
 /// The time-driven mass-flow scheme. See the module docs.
-pub struct MassFlow<K, F> {
+///
+/// `B` is the workspace: an owned `Vec<f64>` ([`MassFlow::new`]) or storage the caller
+/// owns, e.g. `&mut [f64]` ([`MassFlow::new_in`]); it is sized at construction and no
+/// step allocates.
+pub struct MassFlow<K, F, B = Vec<f64>> {
     kernel: K,
     frag: F,
     points: PointSource,
@@ -92,21 +117,20 @@ pub struct MassFlow<K, F> {
     dt: f64,
     time: f64,
     steps: u64,
-    /// Sizes, sorted ascending between steps.
-    x: Vec<f64>,
-    /// Next sizes (double buffer).
-    next: Vec<f64>,
-    /// Points of the current block, N × 3.
-    pts: Vec<f64>,
-    changed: Vec<bool>,
-    scratch: Vec<f64>,
+    /// Particles N.
+    n: usize,
+    /// Which half of the double buffer holds the sizes (0 or 1).
+    cur: usize,
+    /// `[sizes A | sizes B | points (3N) | scratch (N)]`: the sizes, sorted ascending
+    /// between steps, in half `cur`; the next sizes in the other.
+    ws: B,
     totals: StepReport,
 }
 
-impl<K, F> core::fmt::Debug for MassFlow<K, F> {
+impl<K, F, B> core::fmt::Debug for MassFlow<K, F, B> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("MassFlow")
-            .field("particles", &self.x.len())
+            .field("particles", &self.n)
             .field("dt", &self.dt)
             .field("time", &self.time)
             .field("steps", &self.steps)
@@ -116,10 +140,11 @@ impl<K, F> core::fmt::Debug for MassFlow<K, F> {
 
 impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
     /// A scheme over the particles `initial` (N sizes, N a power of two ≥ 2), carrying
-    /// total mass `mass` (M1), with time step `dt`.
+    /// total mass `mass` (M1), with time step `dt`, in a workspace it allocates once
+    /// (`6N` doubles; see [`new_in`](MassFlow::new_in) for caller-owned storage).
     ///
     /// Errors: N not a power of two, a size not finite and positive, mass or dt not
-    /// finite and positive.
+    /// finite and positive, the workspace cannot be allocated.
     pub fn new(
         kernel: K,
         frag: F,
@@ -127,6 +152,46 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
         mass: f64,
         dt: f64,
         points: PointSource,
+    ) -> Result<Self> {
+        let len = workspace_len(initial.len()).ok_or(Error::Overflow {
+            name: "mass-flow workspace",
+        })?;
+        let mut ws = Vec::new();
+        crate::scheme::population::try_resize(&mut ws, len, 0.0)?;
+        MassFlow::new_in(kernel, frag, initial, mass, dt, points, ws)
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
+    MassFlow<K, F, B>
+{
+    /// [`new`](MassFlow::new) in storage the caller owns: `workspace` holds at least
+    /// [`workspace_len`]`(N)` doubles (its contents are overwritten; any excess is
+    /// unused). Construction copies the sizes in, and no step allocates.
+    ///
+    /// Errors: as for `new`, and a workspace that is too small
+    /// ([`Error::BufferLength`]).
+    ///
+    /// ```
+    /// use coagula_core::kernel::{Coagulation, NoFragmentation};
+    /// use coagula_core::scheme::Scheme;
+    /// use coagula_core::scheme::massflow::{MassFlow, PointSource, workspace_len};
+    /// let mut buf = vec![0.0; workspace_len(1024).unwrap()]; // the caller's memory
+    /// let k = Coagulation::constant(1.0).unwrap();
+    /// let mut sim = MassFlow::new_in(k, NoFragmentation, &[1.0; 1024], 1.0, 0.01,
+    ///                                PointSource::niederreiter(), &mut buf[..]).unwrap();
+    /// sim.advance_to(1.0, &mut rand_pcg::Pcg64Mcg::new(1)).unwrap();
+    /// assert!((sim.moment(1.0) - 1.0).abs() < 1e-12); // the mass is carried exactly
+    /// assert!(sim.moment(2.0) > 1.5); // M2 = 1 + t for K = 1, here from 1024 particles
+    /// ```
+    pub fn new_in(
+        kernel: K,
+        frag: F,
+        initial: &[f64],
+        mass: f64,
+        dt: f64,
+        points: PointSource,
+        mut workspace: B,
     ) -> Result<Self> {
         let n = initial.len();
         if n < 2 || !n.is_power_of_two() {
@@ -140,7 +205,21 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
         for &v in initial {
             crate::error::positive("initial size", v)?;
         }
-        let mut x = initial.to_vec();
+        let need = workspace_len(n).ok_or(Error::Overflow {
+            name: "mass-flow workspace",
+        })?;
+        let got = workspace.as_ref().len();
+        if got < need {
+            return Err(Error::BufferLength {
+                name: "mass-flow workspace (f64s)",
+                expected: need,
+                got,
+            });
+        }
+        let ws = &mut workspace.as_mut()[..need];
+        ws.fill(0.0);
+        let x = &mut ws[..n];
+        x.copy_from_slice(initial);
         x.sort_unstable_by(f64::total_cmp);
         Ok(MassFlow {
             kernel,
@@ -152,15 +231,15 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
             dt,
             time: 0.0,
             steps: 0,
-            next: vec![0.0; n],
-            pts: vec![0.0; 3 * n],
-            changed: vec![false; n],
-            scratch: Vec::with_capacity(n),
-            x,
+            n,
+            cur: 0,
+            ws: workspace,
             totals: StepReport::default(),
         })
     }
+}
 
+impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
     /// N particles sampled from the initial *mass* distribution by its inverse CDF at
     /// the centred 1-D low-discrepancy set `(k + 1/2)/N`.
     pub fn from_inverse_cdf(
@@ -177,7 +256,11 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
             .collect();
         Self::new(kernel, frag, &init, mass, dt, points)
     }
+}
 
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
+    MassFlow<K, F, B>
+{
     /// Selects the re-sorting strategy.
     pub fn with_sorting(mut self, sorting: Sorting) -> Self {
         self.sorting = sorting;
@@ -186,24 +269,26 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
 
     /// The particle sizes, sorted ascending.
     pub fn sizes(&self) -> &[f64] {
-        &self.x
+        let o = self.cur * self.n;
+        &self.ws.as_ref()[o..o + self.n]
     }
 
     /// Replaces the particle sizes (a host that applies growth or nucleation between
     /// steps). Same length, every size finite and positive; on error nothing changes.
     pub fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
-        if sizes.len() != self.x.len() {
+        if sizes.len() != self.n {
             return Err(Error::BufferLength {
                 name: "sizes",
-                expected: self.x.len(),
+                expected: self.n,
                 got: sizes.len(),
             });
         }
         for &v in sizes {
             crate::error::positive("size", v)?;
         }
-        self.x.copy_from_slice(sizes);
-        self.x.sort_unstable_by(f64::total_cmp);
+        let (x, ..) = split(self.ws.as_mut(), self.n, self.cur);
+        x.copy_from_slice(sizes);
+        x.sort_unstable_by(f64::total_cmp);
         Ok(())
     }
 
@@ -224,13 +309,13 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
 
     /// The moment estimate `M_m ≈ (M1/N) Σ_k x_k^{m−1}`.
     pub fn moment(&self, m: f64) -> f64 {
-        crate::observe::mass_flow_moment(&self.x, self.mass, self.x.len(), m)
+        crate::observe::mass_flow_moment(self.sizes(), self.mass, self.n, m)
     }
 
     /// Number concentration of sizes in `[a, b]`: `(M1/N) Σ_{a ≤ x_k ≤ b} 1/x_k`.
     pub fn concentration(&self, a: f64, b: f64) -> f64 {
-        let w = self.mass / self.x.len() as f64;
-        crate::observe::sum_concentration(self.x.iter().map(|&x| (x, w / x)), a, b)
+        let w = self.mass / self.n as f64;
+        crate::observe::sum_concentration(self.sizes().iter().map(|&x| (x, w / x)), a, b)
     }
 
     /// Number concentration per bin `[edges[i], edges[i+1])` into `out` (length
@@ -244,8 +329,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
             });
         }
         out.iter_mut().for_each(|o| *o = 0.0);
-        let w = self.mass / self.x.len() as f64;
-        for &x in &self.x {
+        let w = self.mass / self.n as f64;
+        for &x in self.sizes() {
             // edges are sorted; find the bin by binary search
             let i = edges.partition_point(|&e| e <= x);
             if i > 0 && i < edges.len() {
@@ -260,16 +345,17 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
         self.totals
     }
 
-    /// One step of length `h` into `self.next`; returns its report. `self.x` is not
-    /// touched, so an error leaves the state as it was.
+    /// One step of length `h` into the next-sizes buffer; returns its report. The sizes
+    /// are not touched, so an error leaves the state as it was.
     #[inline(never)]
     fn step<R: Rng + ?Sized>(&mut self, h: f64, rng: &mut R) -> Result<StepReport> {
-        let n = self.x.len();
+        let n = self.n;
         let nf = n as f64;
         let mut rep = StepReport::default();
         let mc = matches!(self.points, PointSource::MonteCarlo);
+        let (x, next, pts, _) = split(self.ws.as_mut(), n, self.cur);
         if !mc {
-            self.points.block(self.steps, self.m, &mut self.pts)?;
+            self.points.block(self.steps, self.m, pts)?;
         }
         for p in 0..n {
             let (k, l, u3) = if mc {
@@ -279,14 +365,14 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
                     unit_f64(rng.next_u64()),
                 )
             } else {
-                let u = &self.pts[3 * p..3 * p + 3];
+                let u = &pts[3 * p..3 * p + 3];
                 (
                     ((nf * u[0]) as usize).min(n - 1),
                     ((nf * u[1]) as usize).min(n - 1),
                     u[2],
                 )
             };
-            let (xk, xl) = (self.x[k], self.x[l]);
+            let (xk, xl) = (x[k], x[l]);
             let kt = self.kernel.rate(xk, xl);
             let fd = self.frag.total_rate(xk);
             if !(kt >= 0.0 && kt.is_finite()) {
@@ -328,40 +414,42 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
                     name: "particle size (a coagulation passed the largest f64)",
                 });
             }
-            self.next[k] = new;
-            self.changed[k] = new != xk;
+            next[k] = new;
         }
         rep.proposals = n as u64;
         Ok(rep)
     }
 
-    /// Sorts `next` (old order with some entries changed) ascending.
+    /// Sorts the next sizes (old order with some entries changed) ascending; a particle
+    /// changed in the step iff its next size differs from its size.
     #[inline(never)]
     fn resort(&mut self) {
+        let (x, next, _, scratch) = split(self.ws.as_mut(), self.n, self.cur);
         match self.sorting {
-            Sorting::Full => self.next.sort_unstable_by(f64::total_cmp),
+            Sorting::Full => next.sort_unstable_by(f64::total_cmp),
             Sorting::Adaptive => {
-                self.scratch.clear();
-                let mut w = 0;
-                for i in 0..self.next.len() {
-                    let v = self.next[i];
-                    if self.changed[i] {
-                        self.scratch.push(v);
+                let (mut w, mut changed) = (0, 0);
+                for i in 0..next.len() {
+                    let v = next[i];
+                    if v != x[i] {
+                        scratch[changed] = v;
+                        changed += 1;
                     } else {
-                        self.next[w] = v;
+                        next[w] = v;
                         w += 1;
                     }
                 }
-                self.scratch.sort_unstable_by(f64::total_cmp);
+                let scratch = &mut scratch[..changed];
+                scratch.sort_unstable_by(f64::total_cmp);
                 // merge from the back: the unchanged prefix [0, w) and the scratch
-                let (mut i, mut j, mut out) = (w, self.scratch.len(), self.next.len());
+                let (mut i, mut j, mut out) = (w, scratch.len(), next.len());
                 while j > 0 {
                     out -= 1;
-                    if i > 0 && self.next[i - 1] > self.scratch[j - 1] {
-                        self.next[out] = self.next[i - 1];
+                    if i > 0 && next[i - 1] > scratch[j - 1] {
+                        next[out] = next[i - 1];
                         i -= 1;
                     } else {
-                        self.next[out] = self.scratch[j - 1];
+                        next[out] = scratch[j - 1];
                         j -= 1;
                     }
                 }
@@ -370,7 +458,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel> MassFlow<K, F> {
     }
 }
 
-impl<K: CoagulationKernel, F: FragmentationKernel> Scheme for MassFlow<K, F> {
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>> Scheme
+    for MassFlow<K, F, B>
+{
     fn time(&self) -> f64 {
         self.time
     }
@@ -400,7 +490,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel> Scheme for MassFlow<K, F> {
                 }
             };
             self.resort();
-            core::mem::swap(&mut self.x, &mut self.next);
+            self.cur ^= 1;
             self.steps += 1;
             self.time += h;
             rep.events += r.events;
@@ -413,13 +503,15 @@ impl<K: CoagulationKernel, F: FragmentationKernel> Scheme for MassFlow<K, F> {
     }
 }
 
-impl<K: CoagulationKernel, F: FragmentationKernel> crate::observe::Observe for MassFlow<K, F> {
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
+    crate::observe::Observe for MassFlow<K, F, B>
+{
     /// 1: each particle carries the mass `M1 / N` instead of living in a volume.
     fn volume(&self) -> f64 {
         1.0
     }
     fn particles(&self) -> u64 {
-        self.x.len() as u64
+        self.n as u64
     }
     fn moment(&self, order: f64) -> f64 {
         MassFlow::moment(self, order)
@@ -436,7 +528,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel> crate::observe::Observe for M
     }
 }
 
-impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
+    crate::checkpoint::Checkpoint for MassFlow<K, F, B>
+{
     fn save(&self, w: &mut crate::checkpoint::Writer) {
         use crate::checkpoint::{header, save_report, tag};
         header(w, tag::MASSFLOW);
@@ -450,7 +544,7 @@ impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
         w.f64(self.time);
         w.u64(self.steps);
         save_report(w, &self.totals);
-        w.f64s(&self.x);
+        w.f64s(self.sizes());
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
@@ -472,14 +566,19 @@ impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
         };
         let (mass, dt, time, steps) = (r.f64()?, r.f64()?, r.f64()?, r.u64()?);
         let totals = read_report(r)?;
-        let x = r.f64s()?;
-        if x.len() != self.x.len() {
-            return Err(Error::Checkpoint {
-                what: "different number of particles",
-            });
-        }
-        if !(mass > 0.0 && dt > 0.0 && time >= 0.0)
-            || x.iter().any(|&v| !(v > 0.0 && v.is_finite()))
+        // read into the next-sizes half (scratch until a step), so that a refused
+        // checkpoint leaves the sizes as they were and nothing is allocated
+        let (_, next, ..) = split(self.ws.as_mut(), self.n, self.cur);
+        r.f64s_into(next).map_err(|_| Error::Checkpoint {
+            what: "different number of particles",
+        })?;
+        if !(mass > 0.0
+            && dt > 0.0
+            && time >= 0.0
+            && mass.is_finite()
+            && dt.is_finite()
+            && time.is_finite())
+            || next.iter().any(|&v| !(v > 0.0 && v.is_finite()))
         {
             return Err(Error::Checkpoint {
                 what: "invalid values",
@@ -491,12 +590,12 @@ impl<K, F> crate::checkpoint::Checkpoint for MassFlow<K, F> {
         self.time = time;
         self.steps = steps;
         self.totals = totals;
-        self.x = x;
+        self.cur ^= 1;
         Ok(())
     }
 }
 
-impl<K, F> MassFlow<K, F> {
+impl<K, F, B> MassFlow<K, F, B> {
     /// Replaces the coagulation kernel (e.g. new parameters between outer steps).
     pub fn set_kernel(&mut self, kernel: K) {
         self.kernel = kernel;

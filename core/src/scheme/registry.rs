@@ -378,12 +378,12 @@ where
 pub trait RegistryKernel: CoagulationKernel + Clone + 'static {}
 impl<K: CoagulationKernel + Clone + 'static> RegistryKernel for K {}
 
-fn boxed<S, K, F, G>(s: S, id: SchemeId) -> Box<dyn Simulation<K, F, G>>
+fn boxed<'a, S, K, F, G>(s: S, id: SchemeId) -> Box<dyn Simulation<K, F, G> + 'a>
 where
-    S: Scheme + Observe + Checkpoint + Facet<K, F> + 'static,
-    K: 'static,
-    F: 'static,
-    G: Rng + ?Sized + 'static,
+    S: Scheme + Observe + Checkpoint + Facet<K, F> + 'a,
+    K: 'a,
+    F: 'a,
+    G: Rng + ?Sized + 'a,
 {
     Box::new(Entry {
         s,
@@ -499,7 +499,78 @@ where
     }
 }
 
-impl<K: CoagulationKernel, F: FragmentationKernel> Facet<K, F> for MassFlow<K, F> {
+/// `f64`s of caller-owned workspace scheme `id` needs for `init`, for the fixed-size
+/// schemes that can run in it ([`build_in`]); `None` for the growing schemes (they take
+/// a memory budget instead, [`Options::memory_budget`]) or an overflowing size.
+pub fn workspace_len(id: SchemeId, init: &Init<'_>) -> Option<usize> {
+    match (id, init) {
+        (SchemeId::MassFlow, Init::Sizes { sizes, .. }) => {
+            super::massflow::workspace_len(sizes.len())
+        }
+        _ => None,
+    }
+}
+
+/// [`build`] in storage the caller owns: `workspace` holds at least
+/// [`workspace_len`] doubles and is borrowed for the sim's life; no step allocates
+/// (the facade's box is the only allocation, made here).
+///
+/// Errors: as for `build`; a growing scheme (`Unsupported`: give it a memory budget);
+/// a workspace that is too small (`BufferLength`).
+///
+/// ```
+/// use coagula_core::kernel::{Coagulation, NoFragmentation};
+/// use coagula_core::random::{Pcg64, generator};
+/// use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+/// let sizes = [1.0; 256];
+/// let init = Init::Sizes { sizes: &sizes, mass: 1.0 };
+/// let mut ws = vec![0.0; registry::workspace_len(SchemeId::MassFlow, &init).unwrap()];
+/// let k = Coagulation::constant(1.0).unwrap();
+/// let mut sim: Box<dyn Simulation<_, _, Pcg64> + '_> = registry::build_in(
+///     SchemeId::MassFlow, k, NoFragmentation, &init, &Options::default(), &mut ws,
+/// ).unwrap();
+/// sim.advance_to(0.5, &mut generator(1, 0)).unwrap();
+/// assert!((sim.moment(2.0) - 1.5).abs() < 0.02);
+/// ```
+pub fn build_in<'a, K, F, G>(
+    id: SchemeId,
+    kernel: K,
+    frag: F,
+    init: &Init<'_>,
+    opts: &Options,
+    workspace: &'a mut [f64],
+) -> Result<Box<dyn Simulation<K, F, G> + 'a>>
+where
+    K: CoagulationKernel + Clone + 'a,
+    F: FragmentationKernel + Clone + 'a,
+    G: Rng + ?Sized + 'a,
+{
+    match (id, *init) {
+        (SchemeId::MassFlow, Init::Sizes { sizes, mass }) => {
+            let s = MassFlow::new_in(
+                kernel,
+                frag,
+                sizes,
+                mass,
+                opts.dt,
+                opts.points.clone(),
+                workspace,
+            )?
+            .with_sorting(opts.sorting);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::MassFlow, _) => Err(Error::Unsupported {
+            what: "initial state of the other kind (counts vs sizes) for this scheme",
+        }),
+        _ => Err(Error::Unsupported {
+            what: "caller-owned workspace: only the fixed-size schemes run in one (the growing ones take a memory budget)",
+        }),
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>> Facet<K, F>
+    for MassFlow<K, F, B>
+{
     fn state(&self) -> State<'_> {
         State::Sizes(self.sizes())
     }

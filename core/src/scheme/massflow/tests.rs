@@ -7,6 +7,7 @@ use crate::observe::Replicas;
 use crate::qmc::Randomization;
 use alloc::format;
 use alloc::string::String;
+use alloc::vec;
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 
@@ -247,7 +248,7 @@ fn pure_coagulation_follows_the_euler_recursion_of_the_exact_moments() {
 #[test]
 fn every_particle_is_selected_once_per_step() {
     let mut rng = Pcg64Mcg::new(5);
-    let sources = [
+    let mut sources = [
         PointSource::niederreiter(),
         PointSource::sobol(),
         PointSource::randomized_niederreiter(Randomization::Owen, &mut rng),
@@ -257,7 +258,7 @@ fn every_particle_is_selected_once_per_step() {
     let m = 10;
     let n = 1usize << m;
     let mut pts = vec![0.0; 3 * n];
-    for src in &sources {
+    for src in &mut sources {
         for block in [0u64, 1, 99, 1600] {
             src.block(block, m, &mut pts).unwrap();
             let mut seen = vec![false; n];
