@@ -19,8 +19,7 @@
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::scheme::population::{
-    DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT, check_counts, rate_overflow, try_reserve,
-    try_resize, within_budget,
+    DEFAULT_MEMORY_BUDGET, Population, rate_overflow, try_reserve, try_resize, within_budget,
 };
 use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
 use alloc::vec;
@@ -62,12 +61,9 @@ pub struct Inverse<K> {
     /// Largest `dim`: [`CACHE_DIM`], or less for few particles (the occupied sizes are
     /// then few, and a 32 MB table per small system would cost more than it saves).
     cache_max: usize,
-    memory_budget: usize,
-    n: u64,
-    n0: u64,
-    volume: f64,
+    /// N, N0, V, the size limit and the memory budget.
+    pop: Population,
     time: f64,
-    size_limit: u64,
     totals: StepReport,
 }
 
@@ -75,7 +71,7 @@ impl<K> core::fmt::Debug for Inverse<K> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("Inverse")
             .field("occupied", &self.size.len())
-            .field("particles", &self.n)
+            .field("particles", &self.pop.n)
             .field("time", &self.time)
             .finish_non_exhaustive()
     }
@@ -89,8 +85,8 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Starts from `counts[i - 1] = N_i` in volume `volume`.
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
+        let pop = Population::new(counts, volume)?;
+        let n = pop.n;
         let len = counts.len().next_power_of_two();
         within_budget(
             len.checked_mul(core::mem::size_of::<u32>()),
@@ -111,12 +107,8 @@ impl<K: CoagulationKernel> Inverse<K> {
             cache_max: (n.min(CACHE_DIM as u64) as usize)
                 .next_power_of_two()
                 .clamp(64, CACHE_DIM),
-            memory_budget: DEFAULT_MEMORY_BUDGET,
-            n,
-            n0: n,
-            volume,
+            pop,
             time: 0.0,
-            size_limit: DEFAULT_SIZE_LIMIT,
             totals: StepReport::default(),
         };
         try_resize(&mut s.slot, len, NONE)?;
@@ -142,7 +134,7 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Sets the largest particle size allowed.
     pub fn with_size_limit(mut self, limit: u64) -> Self {
-        self.size_limit = limit;
+        self.pop.size_limit = limit;
         self
     }
 
@@ -195,12 +187,12 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Current number of simulation particles N.
     pub fn particles(&self) -> u64 {
-        self.n
+        self.pop.n
     }
 
     /// The simulation volume V.
     pub fn volume(&self) -> f64 {
-        self.volume
+        self.pop.volume
     }
 
     /// Largest size present.
@@ -215,7 +207,7 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// The moment `Σ_i i^m N_i / V`.
     pub fn moment(&self, m: f64) -> f64 {
-        let w = 1.0 / self.volume;
+        let w = 1.0 / self.pop.volume;
         crate::observe::moment(
             self.size
                 .iter()
@@ -240,7 +232,7 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let result = loop {
-            if self.n < 2 {
+            if self.pop.n < 2 {
                 self.time = t;
                 break Ok(());
             }
@@ -256,7 +248,7 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 self.time = t;
                 break Ok(());
             }
-            let dt = exp1(rng) * 2.0 * self.volume / total;
+            let dt = exp1(rng) * 2.0 * self.pop.volume / total;
             if self.time + dt > t {
                 self.time = t;
                 break Ok(());
@@ -303,13 +295,10 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 }
             }
             let xj = self.size[ja];
-            let merged = xi.saturating_add(xj);
-            if merged > self.size_limit || merged == u64::MAX {
-                break Err(Error::Capacity {
-                    name: "maximum particle size",
-                    capacity: self.size_limit as usize,
-                });
-            }
+            let merged = match self.pop.merged(xi, xj) {
+                Ok(m) => m,
+                Err(e) => break Err(e),
+            };
             // every kernel value the event needs, validated before anything changes
             let dm = match self.event_rows(xj, merged) {
                 Ok(d) => d,
@@ -321,15 +310,14 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
             rep.proposals += 1;
             self.time += dt;
             self.apply_event(ia, ja, merged, dm);
-            self.n -= 1;
+            self.pop.n -= 1;
             rep.events += 1;
-            if self.n < self.n0 / 2 {
+            if self.pop.doubling_due() {
                 for a in 0..self.size.len() {
                     self.count[a] *= 2;
                     self.row[a] *= 2.0;
                 }
-                self.n *= 2;
-                self.volume *= 2.0;
+                self.pop.double();
                 rep.doublings += 1;
             }
         };
@@ -373,7 +361,7 @@ impl<K: CoagulationKernel> Inverse<K> {
             let len = need.checked_next_power_of_two().unwrap_or(usize::MAX);
             within_budget(
                 len.checked_mul(core::mem::size_of::<u32>()),
-                self.memory_budget,
+                self.pop.memory_budget,
             )?;
             try_resize(&mut self.slot, len, NONE)?;
         }
@@ -387,7 +375,7 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// [`DEFAULT_MEMORY_BUDGET`]): a size beyond it makes
     /// `advance_to` fail with [`Error::Capacity`], the state as before the event.
     pub fn with_memory_budget(mut self, bytes: usize) -> Self {
-        self.memory_budget = bytes;
+        self.pop.memory_budget = bytes;
         self
     }
 
@@ -444,10 +432,10 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
         use crate::checkpoint::{header, save_report, tag};
         header(w, tag::INVERSE);
-        w.u64(self.size_limit);
-        w.u64(self.n);
-        w.u64(self.n0);
-        w.f64(self.volume);
+        w.u64(self.pop.size_limit);
+        w.u64(self.pop.n);
+        w.u64(self.pop.n0);
+        w.f64(self.pop.volume);
         w.f64(self.time);
         save_report(w, &self.totals);
         w.u64s(&self.size);
@@ -482,7 +470,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         let len = max.checked_next_power_of_two().unwrap_or(usize::MAX);
         within_budget(
             len.checked_mul(core::mem::size_of::<u32>()),
-            self.memory_budget,
+            self.pop.memory_budget,
         )?;
         let mut slot = Vec::new();
         try_resize(&mut slot, len, NONE)?;
@@ -494,10 +482,10 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
             }
             slot[s as usize - 1] = a as u32;
         }
-        self.size_limit = size_limit;
-        self.n = n;
-        self.n0 = n0;
-        self.volume = volume;
+        self.pop.size_limit = size_limit;
+        self.pop.n = n;
+        self.pop.n0 = n0;
+        self.pop.volume = volume;
         self.time = time;
         self.totals = totals;
         self.size = size;
@@ -514,7 +502,7 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// the scheme unchanged.
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
         let counts = self.counts();
-        let fresh = Inverse::new(kernel, &counts, self.volume)?;
+        let fresh = Inverse::new(kernel, &counts, self.pop.volume)?;
         self.install(fresh);
         Ok(())
     }
@@ -532,13 +520,17 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Takes the state of `fresh`, keeping time, totals and the size limit.
     fn install(&mut self, fresh: Inverse<K>) {
-        let (time, totals, limit, budget) =
-            (self.time, self.totals, self.size_limit, self.memory_budget);
+        let (time, totals, limit, budget) = (
+            self.time,
+            self.totals,
+            self.pop.size_limit,
+            self.pop.memory_budget,
+        );
         *self = fresh;
         self.time = time;
         self.totals = totals;
-        self.size_limit = limit;
-        self.memory_budget = budget;
+        self.pop.size_limit = limit;
+        self.pop.memory_budget = budget;
     }
 }
 

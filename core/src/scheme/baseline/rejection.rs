@@ -4,8 +4,7 @@
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::scheme::population::{
-    DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT, check_counts, rate_overflow, try_reserve,
-    within_budget,
+    DEFAULT_MEMORY_BUDGET, Population, rate_overflow, try_reserve, within_budget,
 };
 use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
 use crate::tree::Weight;
@@ -29,14 +28,12 @@ use rand_core::Rng;
 pub struct AcceptanceRejection<K> {
     kernel: K,
     sizes: Vec<u64>,
-    n0: u64,
-    volume: f64,
+    /// N (= the list's length), N0, V, the size limit and the memory budget.
+    pop: Population,
     time: f64,
     max_present: u64,
     cmax: f64,
-    size_limit: u64,
     totals: StepReport,
-    memory_budget: usize,
 }
 
 impl<K> core::fmt::Debug for AcceptanceRejection<K> {
@@ -73,21 +70,20 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         volume: f64,
         bytes: usize,
     ) -> Result<Self> {
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
-        let sizes = Self::particle_list(counts, n, bytes)?;
+        let pop = Population {
+            memory_budget: bytes,
+            ..Population::new(counts, volume)?
+        };
+        let sizes = Self::particle_list(counts, pop.n, bytes)?;
         let max_present = sizes.iter().copied().max().unwrap_or(1);
         let mut s = AcceptanceRejection {
             kernel,
             sizes,
-            n0: n,
-            volume,
+            pop,
             time: 0.0,
             max_present,
             cmax: 0.0,
-            size_limit: DEFAULT_SIZE_LIMIT,
             totals: StepReport::default(),
-            memory_budget: bytes,
         };
         s.cmax = s.sup(max_present)?;
         Ok(s)
@@ -111,7 +107,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
 
     /// Sets the largest particle size allowed.
     pub fn with_size_limit(mut self, limit: u64) -> Self {
-        self.size_limit = limit;
+        self.pop.size_limit = limit;
         self
     }
 
@@ -152,7 +148,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
 
     /// The simulation volume V.
     pub fn volume(&self) -> f64 {
-        self.volume
+        self.pop.volume
     }
 
     /// Largest size present.
@@ -162,7 +158,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
 
     /// The moment `Σ_p x_p^m / V` (O(N)).
     pub fn moment(&self, m: f64) -> f64 {
-        let w = 1.0 / self.volume;
+        let w = 1.0 / self.pop.volume;
         crate::observe::moment(self.sizes.iter().map(|&s| (s as f64, w)), m)
     }
 
@@ -186,7 +182,7 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 self.time = t;
                 break Ok(());
             }
-            let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.volume);
+            let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.pop.volume);
             if !rate.is_finite() {
                 break Err(rate_overflow(rate));
             }
@@ -217,13 +213,10 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 rep.rejections += 1;
                 continue;
             }
-            let merged = x.saturating_add(y);
-            if merged > self.size_limit || merged == u64::MAX {
-                break Err(Error::Capacity {
-                    name: "maximum particle size",
-                    capacity: self.size_limit as usize,
-                });
-            }
+            let merged = match self.pop.merged(x, y) {
+                Ok(m) => m,
+                Err(e) => break Err(e),
+            };
             if merged > self.max_present {
                 let c = match self.sup(merged) {
                     Ok(c) => c,
@@ -235,10 +228,11 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
             self.time += dt;
             self.sizes[p] = merged;
             self.sizes.swap_remove(q);
+            self.pop.n -= 1;
             rep.events += 1;
-            if (self.sizes.len() as u64) < self.n0 / 2 {
+            if self.pop.doubling_due() {
                 self.sizes.extend_from_within(..);
-                self.volume *= 2.0;
+                self.pop.double();
                 rep.doublings += 1;
             }
         };
@@ -252,9 +246,9 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
     fn save(&self, w: &mut crate::checkpoint::Writer) {
         use crate::checkpoint::{header, save_report, tag};
         header(w, tag::REJECTION);
-        w.u64(self.size_limit);
-        w.u64(self.n0);
-        w.f64(self.volume);
+        w.u64(self.pop.size_limit);
+        w.u64(self.pop.n0);
+        w.f64(self.pop.volume);
         w.f64(self.time);
         w.u64(self.max_present);
         w.f64(self.cmax);
@@ -283,13 +277,14 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
             usize::try_from(n0)
                 .ok()
                 .and_then(|n| n.checked_mul(core::mem::size_of::<u64>())),
-            self.memory_budget,
+            self.pop.memory_budget,
         )?;
         let room = n0 as usize - sizes.len();
         try_reserve(&mut sizes, room)?;
-        self.size_limit = size_limit;
-        self.n0 = n0;
-        self.volume = volume;
+        self.pop.size_limit = size_limit;
+        self.pop.n = sizes.len() as u64;
+        self.pop.n0 = n0;
+        self.pop.volume = volume;
         self.time = time;
         self.max_present = max_present;
         self.cmax = cmax;
@@ -319,17 +314,17 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
     /// Replaces the counts and the volume; the particle number becomes the reference
     /// for particle doubling. Errors leave the scheme unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        crate::error::positive("volume", volume)?;
-        let n = check_counts(counts)?;
+        let n = Population::new(counts, volume)?.n;
         let max = counts
             .iter()
             .rposition(|&c| c > 0)
             .map_or(1, |i| i as u64 + 1);
         let cmax = self.sup(max)?;
-        let sizes = Self::particle_list(counts, n, self.memory_budget)?;
+        let sizes = Self::particle_list(counts, n, self.pop.memory_budget)?;
         self.sizes = sizes;
-        self.n0 = n;
-        self.volume = volume;
+        self.pop.n = n;
+        self.pop.n0 = n;
+        self.pop.volume = volume;
         self.max_present = max;
         self.cmax = cmax;
         Ok(())

@@ -167,7 +167,7 @@ pub struct BucketedEngine<const R: usize, const W: usize> {
     /// `Σ_b q_r(b) tab_b`: the rows' weights as the tables have them.
     main: [u64; W],
     /// Buckets grown since the tables were built (`slots > tab`).
-    over: Vec<usize>,
+    over: heapless::Vec<usize, OVER_MAX>,
     /// Rate of the overflow stream (pairs with a grown slot), in the units of `S_A`.
     over_rate: f64,
     /// Probability that a proposal belongs to the overflow stream.
@@ -295,7 +295,7 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
             side_v: vec![Alias::default(); R],
             side_u: vec![Alias::default(); if R > 1 { R } else { 0 }],
             main: [0; W],
-            over: Vec::new(),
+            over: heapless::Vec::new(),
             over_rate: 0.0,
             over_p: 0.0,
             countdown: u64::MAX,
@@ -952,12 +952,9 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
         }
         // the grown slots join the overflow stream; the tables stay until the
         // overflow is too large
-        if first {
-            if self.over.len() < OVER_MAX {
-                self.over.push(b);
-            } else {
-                self.rates_stale = true;
-            }
+        if first && self.over.push(b).is_err() {
+            // full: the tables must be rebuilt
+            self.rates_stale = true;
         }
         self.rates_changed = true;
     }
@@ -1160,9 +1157,10 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         if over_len > OVER_MAX {
             return Err(bad("overflow list too long"));
         }
-        let mut over = Vec::new();
+        let mut over = heapless::Vec::<usize, OVER_MAX>::new();
         for _ in 0..over_len {
-            over.push(r.usize()?);
+            over.push(r.usize()?)
+                .map_err(|_| bad("overflow list too long"))?;
         }
         if r.usize()? != count_len(m) {
             return Err(bad("count array of another length"));
@@ -1344,7 +1342,7 @@ mod tests {
                     .filter(|&b| self.buckets[b].slots != self.buckets[b].tab)
                     .collect();
                 assert!(self.buckets.iter().all(|bk| bk.tab <= bk.slots));
-                let mut over = self.over.clone();
+                let mut over: Vec<usize> = self.over.iter().copied().collect();
                 over.sort_unstable();
                 grown.sort_unstable();
                 assert_eq!(over, grown, "overflow buckets");
