@@ -366,7 +366,8 @@ typedef struct {
    */
   uint64_t size_limit;
   /*
-   Memory budget in bytes for the growing size tables (0: the default, 2 GiB).
+   Memory budget in bytes for the growing size tables (0: half of the machine's
+   physical memory, at least 256 MiB; 2 GiB where the machine cannot say).
    */
   uint64_t memory_budget;
   /*
@@ -554,8 +555,8 @@ int32_t coag_massflow_default_config(coag_massflow_config *out);
 
 /*
  Writes the default size-count configuration (with `struct_size` set): the
- bucketed low-rank method, volume = number of particles, default size limit and
- memory budget, seed 0, stream 0.
+ bucketed low-rank method, volume = number of particles, default size limit, the
+ machine's memory budget (0: half its physical memory), seed 0, stream 0.
 
  # Safety
  `out` must be NULL or valid for writing the struct.

@@ -1,8 +1,9 @@
 //! `coagula bench lowrank`: Osinsky's tables 1–3 rerun side by side with the paper.
 
+use crate::options;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
-use coagula_core::random::{Pcg64, generator};
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::random::{Generator, generator};
+use coagula_core::scheme::registry::{self, Init, SchemeId, Simulation};
 use std::time::{Duration, Instant};
 
 /// One row of the paper's tables: time, max size M, seconds (inverse, AR, low-rank;
@@ -64,7 +65,7 @@ pub struct Cell {
 }
 
 /// The facade as the CLI instantiates it.
-type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64>;
+type Sim = dyn Simulation<Coagulation, NoFragmentation, Generator>;
 
 /// Scheme `id` from `n0` monomers in volume n0, through the registry.
 fn monodisperse(id: SchemeId, k: Coagulation, n0: u64) -> Result<Box<Sim>, coagula_core::Error> {
@@ -72,7 +73,7 @@ fn monodisperse(id: SchemeId, k: Coagulation, n0: u64) -> Result<Box<Sim>, coagu
         counts: &[n0],
         volume: n0 as f64,
     };
-    registry::build(id, k, NoFragmentation, &init, &Options::default())
+    registry::build(id, k, NoFragmentation, &init, &options())
 }
 
 /// Runs a scheme through the checkpoints, stopping (None for the rest) once the wall
@@ -348,8 +349,7 @@ pub fn lowrank_small(
                     counts: &init,
                     volume: v,
                 };
-                let mut s: Box<Sim> =
-                    registry::build(id, k, NoFragmentation, &init, &Options::default())?;
+                let mut s: Box<Sim> = registry::build(id, k, NoFragmentation, &init, &options())?;
                 let rep = s.advance_to(t, &mut rng)?;
                 let nv = s.particles() as f64 / s.volume();
                 prop += rep.proposals;

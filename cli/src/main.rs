@@ -10,6 +10,13 @@ mod lecot;
 mod plot;
 mod validate;
 
+/// The registry's options as the CLI uses them: the defaults, with the memory budget
+/// of this machine (half its physical memory).
+pub(crate) fn options() -> coagula_core::scheme::registry::Options {
+    coagula_core::scheme::registry::Options::default()
+        .with_memory_budget(coagula_core::scheme::population::machine_memory_budget())
+}
+
 #[derive(Parser)]
 #[command(
     name = "coagula",

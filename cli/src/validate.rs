@@ -1,11 +1,12 @@
 //! `coagula validate`: rerun the reproduction cases and compare with references.
 
+use crate::options;
 use coagula_core::exact::Exact;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
 use coagula_core::observe::{TEST_ALPHA, student_t_threshold};
-use coagula_core::random::{Pcg64, generator};
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::random::{Generator, generator};
+use coagula_core::scheme::registry::{self, Init, SchemeId, Simulation};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -69,13 +70,13 @@ fn one(id: SchemeId, k: Coagulation, n0: u64, t: f64, seed: u64) -> (f64, f64) {
         volume: n0 as f64,
     };
     let mut s: Box<Sim> =
-        registry::build(id, k, NoFragmentation, &init, &Options::default()).expect("valid");
+        registry::build(id, k, NoFragmentation, &init, &options()).expect("valid");
     s.advance_to(t, &mut rng).expect("runs");
     (s.number_density(1.0), s.moment(0.0))
 }
 
 /// The facade as the CLI instantiates it.
-type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64>;
+type Sim = dyn Simulation<Coagulation, NoFragmentation, Generator>;
 
 fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
     let n0: u64 = if quick { 1 << 13 } else { 1 << 16 };
@@ -158,8 +159,7 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
             for id in [SchemeId::LowRankTree, SchemeId::LowRank] {
                 let mut rng = generator(99, 0);
                 let mut s: Box<Sim> =
-                    registry::build(id, k, NoFragmentation, &init, &Options::default())
-                        .expect("valid");
+                    registry::build(id, k, NoFragmentation, &init, &options()).expect("valid");
                 let events = s.advance_to(t, &mut rng).expect("runs").events as f64;
                 let tol = 0.05 * 10f64.powf(paper.log10().floor());
                 out.push(Case {

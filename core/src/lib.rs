@@ -13,10 +13,13 @@
 //! * [`sample`] — weighted samplers: the flat-array sum tree ([`tree`]) and Walker alias
 //!   tables;
 //! * [`random`] — random variates and the seed policy (`seed, stream → generator`);
-//! * [`observe`] — moments, concentrations, gel mass and replica statistics;
-//! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol') and their
-//!   randomisations.
-//! * [`scheme`] — the stepping schemes, behind one `advance_to` interface.
+//! * [`observe`] — the observation trait every population scheme implements, moments,
+//!   concentrations, gel mass and replica statistics;
+//! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol'), their
+//!   randomisations, and the point sources the quasi-Monte Carlo schemes draw from;
+//! * [`scheme`] — the stepping schemes behind one `advance_to` interface, the shared
+//!   size-count population, and the registry with the object-safe facade
+//!   ([`scheme::registry`]) that the C ABI and the CLI are written over.
 //!
 //! # Example
 //! ```

@@ -8,7 +8,7 @@
 use coagula_core::checkpoint::{Checkpoint, Reader, Writer};
 use coagula_core::kernel::{BinaryUniform, Coagulation, FragmentationKernel, NoFragmentation};
 use coagula_core::qmc::Randomization;
-use coagula_core::random::{Pcg64, generator};
+use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource, Sorting, workspace_len};
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
@@ -144,7 +144,7 @@ fn the_facade_in_caller_storage_allocates_nothing_after_construction() {
         Randomization::Owen,
         &mut generator(4, 0),
     ));
-    let mut sim: Box<dyn Simulation<_, _, Pcg64> + '_> =
+    let mut sim: Box<dyn Simulation<_, _, Generator> + '_> =
         registry::build_in(SchemeId::MassFlow, k, f, &init, &opts, &mut ws).unwrap();
     let mut rng = generator(2, 0);
     sim.advance_to(0.2, &mut rng).unwrap();
@@ -173,13 +173,13 @@ fn the_facade_in_caller_storage_allocates_nothing_after_construction() {
     assert!(registry::workspace_len(SchemeId::LowRank, &counts).is_none());
     let mut small = vec![0.0; 4];
     assert!(
-        registry::build_in::<_, _, Pcg64>(SchemeId::LowRank, k, f, &counts, &opts, &mut small)
+        registry::build_in::<_, _, Generator>(SchemeId::LowRank, k, f, &counts, &opts, &mut small)
             .is_err()
     );
     // too small a workspace is an error, not an overrun
     let mut short = vec![0.0; len - 1];
     assert!(
-        registry::build_in::<_, _, Pcg64>(SchemeId::MassFlow, k, f, &init, &opts, &mut short)
+        registry::build_in::<_, _, Generator>(SchemeId::MassFlow, k, f, &init, &opts, &mut short)
             .is_err()
     );
 }

@@ -11,7 +11,7 @@
 
 use coagula::*;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
-use coagula_core::random::{Pcg64, generator};
+use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::Bucketed;
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
@@ -50,7 +50,7 @@ fn facade(n0: u64, seed: u64) -> (f64, u64) {
         counts: &[n0],
         volume: n0 as f64,
     };
-    let mut s: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64>> = registry::build(
+    let mut s: Box<dyn Simulation<Coagulation, NoFragmentation, Generator>> = registry::build(
         SchemeId::LowRank,
         Coagulation::brownian(),
         NoFragmentation,

@@ -1,8 +1,8 @@
-//! The randomness of a sim: a PCG stream owned by the sim (from core's seed policy,
+//! The randomness of a sim: its own xoshiro256++ stream (from core's seed policy,
 //! `coagula_core::random::generator`, and checkpointed with it), or a host callback
 //! returning random 64-bit words.
 
-pub(crate) use coagula_core::random::Pcg64;
+pub(crate) use coagula_core::random::Generator;
 use rand_core::{Infallible, Rng, TryRng};
 use std::ffi::c_void;
 
@@ -12,7 +12,7 @@ pub type coag_rng_callback = Option<unsafe extern "C" fn(user_data: *mut c_void)
 /// The source a sim draws from.
 #[derive(Clone, Debug)]
 pub(crate) enum Source {
-    Pcg(Pcg64),
+    Own(Generator),
     Callback(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void),
 }
 
@@ -27,7 +27,7 @@ impl TryRng for Source {
     #[inline]
     fn try_next_u64(&mut self) -> Result<u64, Infallible> {
         Ok(match self {
-            Source::Pcg(p) => p.next_u64(),
+            Source::Own(p) => p.next_u64(),
             // SAFETY: the host registered this callback and user_data for this purpose
             // and guarantees both stay valid while the sim uses them.
             Source::Callback(f, d) => unsafe { f(*d) },

@@ -2,7 +2,7 @@
 //! `coag_sim_advance_to`.
 
 use crate::kernel::{Fragmentation, Kernel, coag_fragmentation, coag_kernel};
-use crate::rng::{Pcg64, Source, coag_rng_callback};
+use crate::rng::{Generator, Source, coag_rng_callback};
 use crate::{
     COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, Fail, fail, guard, non_null, read_config, slice,
     slice_mut, write,
@@ -86,7 +86,8 @@ pub struct coag_counts_config {
     pub volume: f64,
     /// Largest particle size allowed (0: the default, 2^32).
     pub size_limit: u64,
-    /// Memory budget in bytes for the growing size tables (0: the default, 2 GiB).
+    /// Memory budget in bytes for the growing size tables (0: half of the machine's
+    /// physical memory, at least 256 MiB; 2 GiB where the machine cannot say).
     pub memory_budget: u64,
     /// Seed of the sim's random stream.
     pub seed: u64,
@@ -176,7 +177,7 @@ type Dyn = dyn Simulation<Kernel, Fragmentation, Source>;
 pub struct coag_sim {
     sim: Box<Dyn>,
     /// The sim's own stream (kept even while a callback is installed).
-    pcg: Pcg64,
+    own: Generator,
     callback: Option<(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void)>,
 }
 
@@ -190,7 +191,7 @@ unsafe fn new_sim(
 ) -> Result<(), Fail> {
     let sim = coag_sim {
         sim,
-        pcg: generator(seed, stream),
+        own: generator(seed, stream),
         callback: None,
     };
     // SAFETY: the function's contract.
@@ -279,8 +280,8 @@ pub unsafe extern "C" fn coag_massflow_default_config(out: *mut coag_massflow_co
 }
 
 /// Writes the default size-count configuration (with `struct_size` set): the
-/// bucketed low-rank method, volume = number of particles, default size limit and
-/// memory budget, seed 0, stream 0.
+/// bucketed low-rank method, volume = number of particles, default size limit, the
+/// machine's memory budget (0: half its physical memory), seed 0, stream 0.
 ///
 /// # Safety
 /// `out` must be NULL or valid for writing the struct.
@@ -496,7 +497,8 @@ pub unsafe extern "C" fn coag_counts_new(
         } else {
             c.volume
         };
-        let mut opts = Options::default();
+        let mut opts = Options::default()
+            .with_memory_budget(coagula_core::scheme::population::machine_memory_budget());
         if c.size_limit != 0 {
             opts = opts.with_size_limit(c.size_limit);
         }
@@ -595,11 +597,11 @@ pub unsafe extern "C" fn coag_sim_advance_to(
         }
         let mut rng = match s.callback {
             Some((f, d)) => Source::Callback(f, d),
-            None => Source::Pcg(s.pcg.clone()),
+            None => Source::Own(s.own.clone()),
         };
         let r = s.sim.advance_to(t, &mut rng);
-        if let Source::Pcg(p) = rng {
-            s.pcg = p;
+        if let Source::Own(p) = rng {
+            s.own = p;
         }
         let r = r?;
         if !report.is_null() {
@@ -915,13 +917,13 @@ pub unsafe extern "C" fn coag_sim_reseed(sim: *mut coag_sim, seed: u64, stream: 
     guard(|| {
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle_mut(sim, "sim") }?;
-        s.pcg = generator(seed, stream);
+        s.own = generator(seed, stream);
         Ok(())
     })
 }
 
 fn save_sim(s: &coag_sim, w: &mut Writer) {
-    for p in s.pcg.parts() {
+    for p in s.own.parts() {
         w.u64(p);
     }
     s.sim.save(w);
@@ -996,11 +998,11 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
         let data = unsafe { slice(buf, len, "buf") }?;
         let mut r = Reader::new(data);
         let parts = [r.u64()?, r.u64()?, r.u64()?, r.u64()?];
-        let pcg = Pcg64::from_parts(parts).ok_or(coagula_core::Error::Checkpoint {
+        let own = Generator::from_parts(parts).ok_or(coagula_core::Error::Checkpoint {
             what: "bad random stream",
         })?;
         s.sim.restore(&mut r)?;
-        s.pcg = pcg;
+        s.own = own;
         Ok(())
     })
 }

@@ -6,7 +6,7 @@
 use coagula::*;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::qmc::Randomization;
-use coagula_core::random::{Pcg64, Purpose, generator, substream};
+use coagula_core::random::{Generator, Purpose, generator, substream};
 use coagula_core::scheme::massflow::PointSource;
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
 
@@ -47,7 +47,7 @@ fn rust_counts(id: SchemeId, n0: u64, t: f64) -> Vec<u64> {
         counts: &[n0],
         volume: n0 as f64,
     };
-    let mut s: Box<dyn Simulation<_, _, Pcg64>> = registry::build(
+    let mut s: Box<dyn Simulation<_, _, Generator>> = registry::build(
         id,
         Coagulation::brownian(),
         NoFragmentation,
@@ -109,7 +109,7 @@ fn rqmc_mass_flow_matches_across_front_ends() {
         sizes: &sizes,
         mass: 1.0,
     };
-    let mut s: Box<dyn Simulation<_, _, Pcg64>> = registry::build(
+    let mut s: Box<dyn Simulation<_, _, Generator>> = registry::build(
         SchemeId::MassFlow,
         Coagulation::additive(),
         NoFragmentation,

@@ -7,21 +7,21 @@
 //!
 //! The facade is generic over the kernel type `K`, the fragmentation kernel `F` and the
 //! generator `G`, so a front end fixes them once (the C ABI: its kernel handles and its
-//! random source; the CLI: the built-in kernels and [`crate::random::Pcg64`]). Dispatch
+//! random source; the CLI: the built-in kernels and [`crate::random::Generator`]). Dispatch
 //! is dynamic per call (`advance_to`, an observation), never per random draw or kernel
 //! evaluation: inside a call the scheme runs monomorphised.
 //!
 //! # Example
 //! ```
 //! use coagula_core::kernel::{Coagulation, NoFragmentation};
-//! use coagula_core::random::{Pcg64, generator};
+//! use coagula_core::random::{Generator, generator};
 //! use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
 //! let k = Coagulation::constant(1.0).unwrap();
 //! let init = Init::Counts { counts: &[10_000], volume: 10_000.0 };
 //! let mut rng = generator(7, 0);
 //! // the same set-up on every size-count scheme of the registry
 //! for info in registry::SCHEMES.iter().filter(|s| s.accepts(&init)) {
-//!     let mut sim: Box<dyn Simulation<_, _, Pcg64>> =
+//!     let mut sim: Box<dyn Simulation<_, _, Generator>> =
 //!         registry::build(info.id, k, NoFragmentation, &init, &Options::default()).unwrap();
 //!     sim.advance_to(1.0, &mut rng).unwrap();
 //!     // N(t)/V = 1/(1 + t/2) for K = 1
@@ -520,13 +520,13 @@ pub fn workspace_len(id: SchemeId, init: &Init<'_>) -> Option<usize> {
 ///
 /// ```
 /// use coagula_core::kernel::{Coagulation, NoFragmentation};
-/// use coagula_core::random::{Pcg64, generator};
+/// use coagula_core::random::{Generator, generator};
 /// use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
 /// let sizes = [1.0; 256];
 /// let init = Init::Sizes { sizes: &sizes, mass: 1.0 };
 /// let mut ws = vec![0.0; registry::workspace_len(SchemeId::MassFlow, &init).unwrap()];
 /// let k = Coagulation::constant(1.0).unwrap();
-/// let mut sim: Box<dyn Simulation<_, _, Pcg64> + '_> = registry::build_in(
+/// let mut sim: Box<dyn Simulation<_, _, Generator> + '_> = registry::build_in(
 ///     SchemeId::MassFlow, k, NoFragmentation, &init, &Options::default(), &mut ws,
 /// ).unwrap();
 /// sim.advance_to(0.5, &mut generator(1, 0)).unwrap();

@@ -24,6 +24,25 @@ pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
 /// that knows its memory sets the budget.)
 pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
 
+/// A memory budget from what this machine has: half of its physical memory (Linux:
+/// `MemTotal` in `/proc/meminfo`), at least 256 MiB; [`DEFAULT_MEMORY_BUDGET`] where the
+/// machine cannot say. The C ABI and the CLI use it when no budget is given.
+#[cfg(feature = "std")]
+pub fn machine_memory_budget() -> usize {
+    let total_kib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
+        m.lines()
+            .find(|l| l.starts_with("MemTotal:"))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .and_then(|v| v.parse::<u64>().ok())
+    });
+    match total_kib {
+        Some(kib) => usize::try_from(kib.saturating_mul(1024) / 2)
+            .unwrap_or(usize::MAX)
+            .max(256 << 20),
+        None => DEFAULT_MEMORY_BUDGET,
+    }
+}
+
 /// N, N0, V and the limits of a size-count population (the counts themselves live in
 /// each scheme's own layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -172,5 +191,21 @@ mod tests {
         assert!(p.merged(u64::MAX - 1, 5).is_err());
         assert!(p.within_budget(None).is_err());
         assert!(p.within_budget(Some(10)).is_ok());
+    }
+
+    #[cfg(feature = "std")]
+    #[test]
+    fn the_machine_budget_is_a_sane_fraction() {
+        let b = machine_memory_budget();
+        assert!(b >= 256 << 20);
+        if let Ok(m) = std::fs::read_to_string("/proc/meminfo") {
+            let kib: u64 = m
+                .lines()
+                .find(|l| l.starts_with("MemTotal:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse().ok())
+                .unwrap();
+            assert_eq!(b as u64, (kib * 1024 / 2).max(256 << 20));
+        }
     }
 }
