@@ -116,6 +116,32 @@ module coagula
        type(c_ptr), intent(out) :: out
        integer(c_int32_t) :: coag_massflow_new
      end function
+     function coag_massflow_workspace_size(n, out) bind(c, name="coag_massflow_workspace_size")
+       import :: c_size_t, c_int32_t
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_massflow_workspace_size
+     end function
+     ! the workspace (real(c_double) array, c_loc of it) must stay allocated until
+     ! coag_sim_free
+     function coag_massflow_new_in(config, kernel, frag, sizes, n, workspace, workspace_bytes, out) &
+          bind(c, name="coag_massflow_new_in")
+       import :: coag_massflow_config, c_ptr, c_double, c_size_t, c_int32_t
+       type(coag_massflow_config), intent(in) :: config
+       type(c_ptr), value :: kernel, frag
+       real(c_double), intent(in) :: sizes(*)
+       integer(c_size_t), value :: n
+       type(c_ptr), value :: workspace
+       integer(c_size_t), value :: workspace_bytes
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_massflow_new_in
+     end function
+     function coag_sim_method(sim, out) bind(c, name="coag_sim_method")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int32_t), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_method
+     end function
      function coag_counts_new(config, kernel, counts, n, out) bind(c, name="coag_counts_new")
        import :: coag_counts_config, c_ptr, c_int64_t, c_size_t, c_int32_t
        type(coag_counts_config), intent(in) :: config

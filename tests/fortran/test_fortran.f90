@@ -5,7 +5,11 @@ program test_fortran
   use, intrinsic :: iso_c_binding
   use coagula
   implicit none
-  type(c_ptr) :: k, f, sim
+  type(c_ptr) :: k, f, sim, sim2
+  real(c_double), allocatable, target :: ws(:)
+  integer(c_size_t) :: wbytes
+  integer(c_int32_t) :: method
+  real(c_double) :: m2b
   type(coag_counts_config) :: lc
   type(coag_massflow_config) :: mc
   type(coag_step_report) :: rep
@@ -26,6 +30,10 @@ program test_fortran
      lc%seed = int(100 + r, c_int64_t)
      counts(1) = 8192
      call ok(coag_counts_new(lc, k, counts, 1_c_size_t, sim))
+     if (r == 1) then
+        call ok(coag_sim_method(sim, method))
+        call check(method == COAG_METHOD_LOWRANK, "the default method is bucketed low-rank")
+     end if
      do h = 1, 10
         call ok(coag_sim_advance_to(sim, 0.2_c_double * h, rep))
      end do
@@ -51,6 +59,17 @@ program test_fortran
   call check(rep%proposals == 100 * 4096, "one proposal per particle and step")
   call ok(coag_sim_get_sizes(sim, sizes, size(sizes, kind=c_size_t)))
   call check(all(sizes(2:) >= sizes(:size(sizes) - 1)), "sizes come back sorted")
+  ! the same sim in a workspace the caller owns runs bit for bit alike
+  call ok(coag_massflow_workspace_size(size(sizes, kind=c_size_t), wbytes))
+  call check(wbytes == 6 * 8 * size(sizes), "workspace of 6 N doubles")
+  allocate(ws(wbytes / 8))
+  sizes = 1.0_c_double
+  call ok(coag_massflow_new_in(mc, k, f, sizes, size(sizes, kind=c_size_t), c_loc(ws), wbytes, sim2))
+  call ok(coag_sim_advance_to(sim2, 1.0_c_double, rep))
+  call ok(coag_sim_moment(sim2, 2.0_c_double, m2b))
+  call check(m2b == m2, "caller workspace: the same M2 bit for bit")
+  call coag_sim_free(sim2)
+  deallocate(ws)
   ! errors: a step back in time fails and names the problem
   call check(coag_sim_advance_to(sim, 0.5_c_double, rep) == COAG_TIME_BACKWARDS, "time backwards refused")
   call check(index(coag_error_message(), "before the current time") > 0, "error message")

@@ -793,6 +793,17 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
             // the particle with itself
             return None;
         }
+        Some(Candidate {
+            x: xu,
+            y: xv,
+            at: ((bu, su), (bv, sv)),
+        })
+    }
+
+    /// `(bound, low)` of the pair in buckets `bu`, `bv`: the quantised largest factors
+    /// and the smallest ones.
+    #[inline(always)]
+    fn pair_bounds(&self, bu: usize, bv: usize) -> (f64, f64) {
         let (gu, gv) = (&self.buckets[bu], &self.buckets[bv]);
         let mut bound = 0.0;
         let mut low = 0.0;
@@ -800,13 +811,7 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
             bound += gu.hi[kk] * gv.hi[R + kk] + gv.hi[kk] * gu.hi[R + kk];
             low += gu.min[kk] * gv.min[R + kk] + gv.min[kk] * gu.min[R + kk];
         }
-        Some(Candidate {
-            x: xu,
-            y: xv,
-            bound,
-            low,
-            at: ((bu, su), (bv, sv)),
-        })
+        (bound, low)
     }
 
     /// Merges candidate `c` into one particle of size x (M already prepared).
@@ -994,6 +999,7 @@ type Loc = ((usize, u64), (usize, u64));
 impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> {
     type Loc = Loc;
     const TAG: u64 = crate::checkpoint::tag::BUCKETED;
+    const LOW_IS_BOUND: bool = false;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
         Self::with_counts(kernel, counts, pop)
@@ -1021,6 +1027,11 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
     #[inline(always)]
     fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<Loc>> {
         self.draw(rng)
+    }
+
+    #[inline(always)]
+    fn bounds(&self, &((bu, _), (bv, _)): &Loc) -> (f64, f64) {
+        self.pair_bounds(bu, bv)
     }
 
     #[inline(always)]

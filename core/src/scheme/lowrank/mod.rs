@@ -247,7 +247,12 @@ where
             return Ok(false);
         };
         let spot = (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK);
-        let Some(outcome) = self.rule.decide(&self.kernel, &c, spot, rng)? else {
+        let engine = &self.engine;
+        let bounds = || engine.bounds(&c.at);
+        let Some(outcome) =
+            self.rule
+                .decide(&self.kernel, &c, bounds, E::LOW_IS_BOUND, spot, rng)?
+        else {
             rep.rejections += 1;
             return Ok(false);
         };

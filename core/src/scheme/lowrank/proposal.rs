@@ -16,21 +16,16 @@ use crate::scheme::population::Population;
 use alloc::borrow::Cow;
 use rand_core::Rng;
 
-/// A proposed ordered pair of distinct particles: their sizes, the bound `Â + Âᵀ` at
-/// the pair (what the acceptance divides by) and a lower bound `low ≤ Â + Âᵀ` built
-/// from the smallest factors the engine's coarsening allows (equal to `bound` for the
-/// per-size layout), so that a rule can squeeze with the kernel's floor. `at` is where
-/// the engine keeps the two particles.
+/// A proposed ordered pair of distinct particles: their sizes and where the engine keeps
+/// them. The bound at the pair comes from [`ProposalEngine::bounds`], only when a rule
+/// asks (for an exact bound on the per-size layout it never does, and the factor rows —
+/// cache misses at large M — are not touched).
 #[derive(Clone, Copy, Debug)]
 pub struct Candidate<L> {
     /// Size of the first particle.
     pub x: u64,
     /// Size of the second particle.
     pub y: u64,
-    /// `Â(x, y) + Â(y, x)`.
-    pub bound: f64,
-    /// A lower bound of `bound` from the smallest factors (the squeeze's base).
-    pub low: f64,
     /// The engine's handle on the two particles.
     pub at: L,
 }
@@ -66,9 +61,18 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// An accepted event changed the proposal rate: refresh before the next proposal.
     fn needs_refresh(&self) -> bool;
 
+    /// Whether the engine's bound at a pair is the kernel's factor bound itself, so that
+    /// `low = bound` always (the per-size layout; a coarsened bound has `low ≤ bound`).
+    const LOW_IS_BOUND: bool;
+
     /// Draws one proposal; `None` when thinning rejects it (an empty slot, a rounding
     /// ghost, the particle paired with itself).
     fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<Self::Loc>>;
+
+    /// `(bound, low)` at a proposed pair: `bound = Â(x, y) + Â(y, x)`, what the
+    /// acceptance divides by, and `low ≤ bound` built from the smallest factors the
+    /// engine's coarsening allows, so that a rule can squeeze with the kernel's floor.
+    fn bounds(&self, at: &Self::Loc) -> (f64, f64);
 
     /// The fallible part of applying `outcome` (growing the size table for a new
     /// largest size): on error nothing has changed.

@@ -35,13 +35,17 @@ pub trait EventRule<K>: Sized {
     /// The rule for `kernel` (e.g. its acceptance floor).
     fn for_kernel(kernel: &K) -> Self;
 
-    /// Accepts (`Some(outcome)`) or rejects (`None`) candidate `c`. `spot` asks for a
-    /// kernel evaluation even if the squeeze accepts (see [`SPOT_CHECK`]). A kernel that
-    /// returns an invalid rate or exceeds the bound is an error.
+    /// Accepts (`Some(outcome)`) or rejects (`None`) candidate `c`; `bounds()` gives
+    /// `(bound, low)` at the pair (see [`ProposalEngine::bounds`](super::ProposalEngine::bounds)),
+    /// `low_is_bound` says the engine's `low` always equals its `bound`. `spot` asks for
+    /// a kernel evaluation even if the squeeze accepts (see [`SPOT_CHECK`]). A kernel
+    /// that returns an invalid rate or exceeds the bound is an error.
     fn decide<L, G: Rng + ?Sized>(
         &mut self,
         kernel: &K,
         c: &Candidate<L>,
+        bounds: impl FnOnce() -> (f64, f64),
+        low_is_bound: bool,
         spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>>;
@@ -69,15 +73,26 @@ impl<K: CoagulationKernel> EventRule<K> for Coagulate {
         &mut self,
         kernel: &K,
         c: &Candidate<L>,
+        bounds: impl FnOnce() -> (f64, f64),
+        low_is_bound: bool,
         spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>> {
+        let merge = Outcome::Merge {
+            size: c.x.saturating_add(c.y),
+        };
+        if self.floor >= 1.0 && low_is_bound && !spot {
+            // an exact bound on exact per-size factors: every pair is accepted, and the
+            // bound is not even looked up
+            return Ok(Some(merge));
+        }
+        let (bound, low) = bounds();
         // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
-        let squeeze = self.floor * c.low;
-        let evaluated = squeeze < c.bound && {
-            let u = c.bound * open_unit(rng);
+        let squeeze = self.floor * low;
+        let evaluated = squeeze < bound && {
+            let u = bound * open_unit(rng);
             u > squeeze && {
-                let k = bounded_rate(kernel, c.x as f64, c.y as f64, c.bound, "low-rank bound")?;
+                let k = bounded_rate(kernel, c.x as f64, c.y as f64, bound, "low-rank bound")?;
                 if u > k {
                     return Ok(None);
                 }
@@ -86,10 +101,8 @@ impl<K: CoagulationKernel> EventRule<K> for Coagulate {
         };
         if !evaluated && spot {
             // accepted without K: a spot check now and then
-            bounded_rate(kernel, c.x as f64, c.y as f64, c.bound, "low-rank bound")?;
+            bounded_rate(kernel, c.x as f64, c.y as f64, bound, "low-rank bound")?;
         }
-        Ok(Some(Outcome::Merge {
-            size: c.x.saturating_add(c.y),
-        }))
+        Ok(Some(merge))
     }
 }

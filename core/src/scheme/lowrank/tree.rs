@@ -133,6 +133,7 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
     /// The two sizes' indices.
     type Loc = (usize, usize);
     const TAG: u64 = crate::checkpoint::tag::LOWRANK;
+    const LOW_IS_BOUND: bool = true;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
         if kernel.rank() != R || R == 0 {
@@ -207,18 +208,21 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
             // the particle with itself (probability 1/N_i)
             return None;
         }
+        Some(Candidate {
+            x: (i + 1) as u64,
+            y: (j + 1) as u64,
+            at: (i, j),
+        })
+    }
+
+    #[inline]
+    fn bounds(&self, &(i, j): &(usize, usize)) -> (f64, f64) {
         let mut bound = 0.0;
         for kk in 0..R {
             bound +=
                 self.fab[i][0][kk] * self.fab[j][1][kk] + self.fab[j][0][kk] * self.fab[i][1][kk];
         }
-        Some(Candidate {
-            x: (i + 1) as u64,
-            y: (j + 1) as u64,
-            bound,
-            low: bound,
-            at: (i, j),
-        })
+        (bound, bound)
     }
 
     fn prepare<K: CoagulationKernel>(
