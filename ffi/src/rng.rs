@@ -16,6 +16,15 @@ pub(crate) enum Source {
     Callback(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void),
 }
 
+/// One word from a host callback (out of line: the sim's own stream is the hot path).
+#[cold]
+#[inline(never)]
+fn call(f: unsafe extern "C" fn(*mut c_void) -> u64, d: *mut c_void) -> u64 {
+    // SAFETY: the host registered this callback and user_data for this purpose and
+    // guarantees both stay valid while the sim uses them.
+    unsafe { f(d) }
+}
+
 impl TryRng for Source {
     type Error = Infallible;
 
@@ -24,13 +33,11 @@ impl TryRng for Source {
         Ok((self.try_next_u64()? >> 32) as u32)
     }
 
-    #[inline]
+    #[inline(always)]
     fn try_next_u64(&mut self) -> Result<u64, Infallible> {
         Ok(match self {
             Source::Own(p) => p.next_u64(),
-            // SAFETY: the host registered this callback and user_data for this purpose
-            // and guarantees both stay valid while the sim uses them.
-            Source::Callback(f, d) => unsafe { f(*d) },
+            Source::Callback(f, d) => call(*f, *d),
         })
     }
 

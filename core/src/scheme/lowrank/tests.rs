@@ -3,9 +3,11 @@
 
 use super::*;
 use crate::exact::Exact;
+use crate::kernel::NoFragmentation;
 use crate::kernel::{Coagulation, UserKernel};
 use crate::observe::Replicas;
-use crate::scheme::baseline::{AcceptanceRejection, Inverse};
+use crate::scheme::baseline::AcceptanceRejection;
+use crate::scheme::registry::{self, Init, Options, SchemeId, Simulation};
 use alloc::format;
 use alloc::string::String;
 use rand_pcg::Pcg64Mcg;
@@ -36,66 +38,46 @@ fn mass(counts: &[u64]) -> u64 {
         .sum()
 }
 
-#[derive(Clone, Copy, Debug)]
-enum Method {
-    LowRank,
-    Bucketed,
-    Rejection,
-    Inverse,
+/// The registry's size-count schemes (every scheme these tests cover).
+fn count_schemes() -> impl Iterator<Item = SchemeId> {
+    let probe = Init::Counts {
+        counts: &[1],
+        volume: 1.0,
+    };
+    registry::SCHEMES
+        .iter()
+        .filter(move |s| s.accepts(&probe))
+        .map(|s| s.id)
 }
 
-/// Runs R replicas of `method` to each time in `times`, and returns for each time the
-/// replica statistics of `n_1..n_kmax` (index 0..kmax) followed by M0 and M2.
-fn run<K: CoagulationKernel + Copy, const RANK: usize, const W: usize>(
-    method: Method,
-    kernel: K,
+/// Runs R replicas of scheme `id` (through the registry's facade) to each time in
+/// `times`, and returns for each time the replica statistics of `n_1..n_kmax` (index
+/// 0..kmax) followed by M0 and M2.
+fn run(
+    id: SchemeId,
+    kernel: Coagulation,
     times: &[f64],
     kmax: usize,
 ) -> alloc::vec::Vec<alloc::vec::Vec<Replicas>> {
     let mut stats = alloc::vec![alloc::vec![Replicas::new(); kmax + 2]; times.len()];
+    let tag = registry::SCHEMES.iter().position(|s| s.id == id).unwrap() as u128;
     for rep in 0..REPLICAS {
         let mut rng = Pcg64Mcg::new(
-            0x1234_5678_9abc_def0
-                ^ (rep as u128 * 0x9e37_79b9_7f4a_7c15)
-                ^ ((method as u128) << 100),
+            0x1234_5678_9abc_def0 ^ (rep as u128 * 0x9e37_79b9_7f4a_7c15) ^ (tag << 100),
         );
-        let mut record = |ti: usize, counts: &[u64], volume: f64| {
-            for k in 1..=kmax {
-                let c = counts.get(k - 1).copied().unwrap_or(0);
-                stats[ti][k - 1].push(c as f64 / volume);
-            }
-            stats[ti][kmax].push(crate::observe::moment_of_counts(counts, volume, 0.0));
-            stats[ti][kmax + 1].push(crate::observe::moment_of_counts(counts, volume, 2.0));
+        let init = Init::Counts {
+            counts: &[N0],
+            volume: N0 as f64,
         };
-        match method {
-            Method::LowRank => {
-                let mut s = LowRank::<K, RANK>::monodisperse(kernel, N0).unwrap();
-                for (ti, &t) in times.iter().enumerate() {
-                    s.advance_to(t, &mut rng).unwrap();
-                    record(ti, &s.counts(), s.volume());
-                }
+        let mut s: alloc::boxed::Box<dyn Simulation<_, _, Pcg64Mcg>> =
+            registry::build(id, kernel, NoFragmentation, &init, &Options::default()).unwrap();
+        for (ti, &t) in times.iter().enumerate() {
+            s.advance_to(t, &mut rng).unwrap();
+            for k in 1..=kmax {
+                stats[ti][k - 1].push(s.number_density(k as f64));
             }
-            Method::Bucketed => {
-                let mut s = Bucketed::<K, RANK, W>::monodisperse(kernel, N0).unwrap();
-                for (ti, &t) in times.iter().enumerate() {
-                    s.advance_to(t, &mut rng).unwrap();
-                    record(ti, &s.counts(), s.volume());
-                }
-            }
-            Method::Rejection => {
-                let mut s = AcceptanceRejection::monodisperse(kernel, N0).unwrap();
-                for (ti, &t) in times.iter().enumerate() {
-                    s.advance_to(t, &mut rng).unwrap();
-                    record(ti, &s.counts(), s.volume());
-                }
-            }
-            Method::Inverse => {
-                let mut s = Inverse::monodisperse(kernel, N0).unwrap();
-                for (ti, &t) in times.iter().enumerate() {
-                    s.advance_to(t, &mut rng).unwrap();
-                    record(ti, &s.counts(), s.volume());
-                }
-            }
+            stats[ti][kmax].push(s.moment(0.0));
+            stats[ti][kmax + 1].push(s.moment(2.0));
         }
     }
     stats
@@ -115,20 +97,11 @@ fn within(name: &str, r: &Replicas, exact: f64, failures: &mut String) {
     }
 }
 
-fn check_exact<K: CoagulationKernel + Copy, const RANK: usize, const W: usize>(
-    kernel: K,
-    exact: Exact,
-    times: &[f64],
-) {
+fn check_exact(kernel: Coagulation, exact: Exact, times: &[f64]) {
     let kmax = 4;
     let mut failures = String::new();
-    for method in [
-        Method::LowRank,
-        Method::Bucketed,
-        Method::Rejection,
-        Method::Inverse,
-    ] {
-        let stats = run::<K, RANK, W>(method, kernel, times, kmax);
+    for method in count_schemes() {
+        let stats = run(method, kernel, times, kmax);
         for (ti, &t) in times.iter().enumerate() {
             for k in 1..=kmax {
                 let e = exact.number_density(k as u64, t).unwrap();
@@ -153,7 +126,7 @@ fn check_exact<K: CoagulationKernel + Copy, const RANK: usize, const W: usize>(
 
 #[test]
 fn constant_kernel_matches_exact_solution() {
-    check_exact::<_, 1, 2>(
+    check_exact(
         Coagulation::constant(1.0).unwrap(),
         Exact::constant(1.0).unwrap(),
         &[0.5, 2.0, 6.0],
@@ -163,12 +136,12 @@ fn constant_kernel_matches_exact_solution() {
 #[test]
 fn additive_kernel_matches_exact_solution() {
     // t = 1.5: N has fallen below N0/2 at t = ln 2, so particle doubling is exercised
-    check_exact::<_, 1, 2>(Coagulation::additive(), Exact::additive(), &[0.3, 1.5]);
+    check_exact(Coagulation::additive(), Exact::additive(), &[0.3, 1.5]);
 }
 
 #[test]
 fn multiplicative_kernel_matches_exact_solution_before_gelation() {
-    check_exact::<_, 1, 2>(
+    check_exact(
         Coagulation::multiplicative(),
         Exact::multiplicative(),
         &[0.4, 0.8],
@@ -179,15 +152,11 @@ fn multiplicative_kernel_matches_exact_solution_before_gelation() {
 /// solution: the three methods must agree (Welch statistic below `z2()`).
 #[test]
 fn methods_agree_for_brownian_and_ballistic_kernels() {
-    fn compare<K: CoagulationKernel + Copy, const RANK: usize, const W: usize>(
-        kernel: K,
-        times: &[f64],
-        failures: &mut String,
-    ) {
+    fn compare(kernel: Coagulation, times: &[f64], failures: &mut String) {
         let kmax = 3;
-        let lr = run::<K, RANK, W>(Method::LowRank, kernel, times, kmax);
-        for other in [Method::Bucketed, Method::Rejection, Method::Inverse] {
-            let st = run::<K, RANK, W>(other, kernel, times, kmax);
+        let lr = run(SchemeId::LowRankTree, kernel, times, kmax);
+        for other in count_schemes().filter(|&s| s != SchemeId::LowRankTree) {
+            let st = run(other, kernel, times, kmax);
             for ti in 0..times.len() {
                 for q in 0..kmax + 2 {
                     let (a, b) = (&lr[ti][q], &st[ti][q]);
@@ -196,7 +165,7 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
                     let d = (a.mean() - b.mean()).abs();
                     if d > z2() * se + 1e-12 {
                         failures.push_str(&format!(
-                            "LowRank vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {:.2} SE {se:.3e})\n",
+                            "LowRankTree vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {:.2} SE {se:.3e})\n",
                             times[ti],
                             a.mean(),
                             b.mean(),
@@ -208,8 +177,8 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
         }
     }
     let mut failures = String::new();
-    compare::<_, 2, 4>(Coagulation::brownian(), &[1.0, 4.0], &mut failures);
-    compare::<_, 3, 6>(
+    compare(Coagulation::brownian(), &[1.0, 4.0], &mut failures);
+    compare(
         Coagulation::free_molecular().with_min_size(1.0).unwrap(),
         &[1.0, 3.0],
         &mut failures,
@@ -221,8 +190,8 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
 fn time_step_is_v_over_sa() {
     // A wrong factor 2 in the waiting time would give M0(2) = 0.667 or 0.333 instead
     // of 0.5; the replica mean over 16 runs of 8192 particles has SE ~ 1e-3.
-    let stats = run::<_, 1, 2>(
-        Method::LowRank,
+    let stats = run(
+        SchemeId::LowRankTree,
         Coagulation::constant(1.0).unwrap(),
         &[2.0],
         1,
