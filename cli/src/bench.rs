@@ -64,6 +64,18 @@ pub struct Cell {
     pub max_size: u64,
 }
 
+/// The kernel of one of Osinsky's tables: "brownian", "ballistic" (free-molecular on
+/// integer sizes), anything else the linear (additive) kernel.
+pub(crate) fn paper_kernel(name: &str) -> Coagulation {
+    match name {
+        "brownian" => Coagulation::brownian(),
+        "ballistic" => Coagulation::free_molecular()
+            .with_min_size(1.0)
+            .expect("valid"),
+        _ => Coagulation::additive(),
+    }
+}
+
 /// The facade as the CLI instantiates it.
 type Sim = dyn Simulation<Coagulation, NoFragmentation, Generator>;
 
@@ -152,13 +164,7 @@ pub fn lowrank(
             continue;
         }
         let times: Vec<f64> = rows.iter().map(|r| r.t).collect();
-        let kernel = match name {
-            "brownian" => Coagulation::brownian(),
-            "ballistic" => Coagulation::free_molecular()
-                .with_min_size(1.0)
-                .expect("valid"),
-            _ => Coagulation::additive(),
-        };
+        let kernel = paper_kernel(name);
         let (lr, tree, ar, inv) =
             bench_kernel(kernel, n0, &times, budgets, skip_baselines, repeat, seed);
         println!();
@@ -272,13 +278,7 @@ fn bench_kernel(
 
 /// Low-rank only, one kernel, to one time: for profiling.
 pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool, bucketed: bool) {
-    let kernel = match name {
-        "brownian" => Coagulation::brownian(),
-        "ballistic" => Coagulation::free_molecular()
-            .with_min_size(1.0)
-            .expect("valid"),
-        _ => Coagulation::additive(),
-    };
+    let kernel = paper_kernel(name);
     let id = match (bucketed, binary) {
         (true, _) => SchemeId::LowRank,
         (false, true) => SchemeId::LowRankBinaryTree,

@@ -145,13 +145,7 @@ fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
         ];
         for (name, t, paper) in rows {
             let n0 = 10_000_000;
-            let k = match name {
-                "brownian" => Coagulation::brownian(),
-                "ballistic" => Coagulation::free_molecular()
-                    .with_min_size(1.0)
-                    .expect("valid"),
-                _ => Coagulation::additive(),
-            };
+            let k = crate::bench::paper_kernel(name);
             let init = Init::Counts {
                 counts: &[n0],
                 volume: n0 as f64,

@@ -324,6 +324,18 @@ fn points_of(c: &coag_massflow_config) -> Result<PointSource, Fail> {
     })
 }
 
+/// The registry options of a mass-flow config.
+fn massflow_options(c: &coag_massflow_config) -> Result<Options, Fail> {
+    Ok(Options::default()
+        .with_dt(c.dt)
+        .with_points(points_of(c)?)
+        .with_sorting(if c.full_sort != 0 {
+            Sorting::Full
+        } else {
+            Sorting::Adaptive
+        }))
+}
+
 /// A time-driven mass-flow sim (Lécot et al. 2019) over the `n` particle sizes `sizes`
 /// (n a power of two ≥ 2). `frag` may be NULL (pure coagulation).
 ///
@@ -349,14 +361,7 @@ pub unsafe extern "C" fn coag_massflow_new(
         };
         let x = unsafe { slice(sizes, n, "sizes") }?;
         non_null(out, "out")?;
-        let opts = Options::default()
-            .with_dt(c.dt)
-            .with_points(points_of(&c)?)
-            .with_sorting(if c.full_sort != 0 {
-                Sorting::Full
-            } else {
-                Sorting::Adaptive
-            });
+        let opts = massflow_options(&c)?;
         let init = Init::Sizes {
             sizes: x,
             mass: c.mass,
@@ -440,14 +445,7 @@ pub unsafe extern "C" fn coag_massflow_new_in(
         if !x.is_empty() && w0 < s0 + 8 * n && s0 < w0 + need {
             return fail(COAG_INVALID_ARGUMENT, "sizes overlap the workspace");
         }
-        let opts = Options::default()
-            .with_dt(c.dt)
-            .with_points(points_of(&c)?)
-            .with_sorting(if c.full_sort != 0 {
-                Sorting::Full
-            } else {
-                Sorting::Adaptive
-            });
+        let opts = massflow_options(&c)?;
         let init = Init::Sizes {
             sizes: x,
             mass: c.mass,
