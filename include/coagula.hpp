@@ -136,7 +136,7 @@ class Sim {
         return Sim(s);
     }
     /// A size-count scheme: counts[i] particles of size i + 1.
-    static Sim lowrank(const coag_counts_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
+    static Sim counts(const coag_counts_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
         coag_sim *s = nullptr;
         check(coag_counts_new(&c, k.get(), counts.data(), counts.size(), &s));
         return Sim(s);
@@ -149,6 +149,12 @@ class Sim {
         return r;
     }
     double time() const { return get(coag_sim_time); }
+    /// The `COAG_METHOD_*` of a size-count sim (throws for a mass-flow sim).
+    int method() const {
+        std::int32_t m = -1;
+        check(coag_sim_method(s_.get(), &m));
+        return m;
+    }
     double moment(double m) const {
         double v;
         check(coag_sim_moment(s_.get(), m, &v));

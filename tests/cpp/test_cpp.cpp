@@ -26,7 +26,8 @@ int main() {
     for (int r = 0; r < reps; ++r) {
         auto c = coagula::counts_default_config();
         c.seed = 31 + r;
-        auto sim = coagula::Sim::lowrank(c, k, {1u << 13});
+        auto sim = coagula::Sim::counts(c, k, {1u << 13});
+        if (r == 0) CHECK(sim.method() == COAG_METHOD_LOWRANK, "default method: bucketed low-rank");
         for (int h = 1; h <= 10; ++h) sim.advance_to(0.2 * h);
         double m0 = sim.moment(0.0);
         sum += m0;
