@@ -97,14 +97,18 @@ module coagula
        import :: c_ptr
        type(c_ptr), value :: f
      end subroutine
-     function coag_massflow_default_config(out) bind(c, name="coag_massflow_default_config")
-       import :: coag_massflow_config, c_int32_t
+     ! size: c_sizeof(out)
+     function coag_massflow_default_config(out, size) bind(c, name="coag_massflow_default_config")
+       import :: coag_massflow_config, c_int32_t, c_size_t
        type(coag_massflow_config), intent(out) :: out
+       integer(c_size_t), value :: size
        integer(c_int32_t) :: coag_massflow_default_config
      end function
-     function coag_counts_default_config(out) bind(c, name="coag_counts_default_config")
-       import :: coag_counts_config, c_int32_t
+     ! size: c_sizeof(out)
+     function coag_counts_default_config(out, size) bind(c, name="coag_counts_default_config")
+       import :: coag_counts_config, c_int32_t, c_size_t
        type(coag_counts_config), intent(out) :: out
+       integer(c_size_t), value :: size
        integer(c_int32_t) :: coag_counts_default_config
      end function
      function coag_massflow_new(config, kernel, frag, sizes, n, out) bind(c, name="coag_massflow_new")
@@ -151,9 +155,11 @@ module coagula
        type(c_ptr), intent(out) :: out
        integer(c_int32_t) :: coag_counts_new
      end function
-     function coag_step_report_init(out) bind(c, name="coag_step_report_init")
-       import :: coag_step_report, c_int32_t
+     ! size: c_sizeof(out)
+     function coag_step_report_init(out, size) bind(c, name="coag_step_report_init")
+       import :: coag_step_report, c_int32_t, c_size_t
        type(coag_step_report), intent(out) :: out
+       integer(c_size_t), value :: size
        integer(c_int32_t) :: coag_step_report_init
      end function
      subroutine coag_sim_free(sim) bind(c, name="coag_sim_free")

@@ -537,31 +537,34 @@ int32_t coag_fragmentation_new_user(const coag_user_fragmentation *desc, coag_fr
 void coag_fragmentation_free(coag_fragmentation *frag);
 
 /*
- Zero-fills a step report and sets its `struct_size`.
+ Zero-fills a step report of `size` bytes (`sizeof(coag_step_report)`) and sets its
+ `struct_size`.
 
  # Safety
- `out` must be NULL or valid for writing the struct.
+ `out` must be NULL or valid for writing `size` bytes.
  */
-int32_t coag_step_report_init(coag_step_report *out);
+int32_t coag_step_report_init(coag_step_report *out, size_t size);
 
 /*
- Writes the default mass-flow configuration (with `struct_size` set): Δt = 0.01,
- mass 1, Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
+ Writes the default mass-flow configuration into a struct of `size` bytes
+ (`sizeof(coag_massflow_config)`), with `struct_size` set: Δt = 0.01, mass 1,
+ Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
 
  # Safety
- `out` must be NULL or valid for writing the struct.
+ `out` must be NULL or valid for writing `size` bytes.
  */
-int32_t coag_massflow_default_config(coag_massflow_config *out);
+int32_t coag_massflow_default_config(coag_massflow_config *out, size_t size);
 
 /*
- Writes the default size-count configuration (with `struct_size` set): the
- bucketed low-rank method, volume = number of particles, default size limit, the
- machine's memory budget (0: half its physical memory), seed 0, stream 0.
+ Writes the default size-count configuration into a struct of `size` bytes
+ (`sizeof(coag_counts_config)`), with `struct_size` set: the bucketed low-rank
+ method, volume = number of particles, default size limit, the machine's memory
+ budget (0: half its physical memory), seed 0, stream 0.
 
  # Safety
- `out` must be NULL or valid for writing the struct.
+ `out` must be NULL or valid for writing `size` bytes.
  */
-int32_t coag_counts_default_config(coag_counts_config *out);
+int32_t coag_counts_default_config(coag_counts_config *out, size_t size);
 
 /*
  A time-driven mass-flow sim (Lécot et al. 2019) over the `n` particle sizes `sizes`

@@ -115,13 +115,13 @@ class Fragmentation {
 
 inline coag_massflow_config massflow_default_config() {
     coag_massflow_config c;
-    check(coag_massflow_default_config(&c));
+    check(coag_massflow_default_config(&c, sizeof c));
     return c;
 }
 
 inline coag_counts_config counts_default_config() {
     coag_counts_config c;
-    check(coag_counts_default_config(&c));
+    check(coag_counts_default_config(&c, sizeof c));
     return c;
 }
 
@@ -144,7 +144,7 @@ class Sim {
 
     coag_step_report advance_to(double t) {
         coag_step_report r;
-        check(coag_step_report_init(&r));
+        check(coag_step_report_init(&r, sizeof r));
         check(coag_sim_advance_to(s_.get(), t, &r));
         return r;
     }

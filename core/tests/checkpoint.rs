@@ -151,3 +151,29 @@ fn bucketed_small_large_and_pipelined() {
         |s| s.counts().into_owned(),
     );
 }
+
+/// Review of issue 13: a checkpoint whose list entry names a size past M (the bucket of
+/// M runs past it) was accepted, and the next `counts()` panicked. Restore now refuses
+/// it, and the target is unchanged.
+#[test]
+fn bucketed_restore_refuses_a_particle_past_the_maximum_size() {
+    let k = Coagulation::constant(1.0).unwrap();
+    let mut init = vec![0u64; 64];
+    init[0] = 1000;
+    init[63] = 1; // one particle of size 64 = M, alone in the list bucket 64..=65
+    let a = Bucketed::<_, 1, 2>::new(k, &init, 1001.0).unwrap();
+    assert_eq!(a.max_size(), 64);
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    a.save_to(&mut buf).unwrap();
+    let mut b = Bucketed::<_, 1, 2>::new(k, &init, 1001.0).unwrap();
+    b.restore_from(&buf).unwrap();
+    assert_eq!(a.counts(), b.counts());
+    // the last word is that particle's offset in its bucket: 1 means size 65 > M
+    let at = buf.len() - 8;
+    assert_eq!(u64::from_le_bytes(buf[at..].try_into().unwrap()), 0);
+    buf[at] = 1;
+    let mut c = Bucketed::<_, 1, 2>::monodisperse(k, 10).unwrap();
+    let before = c.counts().into_owned();
+    assert!(c.restore_from(&buf).is_err());
+    assert_eq!(c.counts().into_owned(), before);
+}

@@ -254,3 +254,45 @@ fn refused_input_leaves_the_state_unchanged() {
         s.advance_to(1.0, &mut rng).unwrap();
     }
 }
+
+/// Review of issue 13: the registry's options reach every scheme at construction — a
+/// memory budget the initial tables do not fit is refused by every size-count scheme
+/// (it used to be checked against the default first), a state longer than the size
+/// limit is refused, and a fragmentation kernel is refused by the schemes that cannot
+/// break particles (it used to be dropped silently).
+#[test]
+fn options_and_kernels_reach_every_scheme_at_construction() {
+    let k = Coagulation::constant(1.0).unwrap();
+    let mut counts = vec![0u64; 1 << 16];
+    counts[0] = 1000;
+    let init = Init::Counts {
+        counts: &counts,
+        volume: 1000.0,
+    };
+    let tight = Options::default().with_memory_budget(1 << 10);
+    let short = Options::default().with_size_limit(1000);
+    let frag = coagula_core::kernel::BinaryUniform::new(1.0).unwrap();
+    for info in common::count_schemes() {
+        let built =
+            |o: &Options| registry::build::<_, _, Pcg64Mcg>(info.id, k, NoFragmentation, &init, o);
+        assert!(built(&Options::default()).is_ok(), "{}", info.name);
+        assert!(
+            matches!(built(&tight), Err(Error::Capacity { .. })),
+            "{}: a 1 KiB budget for 65536 sizes",
+            info.name
+        );
+        assert!(
+            matches!(built(&short), Err(Error::Capacity { .. })),
+            "{}",
+            info.name
+        );
+        assert!(
+            matches!(
+                registry::build::<_, _, Pcg64Mcg>(info.id, k, frag, &init, &Options::default()),
+                Err(Error::Unsupported { .. })
+            ),
+            "{}: fragmentation",
+            info.name
+        );
+    }
+}

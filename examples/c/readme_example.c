@@ -19,7 +19,7 @@ int main(void) {
     TRY(coag_fragmentation_new_binary_uniform(1.0, &f));   /* F(x, y) = 2/(x + y) */
 
     coag_massflow_config cfg;
-    TRY(coag_massflow_default_config(&cfg));               /* QMC, dt = 0.01 */
+    TRY(coag_massflow_default_config(&cfg, sizeof cfg));               /* QMC, dt = 0.01 */
     enum { N = 1 << 14 };
     static double sizes[N];
     for (int i = 0; i < N; i++) sizes[i] = 1.0;            /* c(x, 0) = delta(x - 1) */
@@ -32,7 +32,7 @@ int main(void) {
     for (int step = 1; step <= 10; step++) {               /* the host's outer steps */
         double t = 0.1 * step, m2, exact;
         coag_step_report rep;
-        coag_step_report_init(&rep); /* sets rep.struct_size (the ABI's growth rule) */
+        coag_step_report_init(&rep, sizeof rep); /* sets rep.struct_size (the ABI's growth rule) */
         TRY(coag_sim_advance_to(sim, t, &rep));
         TRY(coag_sim_moment(sim, 2.0, &m2));
         TRY(coag_exact_moment(COAG_EXACT_COAG_FRAG, 2, t, &exact));

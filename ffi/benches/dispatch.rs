@@ -76,13 +76,19 @@ fn c_abi(n0: u64, seed: u64) -> (f64, u64) {
         let mut k = std::ptr::null_mut();
         assert_eq!(coag_kernel_new_brownian(&mut k), COAG_OK);
         let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
-        assert_eq!(coag_counts_default_config(cfg.as_mut_ptr()), COAG_OK);
+        assert_eq!(
+            coag_counts_default_config(cfg.as_mut_ptr(), std::mem::size_of::<coag_counts_config>()),
+            COAG_OK
+        );
         let mut cfg = cfg.assume_init();
         cfg.seed = seed;
         let mut s = std::ptr::null_mut();
         assert_eq!(coag_counts_new(&cfg, k, [n0].as_ptr(), 1, &mut s), COAG_OK);
         let mut rep = std::mem::MaybeUninit::<coag_step_report>::uninit();
-        assert_eq!(coag_step_report_init(rep.as_mut_ptr()), COAG_OK);
+        assert_eq!(
+            coag_step_report_init(rep.as_mut_ptr(), std::mem::size_of::<coag_step_report>()),
+            COAG_OK
+        );
         let mut rep = rep.assume_init();
         for i in 1..=SLICES {
             let t = T * f64::from(i) / f64::from(SLICES);

@@ -20,7 +20,13 @@ impl CSim {
         let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
         let mut s = std::ptr::null_mut();
         unsafe {
-            assert_eq!(coag_counts_default_config(cfg.as_mut_ptr()), COAG_OK);
+            assert_eq!(
+                coag_counts_default_config(
+                    cfg.as_mut_ptr(),
+                    std::mem::size_of::<coag_counts_config>()
+                ),
+                COAG_OK
+            );
             let mut cfg = cfg.assume_init();
             cfg.seed = seed;
             cfg.method = COAG_METHOD_LOWRANK_TREE;

@@ -149,8 +149,7 @@ fn report_of(r: StepReport) -> coag_step_report {
 unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), Fail> {
     // SAFETY: non-null (caller); a report begins with its size_t struct_size.
     let size = unsafe { out.cast::<usize>().read_unaligned() };
-    if !(std::mem::size_of::<usize>() + std::mem::size_of::<f64>()..=STEP_REPORT_V1).contains(&size)
-    {
+    if size < STEP_REPORT_V1 {
         return fail(
             COAG_INVALID_ARGUMENT,
             format!(
@@ -158,13 +157,16 @@ unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), 
             ),
         );
     }
+    // (a larger report is from a newer header: the fields this library knows are
+    // written, `struct_size` is left as the caller set it)
     let v = report_of(r);
-    // SAFETY: `size` bytes are writable at out (contract) and readable from v.
+    let n = size.min(STEP_REPORT_V1);
+    // SAFETY: `n ≤ size` bytes are writable at out (contract) and readable from v.
     unsafe {
         std::ptr::copy_nonoverlapping(
             (&v as *const coag_step_report).cast::<u8>().add(8),
             out.cast::<u8>().add(8),
-            size - 8,
+            n - 8,
         )
     };
     Ok(())
@@ -217,25 +219,58 @@ unsafe fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
     Ok(unsafe { &mut *p })
 }
 
-/// Zero-fills a step report and sets its `struct_size`.
+/// Writes `value` into a caller struct of `size` bytes (`sizeof` as the caller compiled
+/// it): the fields this library knows, at most `size` bytes, with `struct_size` set to
+/// what was written. A caller built against an older header (smaller struct) is never
+/// written past its end; `size` below the first version's is refused.
 ///
 /// # Safety
-/// `out` must be NULL or valid for writing the struct.
+/// A non-null `out` must be valid for writing `size` bytes; T is a repr(C) struct of
+/// numbers beginning with a `usize`.
+unsafe fn write_sized<T: Copy>(
+    out: *mut T,
+    size: usize,
+    v1: usize,
+    value: T,
+    name: &str,
+) -> Result<(), Fail> {
+    non_null(out, "out")?;
+    if size < v1 {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!(
+                "{name}: size {size} is below the struct's first version ({v1} bytes); pass sizeof the struct"
+            ),
+        );
+    }
+    let n = size.min(std::mem::size_of::<T>());
+    // SAFETY: `n ≤ size` bytes writable at out (contract), `n ≤ size_of::<T>()` readable
+    // from value; then the leading usize (in bounds: n ≥ v1 > 8).
+    unsafe {
+        std::ptr::copy_nonoverlapping((&value as *const T).cast::<u8>(), out.cast::<u8>(), n);
+        out.cast::<usize>().write_unaligned(n);
+    }
+    Ok(())
+}
+
+/// Zero-fills a step report of `size` bytes (`sizeof(coag_step_report)`) and sets its
+/// `struct_size`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing `size` bytes.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_step_report_init(out: *mut coag_step_report) -> i32 {
+pub unsafe extern "C" fn coag_step_report_init(out: *mut coag_step_report, size: usize) -> i32 {
     guard(|| {
-        non_null(out, "out")?;
-        // SAFETY: checked non-null; writable (contract).
+        // SAFETY: forwarded contract.
         unsafe {
-            write(
+            write_sized(
                 out,
-                coag_step_report {
-                    struct_size: STEP_REPORT_V1,
-                    ..Default::default()
-                },
+                size,
+                STEP_REPORT_V1,
+                coag_step_report::default(),
+                "step report",
             )
-        };
-        Ok(())
+        }
     })
 }
 
@@ -264,34 +299,54 @@ fn default_counts() -> coag_counts_config {
     }
 }
 
-/// Writes the default mass-flow configuration (with `struct_size` set): Δt = 0.01,
-/// mass 1, Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
+/// Writes the default mass-flow configuration into a struct of `size` bytes
+/// (`sizeof(coag_massflow_config)`), with `struct_size` set: Δt = 0.01, mass 1,
+/// Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
 ///
 /// # Safety
-/// `out` must be NULL or valid for writing the struct.
+/// `out` must be NULL or valid for writing `size` bytes.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_massflow_default_config(out: *mut coag_massflow_config) -> i32 {
+pub unsafe extern "C" fn coag_massflow_default_config(
+    out: *mut coag_massflow_config,
+    size: usize,
+) -> i32 {
     guard(|| {
-        non_null(out, "out")?;
-        // SAFETY: checked non-null; writable (contract).
-        unsafe { write(out, default_massflow()) };
-        Ok(())
+        // SAFETY: forwarded contract.
+        unsafe {
+            write_sized(
+                out,
+                size,
+                MASSFLOW_CONFIG_V1,
+                default_massflow(),
+                "massflow config",
+            )
+        }
     })
 }
 
-/// Writes the default size-count configuration (with `struct_size` set): the
-/// bucketed low-rank method, volume = number of particles, default size limit, the
-/// machine's memory budget (0: half its physical memory), seed 0, stream 0.
+/// Writes the default size-count configuration into a struct of `size` bytes
+/// (`sizeof(coag_counts_config)`), with `struct_size` set: the bucketed low-rank
+/// method, volume = number of particles, default size limit, the machine's memory
+/// budget (0: half its physical memory), seed 0, stream 0.
 ///
 /// # Safety
-/// `out` must be NULL or valid for writing the struct.
+/// `out` must be NULL or valid for writing `size` bytes.
 #[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_counts_default_config(out: *mut coag_counts_config) -> i32 {
+pub unsafe extern "C" fn coag_counts_default_config(
+    out: *mut coag_counts_config,
+    size: usize,
+) -> i32 {
     guard(|| {
-        non_null(out, "out")?;
-        // SAFETY: checked non-null; writable (contract).
-        unsafe { write(out, default_counts()) };
-        Ok(())
+        // SAFETY: forwarded contract.
+        unsafe {
+            write_sized(
+                out,
+                size,
+                COUNTS_CONFIG_V1,
+                default_counts(),
+                "counts config",
+            )
+        }
     })
 }
 
@@ -432,9 +487,15 @@ pub unsafe extern "C" fn coag_massflow_new_in(
         if !(workspace as usize).is_multiple_of(std::mem::align_of::<f64>()) {
             return fail(COAG_INVALID_ARGUMENT, "workspace is not aligned for double");
         }
-        let need = coagula_core::scheme::massflow::workspace_len(n)
+        let Some(need) = coagula_core::scheme::massflow::workspace_len(n)
             .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
-            .unwrap_or(usize::MAX);
+            .filter(|&b| b <= isize::MAX as usize)
+        else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("workspace for {n} particles overflows"),
+            );
+        };
         if workspace_bytes < need {
             return fail(
                 crate::COAG_BUFFER_TOO_SMALL,
@@ -442,9 +503,11 @@ pub unsafe extern "C" fn coag_massflow_new_in(
             );
         }
         let (w0, s0) = (workspace as usize, sizes as usize);
-        if !x.is_empty() && w0 < s0 + 8 * n && s0 < w0 + need {
+        if !x.is_empty() && w0 < s0.saturating_add(8 * n) && s0 < w0.saturating_add(need) {
             return fail(COAG_INVALID_ARGUMENT, "sizes overlap the workspace");
         }
+        // everything the construction can refuse, before the caller's memory is zeroed
+        coagula_core::scheme::massflow::check_setup(x, c.mass, c.dt)?;
         let opts = massflow_options(&c)?;
         let init = Init::Sizes {
             sizes: x,
@@ -584,7 +647,7 @@ pub unsafe extern "C" fn coag_sim_advance_to(
             // validate the report before the sim changes
             // SAFETY: non-null; readable by contract.
             let size = unsafe { report.cast::<usize>().read_unaligned() };
-            if !(16..=STEP_REPORT_V1).contains(&size) {
+            if size < STEP_REPORT_V1 {
                 return fail(
                     COAG_INVALID_ARGUMENT,
                     format!(
@@ -920,7 +983,13 @@ pub unsafe extern "C" fn coag_sim_reseed(sim: *mut coag_sim, seed: u64, stream: 
     })
 }
 
+/// The first word of a C-ABI checkpoint: the sim's own generator is xoshiro256++ (a
+/// checkpoint from before the seed policy changed, whose first word is a PCG state,
+/// is refused instead of resuming on another stream).
+const GENERATOR_TAG: u64 = u64::from_le_bytes(*b"XOSHI256");
+
 fn save_sim(s: &coag_sim, w: &mut Writer) {
+    w.u64(GENERATOR_TAG);
     for p in s.own.parts() {
         w.u64(p);
     }
@@ -995,6 +1064,12 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
         let s = unsafe { handle_mut(sim, "sim") }?;
         let data = unsafe { slice(buf, len, "buf") }?;
         let mut r = Reader::new(data);
+        if r.u64()? != GENERATOR_TAG {
+            return Err(coagula_core::Error::Checkpoint {
+                what: "not a checkpoint of this library's generator (xoshiro256++)",
+            }
+            .into());
+        }
         let parts = [r.u64()?, r.u64()?, r.u64()?, r.u64()?];
         let own = Generator::from_parts(parts).ok_or(coagula_core::Error::Checkpoint {
             what: "bad random stream",

@@ -18,7 +18,10 @@ fn c_counts(method: i32, n0: u64, t: f64) -> Vec<u64> {
         let mut k = std::ptr::null_mut();
         assert_eq!(coag_kernel_new_brownian(&mut k), COAG_OK);
         let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
-        assert_eq!(coag_counts_default_config(cfg.as_mut_ptr()), COAG_OK);
+        assert_eq!(
+            coag_counts_default_config(cfg.as_mut_ptr(), std::mem::size_of::<coag_counts_config>()),
+            COAG_OK
+        );
         let mut cfg = cfg.assume_init();
         (cfg.method, cfg.seed, cfg.stream) = (method, SEED, STREAM);
         let mut s = std::ptr::null_mut();
@@ -86,7 +89,13 @@ fn rqmc_mass_flow_matches_across_front_ends() {
         let mut k = std::ptr::null_mut();
         assert_eq!(coag_kernel_new_additive(0.0, &mut k), COAG_OK);
         let mut cfg = std::mem::MaybeUninit::<coag_massflow_config>::uninit();
-        assert_eq!(coag_massflow_default_config(cfg.as_mut_ptr()), COAG_OK);
+        assert_eq!(
+            coag_massflow_default_config(
+                cfg.as_mut_ptr(),
+                std::mem::size_of::<coag_massflow_config>()
+            ),
+            COAG_OK
+        );
         let mut cfg = cfg.assume_init();
         (cfg.randomization, cfg.seed, cfg.stream) = (COAG_RANDOMIZATION_OWEN, SEED, STREAM);
         let mut s = std::ptr::null_mut();

@@ -56,7 +56,7 @@ int main(void) {
 
     /* sim constructors */
     coag_massflow_config mc;
-    OK(coag_massflow_default_config(&mc));
+    OK(coag_massflow_default_config(&mc, sizeof mc));
     double sizes[6] = {1, 1, 1, 1, 1, 1};
     EXPECT(coag_massflow_new(NULL, k, NULL, sizes, 4, &s), COAG_NULL_PARAMETER);
     EXPECT(coag_massflow_new(&mc, NULL, NULL, sizes, 4, &s), COAG_NULL_PARAMETER);
@@ -72,12 +72,12 @@ int main(void) {
     mc.randomization = COAG_RANDOMIZATION_OWEN;
     EXPECT(coag_massflow_new(&mc, k, NULL, sizes, 4, &s), COAG_INVALID_ARGUMENT);
     sizes[2] = -1.0;
-    OK(coag_massflow_default_config(&mc));
+    OK(coag_massflow_default_config(&mc, sizeof mc));
     EXPECT(coag_massflow_new(&mc, k, NULL, sizes, 4, &s), COAG_INVALID_ARGUMENT);
     CHECK(s == NULL, "no sim written on error");
 
     coag_counts_config lc;
-    OK(coag_counts_default_config(&lc));
+    OK(coag_counts_default_config(&lc, sizeof lc));
     uint64_t counts[2] = {0, 0};
     EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT); /* no particles */
     EXPECT(coag_counts_new(&lc, k, counts, 0, &s), COAG_INVALID_ARGUMENT);
@@ -94,7 +94,7 @@ int main(void) {
     lc.volume = NAN;
     EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
     /* configs carry their size: a zeroed or a larger-than-ours struct is refused */
-    OK(coag_counts_default_config(&lc));
+    OK(coag_counts_default_config(&lc, sizeof lc));
     CHECK(lc.struct_size == sizeof lc, "default config sets struct_size: %zu", lc.struct_size);
     lc.struct_size = 0;
     EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
@@ -102,14 +102,14 @@ int main(void) {
     EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);
     {
         coag_massflow_config mc;
-        OK(coag_massflow_default_config(&mc));
+        OK(coag_massflow_default_config(&mc, sizeof mc));
         mc.struct_size = 3;
         double x[2] = {1.0, 1.0};
         EXPECT(coag_massflow_new(&mc, k, NULL, x, 2, &s), COAG_INVALID_ARGUMENT);
     }
 
     /* a working sim, then every misuse on it */
-    OK(coag_counts_default_config(&lc));
+    OK(coag_counts_default_config(&lc, sizeof lc));
     lc.size_limit = 64;
     OK(coag_counts_new(&lc, k, counts, 2, &s));
     EXPECT(coag_sim_advance_to(NULL, 1.0, NULL), COAG_NULL_PARAMETER);
@@ -120,8 +120,20 @@ int main(void) {
         EXPECT(coag_sim_advance_to(s, 0.1, &rep), COAG_INVALID_ARGUMENT);
         OK(coag_sim_time(s, &d));
         CHECK(d == 0.0, "sim unchanged by a refused report: t = %g", d);
-        EXPECT(coag_step_report_init(NULL), COAG_NULL_PARAMETER);
-        OK(coag_step_report_init(&rep));
+        EXPECT(coag_step_report_init(NULL, sizeof rep), COAG_NULL_PARAMETER);
+        EXPECT(coag_step_report_init(&rep, 8), COAG_INVALID_ARGUMENT); /* below the first version */
+        {
+            /* a caller with a larger (newer) report: the known fields are written, nothing past */
+            struct {
+                coag_step_report r;
+                uint64_t extra;
+            } big;
+            memset(&big, 0xab, sizeof big);
+            big.r.struct_size = sizeof big;
+            OK(coag_sim_advance_to(s, 0.05, &big.r));
+            CHECK(big.r.time == 0.05 && big.extra == 0xababababababababull, "newer report: known fields only");
+        }
+        OK(coag_step_report_init(&rep, sizeof rep));
         CHECK(rep.struct_size == sizeof rep && rep.events == 0, "report init");
         int method = -1;
         OK(coag_sim_method(s, &method));
@@ -182,7 +194,7 @@ int main(void) {
     coag_user_kernel nk2 = {nan_kernel, NULL, 0, NULL, 0, NULL, NULL};
     coag_kernel *nanf;
     OK(coag_kernel_new_user(&nk2, &nanf));
-    OK(coag_massflow_default_config(&mc));
+    OK(coag_massflow_default_config(&mc, sizeof mc));
     mc.dt = 0.1;
     double init[64];
     for (int i = 0; i < 64; i++) init[i] = 1.0;

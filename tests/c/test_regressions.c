@@ -42,7 +42,7 @@ int main(void) {
     coag_kernel *nk;
     OK(coag_kernel_new_user(&desc, &nk));
     coag_counts_config c;
-    OK(coag_counts_default_config(&c));
+    OK(coag_counts_default_config(&c, sizeof c));
     c.method = COAG_METHOD_INVERSE;
     uint64_t counts[1] = {1000};
     coag_sim *s;
@@ -64,7 +64,7 @@ int main(void) {
     coag_user_kernel over = {twice_product, NULL, 1, half_product_factors, 0, NULL, NULL};
     coag_kernel *ok;
     OK(coag_kernel_new_user(&over, &ok));
-    OK(coag_counts_default_config(&c));
+    OK(coag_counts_default_config(&c, sizeof c));
     OK(coag_counts_new(&c, ok, counts, 1, &s));
     EXPECT(coag_sim_advance_to(s, 0.3, NULL), COAG_INVALID_RATE);
     double tm = -1.0;
@@ -79,7 +79,7 @@ int main(void) {
     /* item 7: restore a small-M checkpoint into the grown sim, then grow again */
     coag_kernel *add;
     OK(coag_kernel_new_additive(1.0, &add));
-    OK(coag_counts_default_config(&c));
+    OK(coag_counts_default_config(&c, sizeof c));
     uint64_t mono[1] = {2000};
     OK(coag_counts_new(&c, add, mono, 1, &s));
     OK(coag_sim_advance_to(s, 0.1, NULL));

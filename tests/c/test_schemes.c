@@ -19,7 +19,7 @@ static void massflow_lecot(void) {
     OK(coag_kernel_new_constant(1.0, &k));
     OK(coag_fragmentation_new_binary_uniform(1.0, &f));
     coag_massflow_config c;
-    OK(coag_massflow_default_config(&c));
+    OK(coag_massflow_default_config(&c, sizeof c));
     c.dt = 0.01;
     enum { N = 1 << 12 };
     static double sizes[N];
@@ -31,7 +31,7 @@ static void massflow_lecot(void) {
     for (int h = 1; h <= 10; h++) {
         double t = 0.1 * h, m2, m3, e2, e3;
         coag_step_report r;
-        coag_step_report_init(&r);
+        coag_step_report_init(&r, sizeof r);
         OK(coag_sim_advance_to(s, t, &r));
         CHECK(r.proposals == 10u * N, "one proposal per particle and step, got %llu", (unsigned long long)r.proposals);
         OK(coag_sim_moment(s, 2.0, &m2));
@@ -92,7 +92,7 @@ static void counts_schemes(void) {
             stats m0 = {0}, n1 = {0};
             for (int r = 0; r < REPLICAS; r++) {
                 coag_counts_config c;
-                OK(coag_counts_default_config(&c));
+                OK(coag_counts_default_config(&c, sizeof c));
                 c.method = methods[mi];
                 c.seed = 1000 + r;
                 uint64_t counts[1] = {1 << 13};
@@ -110,7 +110,7 @@ static void counts_schemes(void) {
                 stats_push(&n1, (double)buf[0] / vol);
                 free(buf);
                 coag_step_report tot;
-                coag_step_report_init(&tot);
+                coag_step_report_init(&tot, sizeof tot);
                 OK(coag_sim_totals(s, &tot));
                 CHECK(tot.bound_violations == 0, "no violations, got %llu", (unsigned long long)tot.bound_violations);
                 coag_sim_free(s);
@@ -134,7 +134,7 @@ static void change_kernel_between_steps(void) {
     stats m0 = {0};
     for (int r = 0; r < REPLICAS; r++) {
         coag_counts_config c;
-        OK(coag_counts_default_config(&c));
+        OK(coag_counts_default_config(&c, sizeof c));
         c.seed = 7 + r;
         uint64_t counts[1] = {1 << 13};
         coag_sim *s;
@@ -167,7 +167,7 @@ static void host_randomness(void) {
     uint64_t finals[2];
     for (int rep = 0; rep < 2; rep++) {
         coag_counts_config c;
-        OK(coag_counts_default_config(&c));
+        OK(coag_counts_default_config(&c, sizeof c));
         uint64_t counts[1] = {5000};
         coag_sim *s;
         OK(coag_counts_new(&c, k, counts, 1, &s));
@@ -188,7 +188,7 @@ static void checkpoint_restore(void) {
     coag_kernel *k;
     OK(coag_kernel_new_free_molecular(1.0, &k));
     coag_counts_config c;
-    OK(coag_counts_default_config(&c));
+    OK(coag_counts_default_config(&c, sizeof c));
     c.seed = 99;
     uint64_t counts[1] = {20000};
     coag_sim *a, *b;
@@ -226,7 +226,7 @@ static void checkpoint_restore(void) {
     OK(coag_kernel_new_constant(1.0, &kc));
     OK(coag_fragmentation_new_binary_uniform(1.0, &f));
     coag_massflow_config mc;
-    OK(coag_massflow_default_config(&mc));
+    OK(coag_massflow_default_config(&mc, sizeof mc));
     mc.randomization = COAG_RANDOMIZATION_OWEN;
     mc.seed = 5;
     double init[1024];
@@ -262,7 +262,7 @@ static void host_modifies_state(void) {
     coag_kernel *k;
     OK(coag_kernel_new_constant(1.0, &k));
     coag_counts_config c;
-    OK(coag_counts_default_config(&c));
+    OK(coag_counts_default_config(&c, sizeof c));
     uint64_t counts[1] = {10000};
     coag_sim *s;
     OK(coag_counts_new(&c, k, counts, 1, &s));
@@ -295,7 +295,7 @@ static void massflow_in_caller_workspace(void) {
     OK(coag_kernel_new_constant(1.0, &k));
     OK(coag_fragmentation_new_binary_uniform(1.0, &f));
     coag_massflow_config c;
-    OK(coag_massflow_default_config(&c));
+    OK(coag_massflow_default_config(&c, sizeof c));
     c.randomization = COAG_RANDOMIZATION_OWEN;
     c.seed = 17;
     double sizes[NP];
@@ -310,6 +310,14 @@ static void massflow_in_caller_workspace(void) {
     EXPECT(coag_massflow_new_in(&c, k, f, sizes, NP, (char *)ws + 4, bytes - 8, &in), COAG_INVALID_ARGUMENT);
     EXPECT(coag_massflow_new_in(&c, k, f, sizes, NP, NULL, bytes, &in), COAG_NULL_PARAMETER);
     EXPECT(coag_massflow_new_in(&c, k, f, ws, NP, ws, bytes, &in), COAG_INVALID_ARGUMENT); /* overlap */
+    {
+        /* a refused set-up leaves the caller's workspace as it was */
+        for (size_t i = 0; i < bytes / sizeof(double); i++) ws[i] = 7.0;
+        coag_massflow_config bad = c;
+        bad.dt = -1.0;
+        EXPECT(coag_massflow_new_in(&bad, k, f, sizes, NP, ws, bytes, &in), COAG_INVALID_ARGUMENT);
+        CHECK(ws[0] == 7.0 && ws[bytes / sizeof(double) - 1] == 7.0, "workspace untouched by a refused call");
+    }
     OK(coag_massflow_new_in(&c, k, f, sizes, NP, ws, bytes, &in));
     for (int h = 1; h <= 30; h++) {
         OK(coag_sim_advance_to(own, 0.05 * h, NULL));

@@ -22,11 +22,11 @@ program test_fortran
   nfail = 0
   nchecks = 0
   call ok(coag_kernel_new_constant(1.0_c_double, k))
-  call ok(coag_step_report_init(rep))
+  call ok(coag_step_report_init(rep, c_sizeof(rep)))
   s1 = 0
   s2 = 0
   do r = 1, reps
-     call ok(coag_counts_default_config(lc))
+     call ok(coag_counts_default_config(lc, c_sizeof(lc)))
      lc%seed = int(100 + r, c_int64_t)
      counts(1) = 8192
      call ok(coag_counts_new(lc, k, counts, 1_c_size_t, sim))
@@ -48,7 +48,7 @@ program test_fortran
   call check(abs(mean - exact) < 6.072_c_double * se, "low-rank M0(2) within 6.07 SE of the exact value")
 
   call ok(coag_fragmentation_new_binary_uniform(1.0_c_double, f))
-  call ok(coag_massflow_default_config(mc))
+  call ok(coag_massflow_default_config(mc, c_sizeof(mc)))
   allocate(sizes(4096))
   sizes = 1.0_c_double
   call ok(coag_massflow_new(mc, k, f, sizes, size(sizes, kind=c_size_t), sim))

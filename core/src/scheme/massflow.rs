@@ -87,6 +87,25 @@ pub const fn workspace_len(n: usize) -> Option<usize> {
     n.checked_mul(6)
 }
 
+/// Validates a mass-flow set-up (what [`MassFlow::new`] and [`MassFlow::new_in`] refuse:
+/// N not a power of two ≥ 2, a size, the mass or Δt not finite and positive) without
+/// touching any workspace, so a caller can check before handing memory over.
+pub fn check_setup(initial: &[f64], mass: f64, dt: f64) -> Result<()> {
+    let n = initial.len();
+    if n < 2 || !n.is_power_of_two() {
+        return Err(Error::NotPowerOfTwo {
+            name: "number of particles",
+            value: n as u64,
+        });
+    }
+    crate::error::positive("mass", mass)?;
+    crate::error::positive("dt", dt)?;
+    for &v in initial {
+        crate::error::positive("initial size", v)?;
+    }
+    Ok(())
+}
+
 /// The workspace split into (sizes, next sizes, points, scratch); `cur` says which half
 /// of the first `2n` holds the sizes.
 #[inline]
@@ -193,18 +212,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         points: PointSource,
         mut workspace: B,
     ) -> Result<Self> {
+        check_setup(initial, mass, dt)?;
         let n = initial.len();
-        if n < 2 || !n.is_power_of_two() {
-            return Err(Error::NotPowerOfTwo {
-                name: "number of particles",
-                value: n as u64,
-            });
-        }
-        crate::error::positive("mass", mass)?;
-        crate::error::positive("dt", dt)?;
-        for &v in initial {
-            crate::error::positive("initial size", v)?;
-        }
         let need = workspace_len(n).ok_or(Error::Overflow {
             name: "mass-flow workspace",
         })?;

@@ -445,6 +445,19 @@ where
             what: "initial state of the other kind (counts vs sizes) for this scheme",
         });
     }
+    if let Init::Counts { counts, .. } = init {
+        if !frag.is_none() {
+            return Err(Error::Unsupported {
+                what: "fragmentation: only the mass-flow scheme breaks particles",
+            });
+        }
+        if counts.len() as u64 > opts.size_limit {
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: usize::try_from(opts.size_limit).unwrap_or(usize::MAX),
+            });
+        }
+    }
     match (id, *init) {
         (SchemeId::MassFlow, Init::Sizes { sizes, mass }) => {
             let s = MassFlow::new(kernel, frag, sizes, mass, opts.dt, opts.points.clone())?
@@ -453,34 +466,30 @@ where
         }
         (SchemeId::LowRank, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
-                let s = Bucketed::<K, R, W>::new(kernel, counts, volume)?
-                    .with_size_limit(opts.size_limit)
-                    .with_memory_budget(opts.memory_budget);
+                let s = Bucketed::<K, R, W>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                    .with_size_limit(opts.size_limit);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }
         (SchemeId::LowRankTree, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
                 let _ = W;
-                let s = LowRank::<K, R>::new(kernel, counts, volume)?
-                    .with_size_limit(opts.size_limit)
-                    .with_memory_budget(opts.memory_budget);
+                let s = LowRank::<K, R>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                    .with_size_limit(opts.size_limit);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }
         (SchemeId::LowRankBinaryTree, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
                 let _ = W;
-                let s = LowRank::<K, R, BinaryTree<R>>::new(kernel, counts, volume)?
-                    .with_size_limit(opts.size_limit)
-                    .with_memory_budget(opts.memory_budget);
+                let s = LowRank::<K, R, BinaryTree<R>>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                    .with_size_limit(opts.size_limit);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }
         (SchemeId::Inverse, Init::Counts { counts, volume }) => {
-            let s = Inverse::new(kernel, counts, volume)?
-                .with_size_limit(opts.size_limit)
-                .with_memory_budget(opts.memory_budget);
+            let s = Inverse::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                .with_size_limit(opts.size_limit);
             Ok(boxed(s, id))
         }
         (SchemeId::Rejection, Init::Counts { counts, volume }) => {

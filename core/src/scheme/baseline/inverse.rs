@@ -85,13 +85,25 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Starts from `counts[i - 1] = N_i` in volume `volume`.
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        let pop = Population::new(counts, volume)?;
+        Self::new_with_memory_budget(kernel, counts, volume, DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// [`new`](Self::new) with a memory budget of `bytes` (see
+    /// [`with_memory_budget`](Self::with_memory_budget)), which the initial size index
+    /// must already fit.
+    pub fn new_with_memory_budget(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        bytes: usize,
+    ) -> Result<Self> {
+        let pop = Population {
+            memory_budget: bytes,
+            ..Population::new(counts, volume)?
+        };
         let n = pop.n;
         let len = counts.len().next_power_of_two();
-        within_budget(
-            len.checked_mul(core::mem::size_of::<u32>()),
-            DEFAULT_MEMORY_BUDGET,
-        )?;
+        within_budget(len.checked_mul(core::mem::size_of::<u32>()), bytes)?;
         let mut s = Inverse {
             kernel,
             size: Vec::new(),

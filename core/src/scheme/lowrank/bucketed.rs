@@ -1138,8 +1138,9 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
     ) -> Result<Self> {
         let bad = |what| Error::Checkpoint { what };
         let n = pop.n;
-        if !(1..=MAX_PARTICLES).contains(&pop.n0) {
-            return Err(bad("invalid particle reference"));
+        // doubling keeps n below n0 (it doubles when n < n0/2); a fresh start has n = n0
+        if !(1..=MAX_PARTICLES).contains(&pop.n0) || !(1..=pop.n0).contains(&n) {
+            return Err(bad("invalid particle number or reference"));
         }
         within_budget(
             count_len(m).checked_mul(core::mem::size_of::<u32>()),
@@ -1190,7 +1191,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         s.quantise();
         for bk in s.buckets.iter_mut() {
             let (slots, tab, bn, cap, judged) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?, r.u64()?);
-            if tab > slots || bn > slots {
+            if tab > slots || bn > slots || judged > pop.n0 {
                 return Err(bad("bucket slots inconsistent"));
             }
             (bk.slots, bk.tab, bk.n, bk.cap, bk.judged) = (slots, tab, bn, cap, judged);
@@ -1230,17 +1231,24 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                     .lists
                     .get(b.wrapping_sub(SINGLE as usize))
                     .ok_or(bad("a singleton bucket in list mode"))?;
-                if list.len() as u64 != bk.n || list.iter().any(|&o| u64::from(o) >= width) {
+                // (the bucket of M runs past M: no particle is larger than M)
+                if list.len() as u64 != bk.n
+                    || list
+                        .iter()
+                        .any(|&o| u64::from(o) >= width || lo + u64::from(o) > m)
+                {
                     return Err(bad("list bucket inconsistent"));
                 }
             }
         }
-        if total != n {
+        if total != n || counts[m as usize + 1..].iter().any(|&c| c != 0) {
             return Err(bad("counts do not add up"));
         }
-        if over
-            .iter()
-            .any(|&b| b >= nb || s.buckets[b].slots == s.buckets[b].tab)
+        // the overflow holds distinct grown buckets; with current tables, every one
+        let grown = s.buckets.iter().filter(|bk| bk.slots > bk.tab).count();
+        if over.iter().enumerate().any(|(i, &b)| {
+            b >= nb || s.buckets[b].slots == s.buckets[b].tab || over[..i].contains(&b)
+        }) || (!stale && over.len() != grown)
         {
             return Err(bad("overflow list inconsistent"));
         }
@@ -1264,6 +1272,10 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 }
                 _ => return Err(bad("slot weights overflow")),
             }
+        }
+        let slack_ok = (0..W).all(|rr| base_slack[rr] <= s.row_total[rr]);
+        if planned > s.slots_total || !slack_ok || since_resync > 1 << 62 {
+            return Err(bad("resync bookkeeping inconsistent"));
         }
         s.set_resync_threshold();
         if !stale {

@@ -127,7 +127,22 @@ where
     /// factor is negative or not finite, the counts are all zero (or, bucketed, add up to
     /// more than [`MAX_PARTICLES`]), the volume is not positive.
     pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
-        let pop = Population::new(counts, volume)?;
+        Self::new_with_memory_budget(kernel, counts, volume, DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// [`new`](Self::new) with a memory budget of `bytes` (see
+    /// [`with_memory_budget`](Self::with_memory_budget)), which the initial tables must
+    /// already fit.
+    pub fn new_with_memory_budget(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        bytes: usize,
+    ) -> Result<Self> {
+        let pop = Population {
+            memory_budget: bytes,
+            ..Population::new(counts, volume)?
+        };
         let engine = E::build(&kernel, counts, &pop)?;
         Ok(LowRankMc {
             rule: Rl::for_kernel(&kernel),
