@@ -10,6 +10,37 @@ mod lecot;
 mod plot;
 mod validate;
 
+/// A finite, positive number (end times, sizes).
+fn positive_f64(v: &str) -> Result<f64, String> {
+    let x: f64 = v.parse().map_err(|e| format!("{e}"))?;
+    if x.is_finite() && x > 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("{v} is not a finite positive number"))
+    }
+}
+
+/// One of Osinsky's tables (a kernel of the paper's benchmarks).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub(crate) enum PaperTable {
+    /// The Brownian (continuum) kernel, table 1.
+    Brownian,
+    /// The free-molecular (ballistic) kernel on integer sizes, table 2.
+    Ballistic,
+    /// The linear (additive) kernel, table 3.
+    Linear,
+}
+
+impl PaperTable {
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            PaperTable::Brownian => "brownian",
+            PaperTable::Ballistic => "ballistic",
+            PaperTable::Linear => "linear",
+        }
+    }
+}
+
 /// The registry's options as the CLI uses them: the defaults, with the memory budget
 /// of this machine (half its physical memory).
 pub(crate) fn options() -> coagula_core::scheme::registry::Options {
@@ -66,14 +97,14 @@ enum Command {
         /// Which experiment.
         #[arg(value_enum)]
         which: Experiment,
-        /// Largest log2 N (the paper goes to 20).
-        #[arg(long, default_value_t = 20)]
+        /// Largest log2 N, 7..=24 (the paper's N = 2^7 .. 2^20).
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(7..=24))]
         m_max: u32,
-        /// MC seeds averaged per cell.
-        #[arg(long, default_value_t = 4)]
+        /// MC seeds averaged per cell (at least 1).
+        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..))]
         mc_seeds: u64,
-        /// RQMC randomisations per N (0 = none).
-        #[arg(long, default_value_t = 20)]
+        /// RQMC randomisations per N (0 = none; otherwise at least 2, for an interval).
+        #[arg(long, default_value_t = 20, value_parser = rqmc_count)]
         rqmc: u32,
         /// Draw Figure 2 (an .svg file).
         #[arg(long)]
@@ -84,8 +115,13 @@ enum Command {
         /// Which solution.
         #[arg(long, value_enum, default_value = "constant")]
         solution: Solution,
-        /// Comma-separated times.
-        #[arg(long, value_delimiter = ',', default_value = "0,0.5,1,2,5")]
+        /// Comma-separated times (a negative one is an error, not a flag).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "0,0.5,1,2,5",
+            allow_negative_numbers = true
+        )]
         times: Vec<f64>,
         /// Print n_1 .. n_kmax as well.
         #[arg(long, default_value_t = 0)]
@@ -93,11 +129,11 @@ enum Command {
     },
     /// Print the t-values of the digital sequences (rank test on generating matrices).
     Qmc {
-        /// Number of coordinates to analyse.
-        #[arg(long, default_value_t = 20)]
-        dims: usize,
-        /// Largest m (block size 2^m) for the sequence t-values.
-        #[arg(long, default_value_t = 20)]
+        /// Number of coordinates to analyse (1..=64).
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=64))]
+        dims: u64,
+        /// Largest m (block size 2^m) for the sequence t-values (1..=62).
+        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=62))]
         m: u32,
     },
     /// Benchmarks: `coagula bench lowrank` reruns Osinsky's tables 1-3.
@@ -107,15 +143,15 @@ enum Command {
     },
     /// Check every built-in kernel's bounds on a log grid and print the worst acceptance.
     Kernels {
-        /// Smallest size of the grid (1 = integer sizes, bounds narrowed to x ≥ 1).
-        #[arg(long, default_value_t = 1.0)]
+        /// Smallest size of the grid, > 0 (1 = integer sizes, bounds narrowed to x ≥ 1).
+        #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
         min: f64,
-        /// Largest size of the grid.
-        #[arg(long, default_value_t = 1e9)]
+        /// Largest size of the grid (> min).
+        #[arg(long, default_value_t = 1e9, value_parser = positive_f64)]
         max: f64,
-        /// Grid points.
-        #[arg(long, default_value_t = 400)]
-        points: usize,
+        /// Grid points (at least 2).
+        #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u64).range(2..=10_000_000))]
+        points: u64,
     },
 }
 
@@ -124,7 +160,7 @@ enum BenchKind {
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
-        #[arg(long, default_value_t = 10_000_000)]
+        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=u64::from(u32::MAX)))]
         n0: u64,
         /// Wall-clock budget per baseline run, in seconds (cells beyond it print "-").
         #[arg(long, default_value_t = 600.0)]
@@ -136,9 +172,9 @@ enum BenchKind {
         /// Budget of the inverse runs alone (default: --budget); 0 skips them.
         #[arg(long)]
         inverse_budget: Option<f64>,
-        /// Only this table: brownian, ballistic or linear.
-        #[arg(long)]
-        only: Option<String>,
+        /// Only this table.
+        #[arg(long, value_enum)]
+        only: Option<PaperTable>,
         /// Time only the low-rank method.
         #[arg(long)]
         skip_baselines: bool,
@@ -152,12 +188,14 @@ enum BenchKind {
     },
     /// Low-rank only, one kernel to one time (for profiling).
     LowrankSingle {
-        /// brownian, ballistic or linear.
-        #[arg(long, default_value = "brownian")]
-        kernel: String,
-        #[arg(long, default_value_t = 10_000_000)]
+        /// The table's kernel.
+        #[arg(long, value_enum, default_value = "brownian")]
+        kernel: PaperTable,
+        /// Initial number of monomers.
+        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=u64::from(u32::MAX)))]
         n0: u64,
-        #[arg(long, default_value_t = 10.0)]
+        /// End time (finite, > 0).
+        #[arg(long, default_value_t = 10.0, value_parser = positive_f64)]
         t: f64,
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -199,6 +237,16 @@ enum Solution {
     Multiplicative,
     MarcusLushnikov,
     CoagFrag,
+}
+
+/// An RQMC randomisation count: 0 (none) or at least 2 (an interval needs two).
+fn rqmc_count(v: &str) -> Result<u32, String> {
+    let r: u32 = v.parse().map_err(|e| format!("{e}"))?;
+    if r == 1 {
+        Err("1 randomisation gives no interval: use 0 or at least 2".into())
+    } else {
+        Ok(r)
+    }
 }
 
 fn main() -> ExitCode {
@@ -248,8 +296,18 @@ fn main() -> ExitCode {
             times,
             kmax,
         } => exact(solution, &times, kmax),
-        Command::Kernels { min, max, points } => kernels(min, max, points),
-        Command::Qmc { dims, m } => qmc_tvalues(dims, m),
+        Command::Kernels { min, max, points } => {
+            if max > min {
+                kernels(min, max, points as usize)
+            } else {
+                Err(coagula_core::Error::OutOfRange {
+                    name: "--max",
+                    value: max,
+                    range: "(--min, inf)",
+                })
+            }
+        }
+        Command::Qmc { dims, m } => qmc_tvalues(dims as usize, m),
         Command::Bench {
             which:
                 BenchKind::Lowrank {
@@ -281,7 +339,14 @@ fn main() -> ExitCode {
                     range: "[0, inf) seconds",
                 }),
                 None => {
-                    bench::lowrank(n0, budgets, only, skip_baselines, repeat, seed);
+                    bench::lowrank(
+                        n0,
+                        budgets,
+                        only.map(|o| o.name().to_string()),
+                        skip_baselines,
+                        repeat,
+                        seed,
+                    );
                     Ok(())
                 }
             }
@@ -297,7 +362,7 @@ fn main() -> ExitCode {
                     bucketed,
                 },
         } => {
-            bench::lowrank_single(&kernel, n0, t, seed, binary, bucketed);
+            bench::lowrank_single(kernel.name(), n0, t, seed, binary, bucketed);
             Ok(())
         }
         Command::Bench {

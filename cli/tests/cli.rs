@@ -63,3 +63,33 @@ fn bad_arguments_fail_with_a_message() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("t = -1"));
 }
+
+/// Issue 15's list of inputs that panicked or ran meaninglessly: each is now refused
+/// with a message and a failing exit status, and none panics.
+#[test]
+fn bad_input_is_refused_without_a_panic() {
+    let cases: &[&[&str]] = &[
+        &["qmc", "--m", "65"],
+        &["qmc", "--dims", "0"],
+        &["bench", "lowrank", "--n0", "0"],
+        &["bench", "lowrank", "--only", "foo"],
+        &["bench", "lowrank-single", "--n0", "0"],
+        &["bench", "lowrank-single", "--t=-1"],
+        &["bench", "lowrank-single", "--t", "nan"],
+        &["bench", "lowrank-single", "--kernel", "foo"],
+        &["kernels", "--points", "0"],
+        &["kernels", "--min", "0"],
+        &["kernels", "--min", "10", "--max", "5"],
+        &["reproduce", "lecot2019", "--m-max", "3"],
+        &["reproduce", "lecot2019", "--mc-seeds", "0"],
+        &["reproduce", "lecot2019", "--rqmc", "1"],
+        &["exact", "--times", "-1"],
+    ];
+    for args in cases {
+        let out = coagula().args(*args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+        assert!(err.contains("error"), "{args:?}: no error message: {err}");
+    }
+}
