@@ -13,6 +13,7 @@ use coagula_core::random::{Purpose, generator, substream};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use rayon::prelude::*;
+use std::io::Write;
 
 /// Which points drive the scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -159,40 +160,70 @@ pub fn run_default(
             "--m {m}: log2 of the particle number must be in 1..=30"
         ));
     }
-    if steps == 0 {
-        return Err("--steps must be at least 1".into());
+    if steps == 0 || !steps.is_multiple_of(100) {
+        // the errors are read at t = h/100: with P not a multiple of 100 those times
+        // would cut the steps short, and the run would not be the P-step scheme asked for
+        return Err(format!(
+            "--steps {steps}: must be a positive multiple of 100 (the moments are compared at t = h/100, which must fall on steps)"
+        ));
     }
+    // every output is opened before the work starts ("-": standard output, and the
+    // table then goes to standard error)
+    let mut csv_out: Option<csv::Writer<Box<dyn std::io::Write>>> = match csv {
+        Some("-") => Some(csv::Writer::from_writer(Box::new(std::io::stdout()))),
+        Some(path) => Some(csv::Writer::from_writer(Box::new(
+            std::fs::File::create(path).map_err(|e| format!("--csv {path}: {e}"))?,
+        ))),
+        None => None,
+    };
+    if let Some(path) = plot {
+        crate::plot::check_svg(path)?;
+        std::fs::File::create(path).map_err(|e| format!("--plot {path}: {e}"))?;
+    }
+    let mut table: Box<dyn std::io::Write> = if csv == Some("-") {
+        Box::new(std::io::stderr())
+    } else {
+        Box::new(std::io::stdout())
+    };
+    let io = |e: std::io::Error| e.to_string();
     let start = std::time::Instant::now();
     let traj = try_lecot_case(m, steps, points, seed).map_err(|e| e.to_string())?;
     let secs = start.elapsed().as_secs_f64();
     let exact = Exact::coagulation_fragmentation();
-    println!(
+    writeln!(
+        table,
         "Lécot et al. (2019) coagulation-fragmentation test: K = 1, F = 2/(x+y), c(x,0) = δ(x-1)\n\
          scheme: mass flow, {points:?} points, N = 2^{m} = {}, P = {steps} steps to T = 1 ({secs:.2} s)\n",
         1u64 << m
-    );
-    println!(
+    )
+    .map_err(io)?;
+    writeln!(
+        table,
         "{:>6} {:>12} {:>12} {:>10} {:>12} {:>12} {:>10}",
         "t", "M2", "M2 exact", "|err|", "M3", "M3 exact", "|err|"
-    );
+    )
+    .map_err(io)?;
     for &(t, m2, m3) in &traj {
         let h = (t * 100.0).round() as u32;
         if h == 1 || h.is_multiple_of(10) {
             let (e2, e3) = (exact.moment(2, t).unwrap(), exact.moment(3, t).unwrap());
-            println!(
+            writeln!(
+                table,
                 "{t:>6.2} {m2:>12.6} {e2:>12.6} {:>10.2e} {m3:>12.6} {e3:>12.6} {:>10.2e}",
                 (m2 - e2).abs(),
                 (m3 - e3).abs()
-            );
+            )
+            .map_err(io)?;
         }
     }
     let err = errors(&traj);
-    println!(
+    writeln!(
+        table,
         "\nmean |error| over t = h/100, h = 1..100: M2 {:.3e}, M3 {:.3e}",
         err[0][3], err[1][3]
-    );
-    if let Some(path) = csv {
-        let mut w = csv::Writer::from_path(path).map_err(|e| format!("{path}: {e}"))?;
+    )
+    .map_err(io)?;
+    if let (Some(path), Some(w)) = (csv, csv_out.as_mut()) {
         w.write_record(["t", "M2", "M2_exact", "M3", "M3_exact"])
             .map_err(|e| e.to_string())?;
         for &(t, m2, m3) in &traj {
@@ -207,13 +238,15 @@ pub fn run_default(
                 .map_err(|e| e.to_string())?;
         }
         w.flush().map_err(|e| e.to_string())?;
-        println!("wrote {path}");
+        if path != "-" {
+            writeln!(table, "wrote {path}").map_err(io)?;
+        }
     }
     if let Some(path) = plot {
         crate::plot::moments(path, &traj, |t| {
             (exact.moment(2, t).unwrap(), exact.moment(3, t).unwrap())
         })?;
-        println!("wrote {path}");
+        writeln!(table, "wrote {path}").map_err(io)?;
     }
     Ok(())
 }

@@ -6,7 +6,7 @@ fn err<E: std::fmt::Display>(e: E) -> String {
     format!("plot: {e}")
 }
 
-fn check_svg(path: &str) -> Result<(), String> {
+pub(crate) fn check_svg(path: &str) -> Result<(), String> {
     if path.ends_with(".svg") {
         Ok(())
     } else {

@@ -52,11 +52,15 @@ fn run_writes_csv_close_to_exact() {
 #[test]
 fn bad_arguments_fail_with_a_message() {
     let out = coagula()
-        .args(["run", "--m", "10", "--steps", "10", "--plot", "x.png"])
+        .args(["run", "--m", "10", "--steps", "100", "--plot", "x.png"])
         .output()
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("only SVG"));
+    assert!(
+        !std::path::Path::new("x.png").exists(),
+        "refused before any file is made"
+    );
     let out = coagula().args(["run", "--m", "0"]).output().unwrap();
     assert!(!out.status.success());
     let out = coagula().args(["exact", "--times=-1"]).output().unwrap();
@@ -84,6 +88,9 @@ fn bad_input_is_refused_without_a_panic() {
         &["reproduce", "lecot2019", "--mc-seeds", "0"],
         &["reproduce", "lecot2019", "--rqmc", "1"],
         &["exact", "--times", "-1"],
+        &["run", "--steps", "1"],
+        &["run", "--m", "6", "--csv", "/nonexistent/dir/x.csv"],
+        &["run", "--m", "6", "--plot", "/nonexistent/dir/x.svg"],
     ];
     for args in cases {
         let out = coagula().args(*args).output().unwrap();
@@ -92,4 +99,24 @@ fn bad_input_is_refused_without_a_panic() {
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
         assert!(err.contains("error"), "{args:?}: no error message: {err}");
     }
+}
+
+/// `--csv -` writes the CSV to standard output (the table moves to standard error).
+#[test]
+fn run_csv_to_standard_output() {
+    let out = coagula()
+        .args(["run", "--m", "6", "--steps", "100", "--csv", "-"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("t,M2,M2_exact,M3,M3_exact"));
+    assert_eq!(lines.count(), 100);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("mean |error|"));
+    assert!(!std::path::Path::new("-").exists(), "no file named '-'");
 }
