@@ -379,6 +379,30 @@ fn points_of(c: &coag_massflow_config) -> Result<PointSource, Fail> {
     })
 }
 
+/// The inputs of a mass-flow constructor: the config, the kernel, the fragmentation
+/// kernel (NULL: none) and the sizes.
+///
+/// # Safety
+/// Each pointer NULL or valid (`sizes` for `n` doubles), as the constructors document.
+unsafe fn massflow_inputs<'a>(
+    config: *const coag_massflow_config,
+    kernel: *const coag_kernel,
+    frag: *const coag_fragmentation,
+    sizes: *const f64,
+    n: usize,
+) -> Result<(coag_massflow_config, Kernel, Fragmentation, &'a [f64]), Fail> {
+    // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
+    let c = unsafe { read_config(config, "config", MASSFLOW_CONFIG_V1, default_massflow()) }?;
+    let k = unsafe { handle(kernel, "kernel") }?.k;
+    let f = if frag.is_null() {
+        Fragmentation::None
+    } else {
+        unsafe { handle(frag, "frag") }?.f
+    };
+    let x = unsafe { slice(sizes, n, "sizes") }?;
+    Ok((c, k, f, x))
+}
+
 /// The registry options of a mass-flow config.
 fn massflow_options(c: &coag_massflow_config) -> Result<Options, Fail> {
     Ok(Options::default()
@@ -406,15 +430,8 @@ pub unsafe extern "C" fn coag_massflow_new(
     out: *mut *mut coag_sim,
 ) -> i32 {
     guard(|| {
-        // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
-        let c = unsafe { read_config(config, "config", MASSFLOW_CONFIG_V1, default_massflow()) }?;
-        let k = unsafe { handle(kernel, "kernel") }?.k;
-        let f = if frag.is_null() {
-            Fragmentation::None
-        } else {
-            unsafe { handle(frag, "frag") }?.f
-        };
-        let x = unsafe { slice(sizes, n, "sizes") }?;
+        // SAFETY: NULL is checked; otherwise valid by the caller's contract.
+        let (c, k, f, x) = unsafe { massflow_inputs(config, kernel, frag, sizes, n) }?;
         non_null(out, "out")?;
         let opts = massflow_options(&c)?;
         let init = Init::Sizes {
@@ -473,15 +490,8 @@ pub unsafe extern "C" fn coag_massflow_new_in(
     out: *mut *mut coag_sim,
 ) -> i32 {
     guard(|| {
-        // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
-        let c = unsafe { read_config(config, "config", MASSFLOW_CONFIG_V1, default_massflow()) }?;
-        let k = unsafe { handle(kernel, "kernel") }?.k;
-        let f = if frag.is_null() {
-            Fragmentation::None
-        } else {
-            unsafe { handle(frag, "frag") }?.f
-        };
-        let x = unsafe { slice(sizes, n, "sizes") }?;
+        // SAFETY: NULL is checked; otherwise valid by the caller's contract.
+        let (c, k, f, x) = unsafe { massflow_inputs(config, kernel, frag, sizes, n) }?;
         non_null(out, "out")?;
         non_null(workspace, "workspace")?;
         if !(workspace as usize).is_multiple_of(std::mem::align_of::<f64>()) {

@@ -97,10 +97,7 @@ impl<K: CoagulationKernel> Inverse<K> {
         volume: f64,
         bytes: usize,
     ) -> Result<Self> {
-        let pop = Population {
-            memory_budget: bytes,
-            ..Population::new(counts, volume)?
-        };
+        let pop = Population::new(counts, volume)?.with_memory_budget(bytes);
         let n = pop.n;
         let len = counts.len().next_power_of_two();
         within_budget(len.checked_mul(core::mem::size_of::<u32>()), bytes)?;

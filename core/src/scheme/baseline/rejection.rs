@@ -70,10 +70,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         volume: f64,
         bytes: usize,
     ) -> Result<Self> {
-        let pop = Population {
-            memory_budget: bytes,
-            ..Population::new(counts, volume)?
-        };
+        let pop = Population::new(counts, volume)?.with_memory_budget(bytes);
         let sizes = Self::particle_list(counts, pop.n, bytes)?;
         let max_present = sizes.iter().copied().max().unwrap_or(1);
         let mut s = AcceptanceRejection {

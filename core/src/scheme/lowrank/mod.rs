@@ -139,10 +139,7 @@ where
         volume: f64,
         bytes: usize,
     ) -> Result<Self> {
-        let pop = Population {
-            memory_budget: bytes,
-            ..Population::new(counts, volume)?
-        };
+        let pop = Population::new(counts, volume)?.with_memory_budget(bytes);
         let engine = E::build(&kernel, counts, &pop)?;
         Ok(LowRankMc {
             rule: Rl::for_kernel(&kernel),

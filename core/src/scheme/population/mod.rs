@@ -75,6 +75,12 @@ impl Population {
         })
     }
 
+    /// The same population with a memory budget of `bytes`.
+    pub fn with_memory_budget(mut self, bytes: usize) -> Self {
+        self.memory_budget = bytes;
+        self
+    }
+
     /// Fewer than `N0/2` particles remain: the counts must double.
     #[inline]
     pub fn doubling_due(&self) -> bool {
