@@ -34,6 +34,9 @@ const FM_ALL_SIZES_C2: f64 = 1.4219;
 /// (degree 1/6 against 4/3) the supremum over `x, y ≥ s` is `4√2 s^{-7/6}`.
 const FM_UNIT_C2: f64 = 5.656_854_249_492_381;
 
+/// The Boltzmann constant k_B in J/K (exact since the 2019 SI).
+pub const BOLTZMANN: f64 = 1.380_649e-23;
+
 /// A built-in coagulation kernel (SPEC §2), with a product majorant and a low-rank bound.
 ///
 /// Constructors validate their parameters. Bounds hold for all sizes `x > 0` unless
@@ -52,6 +55,8 @@ const FM_UNIT_C2: f64 = 5.656_854_249_492_381;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Coagulation {
     kind: Kind,
+    /// The coefficient b of `K = b K_kind` (1 unless set by `with_coefficient`).
+    scale: f64,
     min_size: f64,
     /// Additive: the shift c; homogeneous: c² of the bound; free molecular: c².
     c: f64,
@@ -131,6 +136,7 @@ impl Coagulation {
     fn new(kind: Kind) -> Self {
         Coagulation {
             kind,
+            scale: 1.0,
             min_size: 0.0,
             c: 0.0,
         }
@@ -170,6 +176,91 @@ impl Coagulation {
             _ => {}
         }
         Ok(self)
+    }
+
+    /// Multiplies the kernel by a coefficient `b > 0` (finite): `K = b K_kind`, e.g.
+    /// Golovin's `K = b (x + y)`. The bounds scale with it (the majorant by `√b`, the
+    /// low-rank factors `a_k` by `b`), the acceptance floor does not. Coefficients
+    /// compose: `with_coefficient(2)` twice is `4 K`.
+    ///
+    /// ```
+    /// use coagula_core::kernel::{Coagulation, CoagulationKernel};
+    /// let golovin = Coagulation::additive().with_coefficient(1.5).unwrap();
+    /// assert_eq!(golovin.rate(1.0, 3.0), 6.0);
+    /// assert!(Coagulation::additive().with_coefficient(0.0).is_err());
+    /// ```
+    pub fn with_coefficient(mut self, b: f64) -> Result<Self> {
+        positive("coefficient", b)?;
+        let scale = self.scale * b;
+        if !(scale.is_finite() && scale > 0.0) {
+            return Err(Error::OutOfRange {
+                name: "coefficient",
+                value: b,
+                range: "a product with the kernel's coefficient in (0, inf)",
+            });
+        }
+        self.scale = scale;
+        Ok(self)
+    }
+
+    /// The coefficient b of `K = b K_kind` (1 for the plain kernels).
+    pub fn coefficient(&self) -> f64 {
+        self.scale
+    }
+
+    /// The degree λ of homogeneity, `K(s x, s y) = s^λ K(x, y)`: 0 (constant,
+    /// Brownian), 1 (additive), 2 (multiplicative), 2a (product), γ (homogeneous-γ),
+    /// 1/6 (free molecular). A front end that measures sizes in units of δ multiplies
+    /// the kernel by `δ^λ`.
+    pub fn homogeneity(&self) -> f64 {
+        match self.kind {
+            Kind::Constant(_) | Kind::Brownian => 0.0,
+            Kind::Additive => 1.0,
+            Kind::Multiplicative => 2.0,
+            Kind::Product(a) => 2.0 * a,
+            Kind::Homogeneous(g) => g,
+            Kind::FreeMolecular => 1.0 / 6.0,
+        }
+    }
+
+    /// The Brownian (continuum-regime) kernel in physical units,
+    /// `K(v, w) = (2 k_B T / 3 μ) (v^{1/3} + w^{1/3})(v^{−1/3} + w^{−1/3})` in m³/s, for
+    /// gas temperature `temperature` (K) and dynamic viscosity `viscosity` (Pa·s),
+    /// without slip correction (Friedlander, *Smoke, Dust and Haze*, eq. 7.12). The
+    /// kernel is homogeneous of degree 0, so sizes may be counted in any volume unit
+    /// (e.g. monomers).
+    ///
+    /// ```
+    /// use coagula_core::kernel::{Coagulation, CoagulationKernel};
+    /// // air at 293.15 K: 8 k_B T / 3 μ ≈ 6.0e-16 m³/s between equal spheres
+    /// let k = Coagulation::brownian_continuum(293.15, 1.81e-5).unwrap();
+    /// assert!((k.rate(1.0, 1.0) - 5.96e-16).abs() < 0.01e-16);
+    /// ```
+    pub fn brownian_continuum(temperature: f64, viscosity: f64) -> Result<Self> {
+        positive("temperature", temperature)?;
+        positive("viscosity", viscosity)?;
+        Self::brownian().with_coefficient(2.0 * BOLTZMANN * temperature / (3.0 * viscosity))
+    }
+
+    /// The free-molecular (kinetic-regime) kernel in physical units for sizes counted
+    /// in monomers of volume `monomer_volume` (m³):
+    /// `K(v, w) = (3/4π)^{1/6} (6 k_B T / ρ)^{1/2} (1/v + 1/w)^{1/2} (v^{1/3} + w^{1/3})²`
+    /// in m³/s, for temperature `temperature` (K) and particle material density
+    /// `density` (kg/m³) (Friedlander, eq. 7.25; Seinfeld & Pandis, eq. 13.49). With
+    /// `v = v0 x` this is `(3/4π)^{1/6} (6 k_B T/ρ)^{1/2} v0^{1/6}` times
+    /// [`free_molecular`](Self::free_molecular).
+    pub fn free_molecular_physical(
+        temperature: f64,
+        density: f64,
+        monomer_volume: f64,
+    ) -> Result<Self> {
+        positive("temperature", temperature)?;
+        positive("density", density)?;
+        positive("monomer_volume", monomer_volume)?;
+        let c = pow(3.0 / (4.0 * core::f64::consts::PI), 1.0 / 6.0)
+            * sqrt(6.0 * BOLTZMANN * temperature / density)
+            * pow(monomer_volume, 1.0 / 6.0);
+        Self::free_molecular().with_coefficient(c)
     }
 
     /// A short name of the kernel (`"constant"`, `"additive"`, ...).
@@ -235,6 +326,69 @@ fn homogeneous_bound_c2(gamma: f64) -> f64 {
 
 impl CoagulationKernel for Coagulation {
     fn rate(&self, x: f64, y: f64) -> f64 {
+        self.scale * self.unit_rate(x, y)
+    }
+
+    fn majorant(&self, x: f64) -> Option<f64> {
+        self.unit_majorant(x).map(|h| self.scale_sqrt() * h)
+    }
+
+    fn rank(&self) -> usize {
+        match self.kind {
+            Kind::FreeMolecular => 3,
+            Kind::Brownian => 2,
+            _ => 1,
+        }
+    }
+
+    fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+        self.unit_factors(x, a, b);
+        if self.scale != 1.0 {
+            let r = self.rank();
+            for ak in &mut a[..r] {
+                *ak *= self.scale;
+            }
+        }
+    }
+
+    fn min_size(&self) -> f64 {
+        self.min_size
+    }
+
+    fn low_rank_is_exact(&self) -> bool {
+        !matches!(self.kind, Kind::FreeMolecular | Kind::Homogeneous(_))
+    }
+
+    /// Ballistic: `K / (A + Aᵀ) = sqrt(1/x + 1/y) / (x^{-1/2} + y^{-1/2}) ≥ 1/√2` (equality
+    /// at x = y), lowered by 1e-12 against rounding. The coefficient cancels.
+    fn low_rank_floor(&self) -> f64 {
+        match self.kind {
+            Kind::FreeMolecular => core::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-12),
+            Kind::Homogeneous(_) => 0.0,
+            _ => 1.0,
+        }
+    }
+
+    /// Every built-in kernel is, along each axis, monotone or decreasing-then-increasing
+    /// (quasi-convex), so its supremum over a square is attained at a corner.
+    fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
+        let corners = [self.rate(lo, lo), self.rate(lo, hi), self.rate(hi, hi)];
+        Some(corners.into_iter().fold(0.0, f64::max))
+    }
+}
+
+impl Coagulation {
+    /// `√b`, exactly 1 for the plain kernels (so their bits do not change).
+    fn scale_sqrt(&self) -> f64 {
+        if self.scale == 1.0 {
+            1.0
+        } else {
+            sqrt(self.scale)
+        }
+    }
+
+    /// The kernel with coefficient 1.
+    fn unit_rate(&self, x: f64, y: f64) -> f64 {
         match self.kind {
             Kind::Constant(k0) => k0,
             Kind::Additive => x + y,
@@ -252,7 +406,8 @@ impl CoagulationKernel for Coagulation {
         }
     }
 
-    fn majorant(&self, x: f64) -> Option<f64> {
+    /// The majorant with coefficient 1.
+    fn unit_majorant(&self, x: f64) -> Option<f64> {
         Some(match self.kind {
             Kind::Constant(k0) => sqrt(k0),
             Kind::Additive => x + self.c,
@@ -272,15 +427,8 @@ impl CoagulationKernel for Coagulation {
         })
     }
 
-    fn rank(&self) -> usize {
-        match self.kind {
-            Kind::FreeMolecular => 3,
-            Kind::Brownian => 2,
-            _ => 1,
-        }
-    }
-
-    fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+    /// The low-rank factors with coefficient 1.
+    fn unit_factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
         match self.kind {
             Kind::Constant(k0) => {
                 a[0] = 0.5 * k0;
@@ -325,36 +473,95 @@ impl CoagulationKernel for Coagulation {
             }
         }
     }
-
-    fn min_size(&self) -> f64 {
-        self.min_size
-    }
-
-    fn low_rank_is_exact(&self) -> bool {
-        !matches!(self.kind, Kind::FreeMolecular | Kind::Homogeneous(_))
-    }
-
-    /// Ballistic: `K / (A + Aᵀ) = sqrt(1/x + 1/y) / (x^{-1/2} + y^{-1/2}) ≥ 1/√2` (equality
-    /// at x = y), lowered by 1e-12 against rounding.
-    fn low_rank_floor(&self) -> f64 {
-        match self.kind {
-            Kind::FreeMolecular => core::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-12),
-            Kind::Homogeneous(_) => 0.0,
-            _ => 1.0,
-        }
-    }
-
-    /// Every built-in kernel is, along each axis, monotone or decreasing-then-increasing
-    /// (quasi-convex), so its supremum over a square is attained at a corner.
-    fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
-        let corners = [self.rate(lo, lo), self.rate(lo, hi), self.rate(hi, hi)];
-        Some(corners.into_iter().fold(0.0, f64::max))
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A coefficient scales the rate and every bound by the same factor, so the bounds
+    /// still hold and stay as tight (the acceptance ratios do not move).
+    #[test]
+    fn coefficients_scale_the_rate_and_the_bounds() {
+        use crate::kernel::{check_low_rank, check_majorant, log_grid};
+        let grid = log_grid(1.0, 1e6, 60);
+        for base in [
+            Coagulation::constant(2.0).unwrap(),
+            Coagulation::additive(),
+            Coagulation::multiplicative(),
+            Coagulation::product(0.8).unwrap(),
+            Coagulation::homogeneous(1.5).unwrap(),
+            Coagulation::free_molecular(),
+            Coagulation::brownian(),
+        ] {
+            let base = base.with_min_size(1.0).unwrap();
+            let k = base.with_coefficient(3.5).unwrap();
+            assert_eq!(k.coefficient(), 3.5);
+            for &(x, y) in &[(1.0, 1.0), (2.0, 7.0), (1e5, 3.0)] {
+                let (r, r0) = (k.rate(x, y), base.rate(x, y));
+                assert!((r - 3.5 * r0).abs() <= 1e-14 * r, "{} {x} {y}", k.name());
+                let (l, l0) = (
+                    k.low_rank_bound(x, y).unwrap(),
+                    base.low_rank_bound(x, y).unwrap(),
+                );
+                assert!((l - 3.5 * l0).abs() <= 1e-14 * l, "{}", k.name());
+                let (h, h0) = (k.majorant(x).unwrap(), base.majorant(x).unwrap());
+                assert!(
+                    (h * h - 3.5 * h0 * h0).abs() <= 1e-13 * h * h,
+                    "{}",
+                    k.name()
+                );
+            }
+            let (m, m0) = (
+                check_majorant(&k, &grid).unwrap(),
+                check_majorant(&base, &grid).unwrap(),
+            );
+            assert_eq!(m.violations + m.monotonicity_violations, 0, "{}", k.name());
+            assert!((m.worst_acceptance - m0.worst_acceptance).abs() < 1e-12);
+            let (l, l0) = (
+                check_low_rank(&k, &grid).unwrap(),
+                check_low_rank(&base, &grid).unwrap(),
+            );
+            assert_eq!(l.violations, 0, "{}", k.name());
+            assert!((l.worst_acceptance - l0.worst_acceptance).abs() < 1e-12);
+            assert_eq!(k.low_rank_floor(), base.low_rank_floor());
+        }
+        // coefficients compose; bad ones are refused
+        let k = Coagulation::additive().with_coefficient(2.0).unwrap();
+        assert_eq!(k.with_coefficient(2.0).unwrap().rate(1.0, 1.0), 8.0);
+        for b in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+            assert!(Coagulation::brownian().with_coefficient(b).is_err());
+        }
+        let huge = Coagulation::additive().with_coefficient(1e308).unwrap();
+        assert!(huge.with_coefficient(1e10).is_err());
+    }
+
+    /// The physical kernels against hand-computed values: air at 300 K, and soot-like
+    /// spheres (ρ = 1800 kg/m³) of 1 nm³ monomers.
+    #[test]
+    fn physical_kernels_match_their_formulas() {
+        let kb = 1.380_649e-23;
+        let b = Coagulation::brownian_continuum(300.0, 1.8e-5).unwrap();
+        let want = 2.0 * kb * 300.0 / (3.0 * 1.8e-5) * 4.0;
+        assert!((b.rate(5.0, 5.0) - want).abs() < 1e-12 * want);
+        assert_eq!(b.homogeneity(), 0.0);
+        let v0 = 1e-27;
+        let f = Coagulation::free_molecular_physical(300.0, 1800.0, v0).unwrap();
+        // two monomers: (3/4π)^{1/6} (6kT/ρ)^{1/2} (2/v0)^{1/2} (2 v0^{1/3})²
+        let want = libm::pow(3.0 / (4.0 * core::f64::consts::PI), 1.0 / 6.0)
+            * libm::sqrt(6.0 * kb * 300.0 / 1800.0)
+            * libm::sqrt(2.0 / v0)
+            * 4.0
+            * libm::pow(v0, 2.0 / 3.0);
+        assert!(
+            (f.rate(1.0, 1.0) - want).abs() < 1e-12 * want,
+            "{} {want}",
+            f.rate(1.0, 1.0)
+        );
+        assert!(Coagulation::brownian_continuum(0.0, 1e-5).is_err());
+        assert!(Coagulation::free_molecular_physical(300.0, f64::NAN, v0).is_err());
+        assert!(Coagulation::free_molecular_physical(300.0, 1000.0, -1.0).is_err());
+    }
 
     #[test]
     fn constructors_reject_bad_parameters() {

@@ -35,7 +35,7 @@ mod coagulation;
 mod fragmentation;
 
 pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
-pub use coagulation::Coagulation;
+pub use coagulation::{BOLTZMANN, Coagulation};
 pub use fragmentation::{BinaryUniform, FragmentationKernel, NoFragmentation, UserFragmentation};
 
 use crate::error::{Error, Result};
