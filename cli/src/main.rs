@@ -6,9 +6,17 @@ use coagula_core::kernel::{Coagulation, check_low_rank, check_majorant, log_grid
 use std::process::ExitCode;
 
 mod bench;
-mod lecot;
+mod examples;
+mod frag;
+mod output;
 mod plot;
+mod reproduce;
+mod run;
+mod runner;
+mod scenario;
 mod validate;
+
+use scenario::Points;
 
 /// A finite, positive number (end times, sizes).
 fn positive_f64(v: &str) -> Result<f64, String> {
@@ -61,27 +69,70 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run a case. With no options: Lécot et al.'s coagulation-fragmentation test (QMC,
-    /// N = 2^14, P = 400 steps to T = 1), printed against the exact moments.
+    /// Run a scenario (a TOML file, or the name of a built-in example: see `coagula
+    /// examples`). With none: Lécot et al.'s coagulation-fragmentation test (mass flow,
+    /// QMC, N = 2^14, P = 400 steps to T = 1) against the exact moments. Options
+    /// override the scenario's values.
     Run {
-        /// log2 of the number of particles N.
-        #[arg(long, default_value_t = 14)]
-        m: u32,
-        /// Number of time steps P to T = 1.
-        #[arg(long, default_value_t = 400)]
-        steps: u32,
-        /// Point source.
-        #[arg(long, value_enum, default_value = "qmc")]
-        points: lecot::Points,
-        /// Seed (MC and RQMC).
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
-        /// Write t,M2,M2_exact,M3,M3_exact at the 100 checkpoints to this CSV file.
+        /// The scenario file or example name.
+        scenario: Option<String>,
+        /// Override a scenario value: `--set kernel.coefficient=2`, `--set
+        /// output.observables='["M0","M2"]'` (TOML values; repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = scenario::parse_override)]
+        set: Vec<(String, toml::Value)>,
+        /// The scheme (a registry name: massflow, lowrank, lowrank-tree,
+        /// lowrank-binary-tree, inverse, rejection).
+        #[arg(long)]
+        scheme: Option<String>,
+        /// Number of simulation particles N0.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(2..))]
+        particles: Option<u64>,
+        /// log2 of the number of particles (mass flow: N = 2^m).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=30))]
+        m: Option<u32>,
+        /// Mass flow: number of steps P to the last output time (Δt = t_end/P).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        steps: Option<u32>,
+        /// Mass flow: the time step.
+        #[arg(long, value_parser = positive_f64)]
+        dt: Option<f64>,
+        /// Mass flow: point set.
+        #[arg(long, value_enum)]
+        points: Option<Points>,
+        /// Independent replicas (run in parallel).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+        replicas: Option<u64>,
+        /// Seed (replica r runs on stream r of the seed policy).
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (0 = one per core; results do not depend on it).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=1024))]
+        threads: Option<u64>,
+        /// Write every output time as CSV to this file (`-`: standard output).
         #[arg(long)]
         csv: Option<String>,
-        /// Draw the moments against the exact solution (an .svg file).
+        /// Write the results as JSON to this file (`-`: standard output).
+        #[arg(long)]
+        json: Option<String>,
+        /// Plot the observables against time, with confidence bands and the error
+        /// against the exact solution (.svg or .png).
         #[arg(long)]
         plot: Option<String>,
+        /// Rows of the terminal table (the CSV and JSON have every time).
+        #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+        rows: u64,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+        /// Check the scenario and the outputs, print the set-up, and stop without
+        /// running.
+        #[arg(long)]
+        check: bool,
+    },
+    /// List the built-in example scenarios, or print one.
+    Examples {
+        /// An example's name: print its text.
+        name: Option<String>,
     },
     /// Rerun the reproduction cases and compare with exact or published values.
     Validate {
@@ -110,11 +161,18 @@ enum Command {
         #[arg(long)]
         plot: Option<String>,
     },
-    /// Print an exact solution (SPEC §3): moments, gel mass and n_k at given times.
+    /// Print an exact solution: moments, gel mass, n_k (integer sizes) or c(x, t)
+    /// (the exponential starts) at given times.
     Exact {
         /// Which solution.
         #[arg(long, value_enum, default_value = "constant")]
         solution: Solution,
+        /// Kernel coefficient b (K = b K0): time runs b times faster.
+        #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
+        coefficient: f64,
+        /// Sizes x at which to print c(x, t) (continuous solutions).
+        #[arg(long, value_delimiter = ',', value_parser = positive_f64)]
+        x: Vec<f64>,
         /// Comma-separated times (a negative one is an error, not a flag).
         #[arg(
             long,
@@ -232,11 +290,20 @@ enum Experiment {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum Solution {
+    /// K = 1 from monomers.
     Constant,
+    /// K = x + y from monomers.
     Additive,
+    /// K = x y from monomers, Flory's post-gel solution (Eibeck & Wagner eqs. 6.8-6.9).
     Multiplicative,
+    /// K = x y, Marcus-Lushnikov limit (Eibeck & Wagner eqs. 6.10-6.11).
     MarcusLushnikov,
+    /// K = 1, F = 2/(x+y) (Lécot et al. 2019, §4): moments only.
     CoagFrag,
+    /// K = 1 from c(x,0) = e^-x.
+    ConstantExponential,
+    /// Golovin: K = x + y from c(x,0) = e^-x.
+    Golovin,
 }
 
 /// An RQMC randomisation count: 0 (none) or at least 2 (an interval needs two).
@@ -253,15 +320,69 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run {
+            scenario,
+            set,
+            scheme,
+            particles,
             m,
             steps,
+            dt,
             points,
+            replicas,
             seed,
+            threads,
             csv,
+            json,
             plot,
+            rows,
+            quiet,
+            check,
         } => {
-            return match lecot::run_default(m, steps, points, seed, csv.as_deref(), plot.as_deref())
-            {
+            let mut ov = set;
+            let mut put = |k: &str, v: toml::Value| ov.push((k.to_string(), v));
+            if let Some(s) = scheme {
+                put("scheme.name", toml::Value::String(s));
+            }
+            if let Some(m) = m {
+                put("initial.particles", toml::Value::Integer(1i64 << m));
+            }
+            if let Some(n) = particles {
+                match i64::try_from(n) {
+                    Ok(n) => put("initial.particles", toml::Value::Integer(n)),
+                    Err(_) => {
+                        eprintln!("error: --particles {n} is too large");
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
+            if let Some(dt) = dt {
+                put("scheme.dt", toml::Value::Float(dt));
+            }
+            if let Some(p) = points {
+                put(
+                    "scheme.points",
+                    toml::Value::String(p.to_possible_value().expect("named").get_name().into()),
+                );
+            }
+            if let Some(r) = replicas {
+                put("run.replicas", toml::Value::Integer(r as i64));
+            }
+            if let Some(sd) = seed {
+                // TOML integers are i64: seeds above 2^63 wrap to their two's complement
+                put("run.seed", toml::Value::Integer(sd as i64));
+            }
+            if let Some(t) = threads {
+                put("run.threads", toml::Value::Integer(t as i64));
+            }
+            let outputs = run::Outputs {
+                csv,
+                json,
+                plot,
+                rows: rows as usize,
+                quiet,
+                check,
+            };
+            return match run::run(scenario.as_deref(), ov, steps, outputs) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -269,11 +390,42 @@ fn main() -> ExitCode {
                 }
             };
         }
+        Command::Examples { name } => {
+            return match name {
+                None => {
+                    println!(
+                        "built-in example scenarios (coagula run NAME, coagula examples NAME to print one):"
+                    );
+                    for (file, text) in examples::EXAMPLES {
+                        let title = text
+                            .lines()
+                            .find_map(|l| l.strip_prefix("title = "))
+                            .unwrap_or("")
+                            .trim_matches('"');
+                        println!("  {:<42} {title}", file.trim_end_matches(".toml"));
+                    }
+                    ExitCode::SUCCESS
+                }
+                Some(n) => match examples::get(&n) {
+                    Some((_, text)) => {
+                        print!("{text}");
+                        ExitCode::SUCCESS
+                    }
+                    None => {
+                        eprintln!("error: no example named {n:?} (coagula examples lists them)");
+                        ExitCode::FAILURE
+                    }
+                },
+            };
+        }
         Command::Validate { quick, json } => {
-            return if validate::run(quick, json) {
-                ExitCode::SUCCESS
-            } else {
-                ExitCode::FAILURE
+            return match validate::run(quick, json) {
+                Ok(true) => ExitCode::SUCCESS,
+                Ok(false) => ExitCode::FAILURE,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
             };
         }
         Command::Reproduce {
@@ -283,7 +435,7 @@ fn main() -> ExitCode {
             rqmc,
             plot,
         } => {
-            return match lecot::reproduce(m_max, mc_seeds, rqmc, plot.as_deref()) {
+            return match reproduce::lecot2019::reproduce(m_max, mc_seeds, rqmc, plot.as_deref()) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");
@@ -293,9 +445,11 @@ fn main() -> ExitCode {
         }
         Command::Exact {
             solution,
+            coefficient,
+            x,
             times,
             kmax,
-        } => exact(solution, &times, kmax),
+        } => exact(solution, coefficient, &x, &times, kmax),
         Command::Kernels { min, max, points } => {
             if max > min {
                 kernels(min, max, points as usize)
@@ -384,17 +538,36 @@ fn main() -> ExitCode {
     }
 }
 
-fn exact(solution: Solution, times: &[f64], kmax: u64) -> Result<(), coagula_core::Error> {
+fn exact(
+    solution: Solution,
+    coefficient: f64,
+    xs: &[f64],
+    times: &[f64],
+    kmax: u64,
+) -> Result<(), coagula_core::Error> {
     let e = match solution {
         Solution::Constant => Exact::constant(1.0)?,
         Solution::Additive => Exact::additive(),
         Solution::Multiplicative => Exact::multiplicative(),
         Solution::MarcusLushnikov => Exact::marcus_lushnikov(),
         Solution::CoagFrag => Exact::coagulation_fragmentation(),
+        Solution::ConstantExponential => Exact::constant_exponential(1.0)?,
+        Solution::Golovin => Exact::additive_exponential(),
+    };
+    let e = if coefficient != 1.0 {
+        e.with_coefficient(coefficient)?
+    } else {
+        e
     };
     let mut header = String::from("t,M0,M1,M2,M3,gel_mass");
-    for k in 1..=kmax {
-        header.push_str(&format!(",n{k}"));
+    if e.is_continuous() {
+        for x in xs {
+            header.push_str(&format!(",c({x})"));
+        }
+    } else {
+        for k in 1..=kmax {
+            header.push_str(&format!(",n{k}"));
+        }
     }
     println!("{header}");
     for &t in times {
@@ -403,8 +576,14 @@ fn exact(solution: Solution, times: &[f64], kmax: u64) -> Result<(), coagula_cor
             line.push_str(&format!(",{}", e.moment(m, t)?));
         }
         line.push_str(&format!(",{}", e.gel_mass(t)?));
-        for k in 1..=kmax {
-            line.push_str(&format!(",{}", e.number_density(k, t)?));
+        if e.is_continuous() {
+            for &x in xs {
+                line.push_str(&format!(",{}", e.density(x, t)?));
+            }
+        } else {
+            for k in 1..=kmax {
+                line.push_str(&format!(",{}", e.number_density(k, t)?));
+            }
         }
         println!("{line}");
     }

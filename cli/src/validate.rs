@@ -1,14 +1,17 @@
-//! `coagula validate`: rerun the reproduction cases and compare with references.
+//! `coagula validate`: the reproduction cases, as data (`cli/cases/validate.toml`:
+//! scenario + overrides + reference + tolerance), run through the same scenario runner
+//! as `coagula run`.
 
-use crate::options;
-use coagula_core::exact::Exact;
-use coagula_core::kernel::{Coagulation, NoFragmentation};
-use coagula_core::observe::Replicas;
-use coagula_core::observe::{TEST_ALPHA, student_t_threshold};
-use coagula_core::random::{Generator, generator};
-use coagula_core::scheme::registry::{self, Init, SchemeId, Simulation};
-use rayon::prelude::*;
-use serde::Serialize;
+use crate::examples;
+use crate::runner::{self, Outcome};
+use crate::scenario::{self, KernelKind, Observable, Plan, Source};
+use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
+use coagula_core::scheme::registry::{SCHEMES, StateKind};
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+/// The cases file, built in.
+pub const CASES: &str = include_str!("../cases/validate.toml");
 
 /// One line of the validation table.
 #[derive(Clone, Debug, Serialize)]
@@ -22,27 +25,91 @@ pub struct Case {
     pub pass: bool,
 }
 
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CasesFile {
+    case: Vec<CaseSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CaseSpec {
+    name: String,
+    scenario: String,
+    #[serde(default)]
+    schemes: Vec<String>,
+    #[serde(default = "both_modes")]
+    modes: Vec<String>,
+    #[serde(default)]
+    set: BTreeMap<String, toml::Value>,
+    #[serde(default)]
+    quick: BTreeMap<String, toml::Value>,
+    #[serde(default)]
+    full: BTreeMap<String, toml::Value>,
+    #[serde(default)]
+    drop: Vec<String>,
+    check: Vec<Check>,
+}
+
+fn both_modes() -> Vec<String> {
+    vec!["quick".into(), "full".into()]
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Check {
+    observable: String,
+    t: Option<f64>,
+    #[serde(default)]
+    metric: Metric,
+    reference: Reference,
+    tolerance: Tolerance,
+}
+
+#[derive(Clone, Copy, Default, Deserialize, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+enum Metric {
+    #[default]
+    Mean,
+    MeanAbsError,
+    Events,
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(untagged)]
+enum Reference {
+    Named(String),
+    Value(f64),
+    Run { run: BTreeMap<String, toml::Value> },
+}
+
+#[derive(Clone, Deserialize)]
+#[serde(untagged)]
+enum Tolerance {
+    Named(String),
+    Absolute { absolute: f64 },
+    Relative { relative: f64 },
+}
+
 /// Runs every case (a subset with `quick`), prints a table or JSON, and returns whether
-/// all passed.
-pub fn run(quick: bool, json: bool) -> bool {
+/// all passed; an error for a malformed cases file.
+pub fn run(quick: bool, json: bool) -> Result<bool, String> {
     let start = std::time::Instant::now();
-    let mut cases = Vec::new();
-    crate::lecot::cases(quick, &mut cases);
-    osinsky_cases(quick, &mut cases);
+    let cases = evaluate(CASES, quick)?;
     let all = cases.iter().all(|c| c.pass);
     if json {
         println!(
             "{}",
-            serde_json::to_string_pretty(&cases).expect("cases serialise")
+            serde_json::to_string_pretty(&cases).map_err(|e| e.to_string())?
         );
     } else {
         println!(
-            "{:<44} {:<78} {:>13} {:>13} {:>10} {:>10} {:>5}",
+            "{:<52} {:<70} {:>13} {:>13} {:>10} {:>10} {:>5}",
             "case", "quantity", "reference", "ours", "error", "tolerance", "pass"
         );
         for c in &cases {
             println!(
-                "{:<44} {:<78} {:>13.6e} {:>13.6e} {:>10.2e} {:>10.2e} {:>5}",
+                "{:<52} {:<70} {:>13.6e} {:>13.6e} {:>10.2e} {:>10.2e} {:>5}",
                 c.case,
                 c.quantity,
                 c.reference,
@@ -59,113 +126,382 @@ pub fn run(quick: bool, json: bool) -> bool {
             start.elapsed().as_secs_f64()
         );
     }
-    all
+    Ok(all)
 }
 
-/// `(n_1, M0)` at time t from `n0` monomers, one replica of scheme `id`.
-fn one(id: SchemeId, k: Coagulation, n0: u64, t: f64, seed: u64) -> (f64, f64) {
-    let mut rng = generator(seed, 0);
-    let init = Init::Counts {
-        counts: &[n0],
-        volume: n0 as f64,
-    };
-    let mut s: Box<Sim> =
-        registry::build(id, k, NoFragmentation, &init, &options()).expect("valid");
-    s.advance_to(t, &mut rng).expect("runs");
-    (s.number_density(1.0), s.moment(0.0))
-}
-
-/// The facade as the CLI instantiates it.
-type Sim = dyn Simulation<Coagulation, NoFragmentation, Generator>;
-
-fn osinsky_cases(quick: bool, out: &mut Vec<Case>) {
-    let n0: u64 = if quick { 1 << 13 } else { 1 << 16 };
-    let reps = 16u64;
-    let setups: [(&str, Coagulation, Exact, f64); 3] = [
-        (
-            "constant",
-            Coagulation::constant(1.0).expect("valid"),
-            Exact::constant(1.0).expect("valid"),
-            2.0,
-        ),
-        ("additive", Coagulation::additive(), Exact::additive(), 1.5),
-        (
-            "multiplicative",
-            Coagulation::multiplicative(),
-            Exact::multiplicative(),
-            0.8,
-        ),
-    ];
-    for (name, k, e, t) in setups {
-        let counts = Init::Counts {
-            counts: &[1],
-            volume: 1.0,
+/// Runs the cases of a cases text.
+pub fn evaluate(text: &str, quick: bool) -> Result<Vec<Case>, String> {
+    let file: CasesFile = toml::from_str(text).map_err(|e| format!("validate cases: {e}"))?;
+    let mode = if quick { "quick" } else { "full" };
+    let mut out = Vec::new();
+    for spec in &file.case {
+        if !spec.modes.iter().any(|m| m == mode) {
+            continue;
+        }
+        let schemes: Vec<Option<String>> = if spec.schemes.is_empty() {
+            vec![None]
+        } else {
+            spec.schemes
+                .iter()
+                .flat_map(|s| {
+                    if s == "all-counts" {
+                        SCHEMES
+                            .iter()
+                            .filter(|i| i.state == StateKind::Counts)
+                            .map(|i| Some(i.name.to_string()))
+                            .collect::<Vec<_>>()
+                    } else {
+                        vec![Some(s.clone())]
+                    }
+                })
+                .collect()
         };
-        for info in registry::SCHEMES.iter().filter(|s| s.accepts(&counts)) {
-            let vals: Vec<(f64, f64)> = (0..reps)
-                .into_par_iter()
-                .map(|s| one(info.id, k, n0, t, s * 7919 + 1))
+        for scheme in schemes {
+            let name = match &scheme {
+                Some(s) => format!("{}/{s}", spec.name),
+                None => spec.name.clone(),
+            };
+            let mut overrides: Vec<(String, toml::Value)> = spec
+                .set
+                .iter()
+                .chain(if quick { &spec.quick } else { &spec.full })
+                .map(|(k, v)| (k.clone(), v.clone()))
                 .collect();
-            for (q, idx, exact) in [
-                ("n_1", 0, e.number_density(1, t).expect("valid")),
-                ("M0", 1, e.moment(0, t).expect("valid")),
-            ] {
-                let mut r = Replicas::new();
-                for v in &vals {
-                    r.push(if idx == 0 { v.0 } else { v.1 });
+            if let Some(s) = &scheme {
+                overrides.push(("scheme.name".into(), toml::Value::String(s.clone())));
+            }
+            run_case(&name, spec, &overrides, &mut out)?;
+        }
+    }
+    Ok(out)
+}
+
+fn plan_of(spec: &CaseSpec, overrides: &[(String, toml::Value)]) -> Result<Plan, String> {
+    let (file, text) = examples::get(&spec.scenario)
+        .ok_or_else(|| format!("validate: no example scenario {}", spec.scenario))?;
+    let src = Source {
+        name: file,
+        text,
+        overrides,
+        drops: &spec.drop,
+    };
+    scenario::load(&src).map_err(|e| e.to_string())
+}
+
+fn run_case(
+    name: &str,
+    spec: &CaseSpec,
+    overrides: &[(String, toml::Value)],
+    out: &mut Vec<Case>,
+) -> Result<(), String> {
+    let plan = plan_of(spec, overrides).map_err(|e| format!("case {name}: {e}"))?;
+    let outcome = runner::run(&plan, true).map_err(|e| format!("case {name}: {e}"))?;
+    for check in &spec.check {
+        out.push(evaluate_check(
+            name, spec, overrides, &plan, &outcome, check,
+        )?);
+    }
+    Ok(())
+}
+
+/// The replicas' values of a check's metric.
+fn metric(plan: &Plan, out: &Outcome, check: &Check, name: &str) -> Result<Replicas, String> {
+    let o = Observable::parse(&check.observable).map_err(|e| format!("case {name}: {e}"))?;
+    let j = plan
+        .observables
+        .iter()
+        .position(|x| *x == o)
+        .ok_or_else(|| format!("case {name}: observable {} is not an output", o.name()))?;
+    let mut r = Replicas::new();
+    match check.metric {
+        Metric::Mean => {
+            let i = time_index(plan, check, name)?;
+            for v in &out.values {
+                r.push(v[i][j]);
+            }
+        }
+        Metric::MeanAbsError => {
+            let e = plan
+                .exact
+                .ok_or_else(|| format!("case {name}: mean-abs-error needs an exact solution"))?;
+            for v in &out.values {
+                let mut s = 0.0;
+                for (i, &t) in plan.times.iter().enumerate() {
+                    let x = e
+                        .value(&o, t)
+                        .ok_or_else(|| format!("case {name}: no exact {} at t = {t}", o.name()))?;
+                    s += (v[i][j] - x).abs();
                 }
-                // Student t on the replicas' own SE, at the suite's false-alarm rate
-                let z = student_t_threshold(TEST_ALPHA, r.count() - 1);
-                let tol = z * r.std_error();
-                out.push(Case {
-                    case: format!(
-                        "osinsky2023/{}-{name}-N0=2^{}",
-                        info.name,
-                        n0.trailing_zeros()
-                    ),
-                    quantity: format!(
-                        "{q}(t={t}), {reps} replicas (reference: exact; tol {z:.2} SE)"
-                    ),
-                    reference: exact,
-                    value: r.mean(),
-                    error: (r.mean() - exact).abs(),
-                    tolerance: tol,
-                    pass: (r.mean() - exact).abs() <= tol,
-                });
+                r.push(s / plan.times.len() as f64);
+            }
+        }
+        Metric::Events => {
+            for &e in &out.events {
+                r.push(e as f64);
             }
         }
     }
-    if !quick {
-        // the paper's workloads that fit: collisions from 1e7 monomers (2 significant
-        // digits in the paper, so the tolerance is half a unit in the last digit)
-        let rows: [(&str, f64, f64); 3] = [
-            ("brownian", 10.0, 2.3e7),
-            ("ballistic", 1.0, 1.1e7),
-            ("linear", 1.0, 7.6e6),
-        ];
-        for (name, t, paper) in rows {
-            let n0 = 10_000_000;
-            let k = crate::bench::paper_kernel(name);
-            let init = Init::Counts {
-                counts: &[n0],
-                volume: n0 as f64,
-            };
-            for id in [SchemeId::LowRankTree, SchemeId::LowRank] {
-                let mut rng = generator(99, 0);
-                let mut s: Box<Sim> =
-                    registry::build(id, k, NoFragmentation, &init, &options()).expect("valid");
-                let events = s.advance_to(t, &mut rng).expect("runs").events as f64;
-                let tol = 0.05 * 10f64.powf(paper.log10().floor());
-                out.push(Case {
-                    case: format!("osinsky2023/{}-{name}-table-t={t}", id.name()),
-                    quantity: "collisions from 1e7 monomers (reference: paper, 2 digits)".into(),
-                    reference: paper,
-                    value: events,
-                    error: (events - paper).abs(),
-                    tolerance: tol,
-                    pass: (events - paper).abs() <= tol,
-                });
+    Ok(r)
+}
+
+fn time_index(plan: &Plan, check: &Check, name: &str) -> Result<usize, String> {
+    let t = check
+        .t
+        .ok_or_else(|| format!("case {name}: the check of {} needs t", check.observable))?;
+    plan.times
+        .iter()
+        .position(|&x| (x - t).abs() <= 1e-12 * t.abs().max(1.0))
+        .ok_or_else(|| format!("case {name}: t = {t} is not an output time"))
+}
+
+/// The moment equations stepped by explicit Euler at the plan's Δt to time t, for the
+/// kernels whose moments close (constant and additive, with binary uniform
+/// fragmentation for the constant kernel): the expectation of a time-driven scheme.
+fn euler(plan: &Plan, order: f64, t: f64) -> Option<f64> {
+    let e = plan.exact?;
+    if order.fract() != 0.0 || !(0.0..=3.0).contains(&order) {
+        return None;
+    }
+    let mut m = [0.0; 4];
+    for (k, v) in m.iter_mut().enumerate() {
+        *v = e.value(&Observable::Moment(k as f64), 0.0)?;
+    }
+    let b = plan.kernel.coefficient();
+    let lambda = match plan.frag {
+        crate::frag::Frag::None => 0.0,
+        crate::frag::Frag::Binary(_) => plan
+            .scenario
+            .fragmentation
+            .as_ref()
+            .and_then(|f| f.rate)
+            .unwrap_or(1.0),
+    };
+    let h = plan.options.dt;
+    let steps = (t / h).round() as u64;
+    let kind = plan.scenario.kernel.kind;
+    for _ in 0..steps {
+        let d = match kind {
+            KernelKind::Constant => [
+                lambda * m[0] - 0.5 * b * m[0] * m[0],
+                0.0,
+                b * m[1] * m[1] - lambda * m[2] / 3.0,
+                3.0 * b * m[1] * m[2] - 0.5 * lambda * m[3],
+            ],
+            KernelKind::Additive if lambda == 0.0 => [
+                -b * m[1] * m[0],
+                0.0,
+                2.0 * b * m[1] * m[2],
+                3.0 * b * (m[1] * m[3] + m[2] * m[2]),
+            ],
+            _ => return None,
+        };
+        for k in 0..4 {
+            m[k] += h * d[k];
+        }
+    }
+    Some(m[order as usize])
+}
+
+fn evaluate_check(
+    name: &str,
+    spec: &CaseSpec,
+    overrides: &[(String, toml::Value)],
+    plan: &Plan,
+    out: &Outcome,
+    check: &Check,
+) -> Result<Case, String> {
+    let r = metric(plan, out, check, name)?;
+    let value = r.mean();
+    let o = Observable::parse(&check.observable).map_err(|e| format!("case {name}: {e}"))?;
+    let order = match o {
+        Observable::Moment(m) => Some(m),
+        _ => None,
+    };
+    let exact_at = |t: f64| plan.exact.and_then(|e| e.value(&o, t));
+    let (reference, ref_label) = match &check.reference {
+        Reference::Value(v) => (*v, "paper".to_string()),
+        Reference::Named(n) if n == "exact" => {
+            let t = check
+                .t
+                .ok_or_else(|| format!("case {name}: exact needs t"))?;
+            (
+                exact_at(t).ok_or_else(|| format!("case {name}: no exact {} known", o.name()))?,
+                "exact".into(),
+            )
+        }
+        Reference::Named(n) if n == "euler" => {
+            let t = check
+                .t
+                .ok_or_else(|| format!("case {name}: euler needs t"))?;
+            (
+                order
+                    .and_then(|m| euler(plan, m, t))
+                    .ok_or_else(|| format!("case {name}: no Euler expectation of {}", o.name()))?,
+                format!("Euler expectation at Δt = {}", plan.options.dt),
+            )
+        }
+        Reference::Named(n) => return Err(format!("case {name}: unknown reference {n:?}")),
+        Reference::Run { run } => {
+            let mut ov = overrides.to_vec();
+            ov.extend(run.iter().map(|(k, v)| (k.clone(), v.clone())));
+            let p2 = plan_of(spec, &ov).map_err(|e| format!("case {name} (reference run): {e}"))?;
+            let o2 =
+                runner::run(&p2, true).map_err(|e| format!("case {name} (reference run): {e}"))?;
+            let r2 = metric(&p2, &o2, check, name)?;
+            let label: Vec<String> = run.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            (r2.mean(), format!("rerun with {}", label.join(", ")))
+        }
+    };
+    let z = if r.count() >= 2 {
+        student_t_threshold(TEST_ALPHA, r.count() - 1)
+    } else {
+        f64::NAN
+    };
+    let need_replicas = |what: &str| -> Result<(), String> {
+        if r.count() < 2 {
+            Err(format!(
+                "case {name}: tolerance {what} needs at least 2 replicas"
+            ))
+        } else {
+            Ok(())
+        }
+    };
+    let what = match check.metric {
+        Metric::Mean => format!("{} at t = {}", o.name(), check.t.unwrap_or(f64::NAN)),
+        Metric::MeanAbsError => {
+            format!("mean |{} error| over {} times", o.name(), plan.times.len())
+        }
+        Metric::Events => "events to the last time".into(),
+    };
+    let (tolerance, pass, tol_label) = match &check.tolerance {
+        Tolerance::Named(n) if n == "replicas" => {
+            need_replicas(n)?;
+            let tol = z * r.std_error();
+            (tol, (value - reference).abs() <= tol, format!("{z:.2} SE"))
+        }
+        Tolerance::Named(n) if n == "replicas+euler" => {
+            need_replicas(n)?;
+            let t = check.t.ok_or_else(|| format!("case {name}: needs t"))?;
+            let bias = order
+                .and_then(|m| Some((euler(plan, m, t)? - exact_at(t)?).abs()))
+                .ok_or_else(|| format!("case {name}: no Euler bias of {}", o.name()))?;
+            let tol = bias + z * r.std_error() + 1e-12 * reference.abs();
+            (
+                tol,
+                (value - reference).abs() <= tol,
+                format!("Euler bias {bias:.1e} + {z:.2} SE"),
+            )
+        }
+        Tolerance::Named(n) if n == "below" => (0.0, value < reference, "ours < reference".into()),
+        Tolerance::Named(n) => return Err(format!("case {name}: unknown tolerance {n:?}")),
+        Tolerance::Absolute { absolute } => (
+            *absolute,
+            (value - reference).abs() <= *absolute,
+            format!("±{absolute:.1e}"),
+        ),
+        Tolerance::Relative { relative } => {
+            let tol = relative * reference.abs();
+            (
+                tol,
+                (value - reference).abs() <= tol,
+                format!("±{relative} relative"),
+            )
+        }
+    };
+    Ok(Case {
+        case: name.to_string(),
+        quantity: format!(
+            "{what}, {} replicas (ref: {ref_label}; tol {tol_label})",
+            plan.replicas
+        ),
+        reference,
+        value,
+        error: (value - reference).abs(),
+        tolerance,
+        pass,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every case of the built-in file parses and names scenarios, observables and
+    /// output times that exist (in both modes), without running anything.
+    #[test]
+    fn cases_are_well_formed() {
+        let file: CasesFile = toml::from_str(CASES).unwrap();
+        assert!(file.case.len() >= 10);
+        for spec in &file.case {
+            let prefix = spec.name.split('/').next().unwrap();
+            assert!(
+                [
+                    "lecot2019",
+                    "osinsky2023",
+                    "eibeck2000",
+                    "maftei2016",
+                    "exact"
+                ]
+                .contains(&prefix),
+                "{}",
+                spec.name
+            );
+            for quick in [true, false] {
+                let mode = if quick { "quick" } else { "full" };
+                if !spec.modes.iter().any(|m| m == mode) {
+                    continue;
+                }
+                let ov: Vec<(String, toml::Value)> = spec
+                    .set
+                    .iter()
+                    .chain(if quick { &spec.quick } else { &spec.full })
+                    .map(|(k, v)| (k.clone(), v.clone()))
+                    .collect();
+                let plan = plan_of(spec, &ov).unwrap_or_else(|e| panic!("{}: {e}", spec.name));
+                for c in &spec.check {
+                    let o = Observable::parse(&c.observable).unwrap();
+                    assert!(
+                        plan.observables.contains(&o),
+                        "{}: {}",
+                        spec.name,
+                        c.observable
+                    );
+                    if c.metric == Metric::Mean {
+                        time_index(&plan, c, &spec.name).unwrap();
+                    }
+                }
             }
         }
+    }
+
+    /// Euler's recurrence for the constant kernel's M2 is linear: M2 = 1 + n h exactly.
+    #[test]
+    fn euler_of_the_constant_kernel() {
+        let ov = vec![("scheme.dt".to_string(), toml::Value::Float(0.01))];
+        let (file, text) = examples::get("lecot2019-coagulation-fragmentation").unwrap();
+        let drops = vec!["fragmentation".to_string()];
+        let plan = scenario::load(&Source {
+            name: file,
+            text,
+            overrides: &ov,
+            drops: &drops,
+        })
+        .unwrap();
+        assert!((euler(&plan, 2.0, 1.0).unwrap() - 2.0).abs() < 1e-12);
+        assert!((euler(&plan, 1.0, 1.0).unwrap() - 1.0).abs() < 1e-15);
+        // and converges to the exact M0 = 1/(1 + t/2) as Δt → 0, at first order
+        let e = |dt: f64| {
+            let ov = vec![("scheme.dt".to_string(), toml::Value::Float(dt))];
+            let p = scenario::load(&Source {
+                name: file,
+                text,
+                overrides: &ov,
+                drops: &drops,
+            })
+            .unwrap();
+            euler(&p, 0.0, 1.0).unwrap() - 1.0 / 1.5
+        };
+        let ratio = e(0.01) / e(0.005);
+        assert!((ratio - 2.0).abs() < 0.05, "{ratio}");
     }
 }

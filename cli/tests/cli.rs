@@ -45,20 +45,24 @@ fn run_writes_csv_close_to_exact() {
         assert!((r[3] - m3).abs() < 0.02 * m3, "t={t}: M3 {} vs {m3}", r[3]);
     }
     let svg_text = std::fs::read_to_string(&svg).unwrap();
-    assert!(svg_text.starts_with("<svg") && svg_text.contains("M2 exact"));
+    assert!(svg_text.starts_with("<svg"), "an SVG");
+    assert!(
+        svg_text.contains("M2(t)") && svg_text.contains("M3 − exact"),
+        "panels"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]
 fn bad_arguments_fail_with_a_message() {
     let out = coagula()
-        .args(["run", "--m", "10", "--steps", "100", "--plot", "x.png"])
+        .args(["run", "--m", "10", "--steps", "100", "--plot", "x.pdf"])
         .output()
         .unwrap();
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("only SVG"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".svg or .png"));
     assert!(
-        !std::path::Path::new("x.png").exists(),
+        !std::path::Path::new("x.pdf").exists(),
         "refused before any file is made"
     );
     let out = coagula().args(["run", "--m", "0"]).output().unwrap();
@@ -117,6 +121,6 @@ fn run_csv_to_standard_output() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t,M2,M2_exact,M3,M3_exact"));
     assert_eq!(lines.count(), 100);
-    assert!(String::from_utf8_lossy(&out.stderr).contains("mean |error|"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("M2 exact"));
     assert!(!std::path::Path::new("-").exists(), "no file named '-'");
 }

@@ -126,6 +126,8 @@ pub enum Purpose {
     Scrambling,
     /// Replica `r` of an ensemble (replica 0 is the main stream itself).
     Replica(u64),
+    /// Random parameters of an initial state (e.g. the shift of a lattice of quantiles).
+    Initial,
 }
 
 /// An independent generator derived from `(seed, stream)` for `purpose`: the scrambling
@@ -134,6 +136,7 @@ pub enum Purpose {
 pub fn substream(seed: u64, stream: u64, purpose: Purpose) -> Generator {
     match purpose {
         Purpose::Scrambling => generator(seed ^ 0x5c4a_3b1e_0000_0001, stream),
+        Purpose::Initial => generator(seed ^ 0x1a17_0c3d_0000_0002, stream),
         Purpose::Replica(0) => generator(seed, stream),
         Purpose::Replica(r) => generator(mix64(seed ^ r.wrapping_mul(GOLDEN)), stream ^ mix64(r)),
     }

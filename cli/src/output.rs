@@ -1,0 +1,358 @@
+//! What `coagula run` writes: a table with a legend on the terminal, CSV and JSON with
+//! every output time.
+
+use crate::runner::Outcome;
+use crate::scenario::{InitData, Plan, Start};
+use serde::Serialize;
+use std::io::Write;
+
+/// An output destination: a file, or standard output for `-`.
+pub enum Sink {
+    /// Standard output.
+    Stdout,
+    /// A file, created before the run.
+    File(String, std::fs::File),
+}
+
+impl Sink {
+    /// Opens (creates) the destination now, so a bad path fails before any work.
+    pub fn open(flag: &str, path: &str) -> Result<Self, String> {
+        if path == "-" {
+            Ok(Sink::Stdout)
+        } else {
+            std::fs::File::create(path)
+                .map(|f| Sink::File(path.to_string(), f))
+                .map_err(|e| format!("{flag} {path}: {e}"))
+        }
+    }
+
+    /// The writer.
+    pub fn writer(&mut self) -> Box<dyn Write + '_> {
+        match self {
+            Sink::Stdout => Box::new(std::io::stdout()),
+            Sink::File(_, f) => Box::new(f),
+        }
+    }
+
+    /// Whether it is standard output.
+    pub fn is_stdout(&self) -> bool {
+        matches!(self, Sink::Stdout)
+    }
+}
+
+/// One output row: per observable the mean, its 95% half-width, the exact value.
+pub struct Row {
+    /// Time.
+    pub t: f64,
+    /// `(mean, half-width of the 95% CI (NaN for one replica), exact or NaN)`.
+    pub cells: Vec<(f64, f64, f64)>,
+}
+
+/// The rows of an outcome.
+pub fn rows(plan: &Plan, out: &Outcome) -> Vec<Row> {
+    plan.times
+        .iter()
+        .enumerate()
+        .map(|(i, &t)| Row {
+            t,
+            cells: plan
+                .observables
+                .iter()
+                .enumerate()
+                .map(|(j, o)| {
+                    let r = &out.stats[i][j];
+                    let half = if r.count() >= 2 {
+                        let (lo, hi) = r.ci95();
+                        0.5 * (hi - lo)
+                    } else {
+                        f64::NAN
+                    };
+                    let exact = plan.exact.and_then(|e| e.value(o, t)).unwrap_or(f64::NAN);
+                    (r.mean(), half, exact)
+                })
+                .collect(),
+        })
+        .collect()
+}
+
+/// Describes the set-up in a few lines.
+pub fn describe(plan: &Plan) -> String {
+    let s = &plan.scenario;
+    let mut d = String::new();
+    d.push_str(&plan.title);
+    if let Some(src) = &s.source {
+        d.push_str(&format!("\nsource: {src}"));
+    }
+    let n = match &plan.start {
+        Start::Fixed(InitData::Counts { counts, .. }) => counts.iter().sum::<u64>(),
+        Start::Fixed(InitData::Sizes { sizes, .. }) => sizes.len() as u64,
+        Start::Quantiles { n, .. } => *n as u64,
+    };
+    d.push_str(&format!(
+        "\nscheme: {} ({}), {n} particles",
+        plan.scheme.name(),
+        plan.scheme.info().summary
+    ));
+    if plan.scheme == coagula_core::scheme::registry::SchemeId::MassFlow {
+        d.push_str(&format!(
+            ", dt = {}, {:?} points",
+            plan.options.dt, plan.points
+        ));
+    }
+    d.push_str(&format!(
+        "\nkernel: {} (coefficient {:.6e}{}), initial: {:?}",
+        plan.kernel.name(),
+        plan.kernel.coefficient(),
+        if plan.size_unit != 1.0 {
+            format!(", sizes on a grid of {}", plan.size_unit)
+        } else {
+            String::new()
+        },
+        s.initial.kind
+    ));
+    if plan.frag != crate::frag::Frag::None {
+        d.push_str(", binary uniform fragmentation");
+    }
+    d.push_str(&format!(
+        "\nreplicas: {}, seed {} (replica r on stream r of the seed policy); about {:.0} MiB at start",
+        plan.replicas,
+        plan.seed,
+        plan.memory as f64 / (1u64 << 20) as f64
+    ));
+    match &plan.exact {
+        Some(e) => d.push_str(&format!("\nexact solution: {}", e.name)),
+        None => d.push_str("\nexact solution: none known for this set-up"),
+    }
+    d
+}
+
+fn fmt_num(v: f64) -> String {
+    if v.is_nan() {
+        "-".into()
+    } else {
+        format!("{v:.6e}")
+    }
+}
+
+/// The terminal table: at most `max_rows` rows (evenly picked, the last included), a
+/// legend that explains every column, and the totals.
+pub fn table(
+    plan: &Plan,
+    out: &Outcome,
+    max_rows: usize,
+    w: &mut dyn Write,
+) -> std::io::Result<()> {
+    writeln!(w, "{}\n", describe(plan))?;
+    let rows = rows(plan, out);
+    let with_ci = plan.replicas >= 2;
+    let with_exact = rows.iter().any(|r| r.cells.iter().any(|c| !c.2.is_nan()));
+    let mut head = format!("{:>12}", "t");
+    for o in &plan.observables {
+        let name = o.name();
+        head.push_str(&format!(" {name:>13}"));
+        if with_ci {
+            head.push_str(&format!(" {:>10}", "±95%"));
+        }
+        if with_exact {
+            head.push_str(&format!(" {:>13} {:>10}", format!("{name} exact"), "error"));
+        }
+    }
+    writeln!(w, "{head}")?;
+    let n = rows.len();
+    let pick: Vec<usize> = if n <= max_rows {
+        (0..n).collect()
+    } else {
+        let mut v: Vec<usize> = (1..=max_rows).map(|k| k * n / max_rows - 1).collect();
+        v.dedup();
+        v
+    };
+    for &i in &pick {
+        let r = &rows[i];
+        let mut line = format!("{:>12.6}", r.t);
+        for &(mean, half, exact) in &r.cells {
+            line.push_str(&format!(" {:>13}", fmt_num(mean)));
+            if with_ci {
+                line.push_str(&format!(
+                    " {:>10}",
+                    if half.is_nan() {
+                        "-".into()
+                    } else {
+                        format!("{half:.2e}")
+                    }
+                ));
+            }
+            if with_exact {
+                let err = mean - exact;
+                line.push_str(&format!(
+                    " {:>13} {:>10}",
+                    fmt_num(exact),
+                    if err.is_nan() {
+                        "-".into()
+                    } else {
+                        format!("{err:.2e}")
+                    }
+                ));
+            }
+        }
+        writeln!(w, "{line}")?;
+    }
+    if pick.len() < n {
+        writeln!(
+            w,
+            "({} of {n} output times shown; --csv or --json has them all)",
+            pick.len()
+        )?;
+    }
+    writeln!(w, "\ncolumns:")?;
+    writeln!(w, "  t: time{}", physical_note(plan))?;
+    for o in &plan.observables {
+        writeln!(w, "  {}: {}", o.name(), o.meaning())?;
+    }
+    if with_ci {
+        writeln!(
+            w,
+            "  ±95%: half-width of the 95% confidence interval of the mean over {} replicas (Student t)",
+            plan.replicas
+        )?;
+    }
+    if with_exact {
+        writeln!(w, "  exact: the analytical solution; error: ours − exact")?;
+    }
+    let t = &out.totals;
+    writeln!(
+        w,
+        "\ntotals over {} replicas: {} events, {} proposals ({} rejected), {} clipped, {} particle doublings; {:.2} s",
+        plan.replicas, t.events, t.proposals, t.rejections, t.clipped, t.doublings, out.seconds
+    )?;
+    writeln!(
+        w,
+        "  events: coagulations (and break-ups) carried out; proposals/rejected: candidate pairs of the event-driven schemes and those refused by the acceptance test;"
+    )?;
+    writeln!(
+        w,
+        "  clipped: mass-flow steps whose probability dt·K̃ exceeded 1 and was cut to 1 (a time-step bias: lower dt if not 0); doublings: particle-number doublings (Osinsky §2)"
+    )?;
+    Ok(())
+}
+
+fn physical_note(plan: &Plan) -> &'static str {
+    if plan.scenario.kernel.units == crate::scenario::Units::Physical {
+        " in s; concentrations per m³, sizes in monomers"
+    } else {
+        " in the kernel's units (1/(K·c0))"
+    }
+}
+
+/// CSV: `t`, then per observable its mean, `_ci95` (half-width, with replicas) and
+/// `_exact` (where known).
+pub fn csv(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> {
+    let rows = rows(plan, out);
+    let with_ci = plan.replicas >= 2;
+    let with_exact = rows.iter().any(|r| r.cells.iter().any(|c| !c.2.is_nan()));
+    let mut wr = csv::Writer::from_writer(w);
+    let mut head = vec!["t".to_string()];
+    for o in &plan.observables {
+        head.push(o.name());
+        if with_ci {
+            head.push(format!("{}_ci95", o.name()));
+        }
+        if with_exact {
+            head.push(format!("{}_exact", o.name()));
+        }
+    }
+    wr.write_record(&head).map_err(|e| e.to_string())?;
+    for r in &rows {
+        let mut rec = vec![r.t.to_string()];
+        for &(m, h, e) in &r.cells {
+            rec.push(m.to_string());
+            if with_ci {
+                rec.push(h.to_string());
+            }
+            if with_exact {
+                rec.push(e.to_string());
+            }
+        }
+        wr.write_record(&rec).map_err(|e| e.to_string())?;
+    }
+    wr.flush().map_err(|e| e.to_string())
+}
+
+#[derive(Serialize)]
+struct Series {
+    observable: String,
+    meaning: String,
+    mean: Vec<Option<f64>>,
+    std_error: Vec<Option<f64>>,
+    ci95: Vec<Option<[f64; 2]>>,
+    exact: Vec<Option<f64>>,
+}
+
+#[derive(Serialize)]
+struct Report<'a> {
+    title: &'a str,
+    scheme: &'a str,
+    replicas: u64,
+    seed: u64,
+    exact_solution: Option<&'a str>,
+    times: &'a [f64],
+    series: Vec<Series>,
+    events: u64,
+    proposals: u64,
+    rejections: u64,
+    clipped: u64,
+    doublings: u64,
+    seconds: f64,
+    scenario: &'a crate::scenario::Scenario,
+}
+
+fn finite(v: f64) -> Option<f64> {
+    v.is_finite().then_some(v)
+}
+
+/// JSON: the scenario, the times, and per observable the mean, standard error, CI and
+/// exact values (null where undefined).
+pub fn json(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> {
+    let series = plan
+        .observables
+        .iter()
+        .enumerate()
+        .map(|(j, o)| Series {
+            observable: o.name(),
+            meaning: o.meaning(),
+            mean: out.stats.iter().map(|s| finite(s[j].mean())).collect(),
+            std_error: out.stats.iter().map(|s| finite(s[j].std_error())).collect(),
+            ci95: out
+                .stats
+                .iter()
+                .map(|s| {
+                    let (lo, hi) = s[j].ci95();
+                    (lo.is_finite() && hi.is_finite()).then_some([lo, hi])
+                })
+                .collect(),
+            exact: plan
+                .times
+                .iter()
+                .map(|&t| plan.exact.and_then(|e| e.value(o, t)).and_then(finite))
+                .collect(),
+        })
+        .collect();
+    let t = &out.totals;
+    let report = Report {
+        title: &plan.title,
+        scheme: plan.scheme.name(),
+        replicas: plan.replicas,
+        seed: plan.seed,
+        exact_solution: plan.exact.map(|e| e.name),
+        times: &plan.times,
+        series,
+        events: t.events,
+        proposals: t.proposals,
+        rejections: t.rejections,
+        clipped: t.clipped,
+        doublings: t.doublings,
+        seconds: out.seconds,
+        scenario: &plan.scenario,
+    };
+    serde_json::to_writer_pretty(&mut *w, &report).map_err(|e| e.to_string())?;
+    writeln!(w).map_err(|e| e.to_string())
+}

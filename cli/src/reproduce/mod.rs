@@ -1,0 +1,4 @@
+//! `coagula reproduce`: the papers' experiments that are more than a scenario (grids
+//! of runs, fitted slopes, figures). One module per paper.
+
+pub mod lecot2019;

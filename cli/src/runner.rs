@@ -1,0 +1,231 @@
+//! Runs a scenario's replicas in parallel (rayon) and gathers their statistics.
+//!
+//! Replica r runs on `generator(seed, r)` of the core's seed policy (and, for RQMC,
+//! its own scrambling from `substream(seed, r, Scrambling)`), results are collected in
+//! replica order and merged sequentially, so every figure is bit-identical whatever
+//! the number of threads.
+
+use crate::frag::Frag;
+use crate::scenario::{InitData, Observable, Plan, Points};
+use coagula_core::kernel::Coagulation;
+use coagula_core::observe::Replicas;
+use coagula_core::qmc::Randomization;
+use coagula_core::random::{Generator, Purpose, substream};
+use coagula_core::scheme::StepReport;
+use coagula_core::scheme::massflow::PointSource;
+use coagula_core::scheme::registry::{self, Init, Simulation};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+
+/// The facade as the CLI instantiates it.
+pub type Sim = dyn Simulation<Coagulation, Frag, Generator>;
+
+/// What the runs gave.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// `values[r][i][j]`: replica r, time i, observable j.
+    pub values: Vec<Vec<Vec<f64>>>,
+    /// Statistics over replicas, `[time][observable]`.
+    pub stats: Vec<Vec<Replicas>>,
+    /// Totals of every replica's reports.
+    pub totals: StepReport,
+    /// Events of each replica.
+    pub events: Vec<u64>,
+    /// Wall-clock seconds.
+    pub seconds: f64,
+}
+
+/// The point source of replica r.
+pub fn points_of(points: Points, seed: u64, replica: u64) -> PointSource {
+    match points {
+        Points::Qmc => PointSource::niederreiter(),
+        Points::Sobol => PointSource::sobol(),
+        Points::Mc => PointSource::monte_carlo(),
+        Points::Rqmc => {
+            let mut rng = substream(seed, replica, Purpose::Scrambling);
+            PointSource::randomized_niederreiter(Randomization::Owen, &mut rng)
+        }
+    }
+}
+
+/// Whether replica runs draw random numbers beyond the scheme's own (everything but
+/// deterministic QMC points).
+fn randomised(plan: &Plan) -> bool {
+    plan.scheme != coagula_core::scheme::registry::SchemeId::MassFlow
+        || matches!(plan.points, Points::Mc | Points::Rqmc)
+}
+
+/// Replica r's initial state: the lattice of quantiles centred for deterministic
+/// points, randomly shifted (its own substream) otherwise.
+pub fn initial(plan: &Plan, replica: u64) -> Result<InitData, String> {
+    let shift = if randomised(plan) {
+        let mut g = substream(plan.seed, replica, Purpose::Initial);
+        coagula_core::random::unit_f64(rand_core::Rng::next_u64(&mut g))
+    } else {
+        0.5
+    };
+    plan.start.data(shift)
+}
+
+/// The generator of replica r: the core's seed policy (`Purpose::Replica`; replica 0
+/// is `generator(seed, 0)`, the stream a C-ABI run with that seed uses).
+pub fn rng_of(plan: &Plan, replica: u64) -> Generator {
+    substream(plan.seed, 0, Purpose::Replica(replica))
+}
+
+/// Builds replica r's simulation.
+pub fn build(plan: &Plan, replica: u64) -> Result<Box<Sim>, String> {
+    let opts = plan
+        .options
+        .clone()
+        .with_points(points_of(plan.points, plan.seed, replica));
+    let data = initial(plan, replica)?;
+    let init = match &data {
+        InitData::Counts { counts, volume } => Init::Counts {
+            counts,
+            volume: *volume,
+        },
+        InitData::Sizes { sizes, mass } => Init::Sizes { sizes, mass: *mass },
+    };
+    registry::build(plan.scheme, plan.kernel, plan.frag, &init, &opts).map_err(|e| e.to_string())
+}
+
+/// An observable of a simulation, in the scenario's size units.
+pub fn observe(plan: &Plan, sim: &Sim, o: &Observable) -> f64 {
+    let d = plan.size_unit;
+    match *o {
+        Observable::Moment(m) => sim.moment(m) * if d == 1.0 { 1.0 } else { d.powf(m) },
+        Observable::Density(k) => sim.number_density(k as f64 / d),
+        Observable::Concentration(a, b) => sim.concentration(a / d, b / d),
+        Observable::Gel => sim.gel_mass().unwrap_or(f64::NAN) * d,
+        Observable::Particles => sim.particles() as f64,
+    }
+}
+
+/// One replica's observables (`[time][observable]`) and its totals.
+type ReplicaRows = (Vec<Vec<f64>>, StepReport);
+
+/// One replica: the observables at every output time, and its totals.
+fn replica(
+    plan: &Plan,
+    r: u64,
+    tick: &(dyn Fn() + Sync),
+) -> Result<(Vec<Vec<f64>>, StepReport), String> {
+    let mut sim = build(plan, r)?;
+    let mut rng = rng_of(plan, r);
+    let mut rows = Vec::with_capacity(plan.times.len());
+    for &t in &plan.times {
+        sim.advance_to(t, &mut rng)
+            .map_err(|e| format!("replica {r} at t = {:.6e}: {e}", sim.time()))?;
+        rows.push(
+            plan.observables
+                .iter()
+                .map(|o| observe(plan, &*sim, o))
+                .collect(),
+        );
+        tick();
+    }
+    Ok((rows, sim.totals()))
+}
+
+/// A progress bar on standard error that appears once a run has taken a second, and
+/// never when standard error is not a terminal (or `quiet`).
+pub struct Progress {
+    bar: ProgressBar,
+    start: Instant,
+    shown: AtomicBool,
+    quiet: bool,
+}
+
+impl Progress {
+    /// A bar of `len` steps.
+    pub fn new(len: u64, message: &str, quiet: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{msg} [{bar:40}] {pos}/{len} ({elapsed}, about {eta} left)",
+            )
+            .expect("valid template")
+            .progress_chars("=> "),
+        );
+        bar.set_message(message.to_string());
+        Progress {
+            bar,
+            start: Instant::now(),
+            shown: AtomicBool::new(false),
+            quiet,
+        }
+    }
+
+    /// One step done.
+    pub fn tick(&self) {
+        if !self.quiet
+            && !self.shown.load(Ordering::Relaxed)
+            && self.start.elapsed().as_secs_f64() > 1.0
+            && !self.shown.swap(true, Ordering::Relaxed)
+        {
+            // stderr() hides itself when standard error is not a terminal
+            self.bar.set_draw_target(ProgressDrawTarget::stderr());
+        }
+        self.bar.inc(1);
+    }
+
+    /// Removes the bar.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+/// Runs every replica of a plan on `plan.threads` threads (0 = all cores).
+pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
+    let start = Instant::now();
+    let progress = Progress::new(
+        plan.replicas * plan.times.len() as u64,
+        &format!("{} x {}", plan.replicas, plan.scheme.name()),
+        quiet,
+    );
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(plan.threads)
+        .build()
+        .map_err(|e| format!("thread pool: {e}"))?;
+    let tick = || progress.tick();
+    let results: Vec<Result<ReplicaRows, String>> = pool.install(|| {
+        (0..plan.replicas)
+            .into_par_iter()
+            .map(|r| replica(plan, r, &tick))
+            .collect()
+    });
+    progress.finish();
+    let mut values = Vec::with_capacity(results.len());
+    let mut totals = StepReport::default();
+    let mut events = Vec::with_capacity(values.capacity());
+    for res in results {
+        let (rows, rep) = res?;
+        totals.accumulate(&rep);
+        events.push(rep.events);
+        values.push(rows);
+    }
+    let stats = statistics(&values, plan.times.len(), plan.observables.len());
+    Ok(Outcome {
+        values,
+        stats,
+        totals,
+        events,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// Welford statistics per (time, observable), replicas pushed in order.
+pub fn statistics(values: &[Vec<Vec<f64>>], times: usize, obs: usize) -> Vec<Vec<Replicas>> {
+    let mut stats = vec![vec![Replicas::new(); obs]; times];
+    for rows in values {
+        for (i, row) in rows.iter().enumerate() {
+            for (j, &v) in row.iter().enumerate() {
+                stats[i][j].push(v);
+            }
+        }
+    }
+    stats
+}
