@@ -367,3 +367,133 @@ pub fn lowrank_small(
     }
     Ok(())
 }
+
+/// One row of `coagula bench scenario`: a scheme (and a varied setting) on the scenario.
+struct BenchRow {
+    label: String,
+    plan: crate::scenario::Plan,
+    best: f64,
+    outcome: Option<crate::runner::Outcome>,
+}
+
+/// `coagula bench scenario`: schemes (and values of one setting) side by side on the
+/// same scenario, `repeat` alternating rounds, the minimum wall time of each kept:
+/// wall seconds, events per second, and the error of each observable at the last
+/// output time against the exact solution where known.
+pub fn scenario(
+    file: Option<&str>,
+    schemes: &[String],
+    vary: Option<(String, Vec<toml::Value>)>,
+    overrides: Vec<(String, toml::Value)>,
+    repeat: u32,
+) -> Result<(), String> {
+    let base = crate::run::plan(file, overrides.clone(), None)?;
+    let schemes: Vec<String> = if schemes.is_empty() {
+        vec![base.scheme.name().to_string()]
+    } else {
+        schemes.to_vec()
+    };
+    let values: Vec<Option<toml::Value>> = match &vary {
+        Some((_, vs)) => vs.iter().cloned().map(Some).collect(),
+        None => vec![None],
+    };
+    let mut rows = Vec::new();
+    for s in &schemes {
+        for v in &values {
+            let mut ov = overrides.clone();
+            ov.push(("scheme.name".into(), toml::Value::String(s.clone())));
+            let mut label = s.clone();
+            if let (Some((key, _)), Some(v)) = (&vary, v) {
+                ov.push((key.clone(), v.clone()));
+                label = format!("{s} {key}={v}");
+            }
+            let plan = crate::run::plan(file, ov, None).map_err(|e| format!("{label}: {e}"))?;
+            rows.push(BenchRow {
+                label,
+                plan,
+                best: f64::INFINITY,
+                outcome: None,
+            });
+        }
+    }
+    println!("{}\n", crate::output::describe(&base));
+    if let Some(n) = original_particles(file)
+        && Some(n) != base.scenario.initial.particles
+    {
+        println!(
+            "note: N0 = {:?} here, the scenario file (and the source's figures) use {n}: compare rates and errors, not seconds\n",
+            base.scenario.initial.particles
+        );
+    }
+    for round in 0..repeat {
+        for row in rows.iter_mut() {
+            let out =
+                crate::runner::run(&row.plan, true).map_err(|e| format!("{}: {e}", row.label))?;
+            eprintln!(
+                "round {}/{repeat}: {} {:.3} s",
+                round + 1,
+                row.label,
+                out.seconds
+            );
+            if out.seconds < row.best {
+                row.best = out.seconds;
+            }
+            row.outcome = Some(out);
+        }
+    }
+    let obs = &base.observables;
+    let t_end = *base.times.last().expect("times");
+    let mut head = format!(
+        "{:<40} {:>10} {:>12} {:>12} {:>10}",
+        "scheme", "seconds", "events", "events/s", "ns/event"
+    );
+    for o in obs {
+        head.push_str(&format!(" {:>24}", format!("{} − exact (±95%)", o.name())));
+    }
+    println!("{head}");
+    for row in &rows {
+        let out = row.outcome.as_ref().expect("ran");
+        let ev = out.totals.events as f64;
+        let mut line = format!(
+            "{:<40} {:>10.3} {:>12.4e} {:>12.4e} {:>10.1}",
+            row.label,
+            row.best,
+            ev,
+            ev / row.best,
+            1e9 * row.best / ev.max(1.0)
+        );
+        let last = row.plan.times.len() - 1;
+        for (j, o) in row.plan.observables.iter().enumerate() {
+            let r = &out.stats[last][j];
+            let cell = match row.plan.exact.and_then(|e| e.value(o, t_end)) {
+                Some(x) if r.count() >= 2 => {
+                    let (lo, hi) = r.ci95();
+                    format!("{:+.2e} (±{:.1e})", r.mean() - x, 0.5 * (hi - lo))
+                }
+                Some(x) => format!("{:+.2e}", r.mean() - x),
+                None => "-".into(),
+            };
+            line.push_str(&format!(" {cell:>24}"));
+        }
+        println!("{line}");
+    }
+    println!(
+        "\nseconds: the fastest of {repeat} alternating rounds (all replicas, {} threads); errors at t = {t_end}, the mean of the replicas",
+        if base.threads == 0 {
+            "all".to_string()
+        } else {
+            base.threads.to_string()
+        }
+    );
+    Ok(())
+}
+
+/// `initial.particles` of a scenario file as written (no overrides).
+fn original_particles(file: Option<&str>) -> Option<u64> {
+    let (_, text) = crate::run::resolve(file).ok()?;
+    let t: toml::Table = toml::from_str(&text).ok()?;
+    t.get("initial")?
+        .get("particles")?
+        .as_integer()
+        .map(|n| n as u64)
+}

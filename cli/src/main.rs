@@ -215,6 +215,26 @@ enum Command {
 
 #[derive(Subcommand)]
 enum BenchKind {
+    /// Schemes side by side on one scenario (default: the built-in one): wall time,
+    /// events per second and the error against the exact solution, e.g.
+    /// `coagula bench scenario quickstart-constant --schemes lowrank,inverse,rejection`
+    /// or `coagula bench scenario --vary scheme.points=qmc,mc`.
+    Scenario {
+        /// Scenario file or example name.
+        scenario: Option<String>,
+        /// Schemes to compare (comma-separated registry names; default: the scenario's).
+        #[arg(long, value_delimiter = ',')]
+        schemes: Vec<String>,
+        /// A setting to vary: `KEY=v1,v2,...` (TOML values).
+        #[arg(long, value_parser = parse_vary)]
+        vary: Option<(String, Vec<toml::Value>)>,
+        /// Override a scenario value (repeatable).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = scenario::parse_override)]
+        set: Vec<(String, toml::Value)>,
+        /// Alternating rounds; the fastest of each row is kept.
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
+    },
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
@@ -304,6 +324,21 @@ enum Solution {
     ConstantExponential,
     /// Golovin: K = x + y from c(x,0) = e^-x.
     Golovin,
+}
+
+/// `KEY=v1,v2,...` for `bench scenario --vary`.
+fn parse_vary(s: &str) -> Result<(String, Vec<toml::Value>), String> {
+    let (k, vs) = s
+        .split_once('=')
+        .ok_or_else(|| format!("--vary {s}: write KEY=v1,v2,..."))?;
+    let mut values = Vec::new();
+    for v in vs.split(',') {
+        values.push(scenario::parse_override(&format!("{k}={v}"))?.1);
+    }
+    if values.is_empty() {
+        return Err(format!("--vary {s}: no values"));
+    }
+    Ok((k.trim().to_string(), values))
 }
 
 /// An RQMC randomisation count: 0 (none) or at least 2 (an interval needs two).
@@ -504,6 +539,24 @@ fn main() -> ExitCode {
                     Ok(())
                 }
             }
+        }
+        Command::Bench {
+            which:
+                BenchKind::Scenario {
+                    scenario,
+                    schemes,
+                    vary,
+                    set,
+                    repeat,
+                },
+        } => {
+            return match bench::scenario(scenario.as_deref(), &schemes, vary, set, repeat) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
         }
         Command::Bench {
             which:

@@ -1609,6 +1609,111 @@ mod tests {
         }
     }
 
+    use proptest::prelude::*;
+
+    const KEYS: &[&str] = &[
+        "kernel.kind",
+        "kernel.coefficient",
+        "kernel.a",
+        "kernel.gamma",
+        "kernel.units",
+        "kernel.temperature",
+        "kernel.viscosity",
+        "kernel.density",
+        "kernel.monomer-diameter",
+        "fragmentation.kind",
+        "fragmentation.rate",
+        "initial.kind",
+        "initial.particles",
+        "initial.size",
+        "initial.mean",
+        "initial.median",
+        "initial.gsd",
+        "initial.resolution",
+        "initial.sizes",
+        "initial.counts",
+        "initial.concentration",
+        "scheme.name",
+        "scheme.dt",
+        "scheme.points",
+        "scheme.size-limit",
+        "output.times",
+        "output.t-end",
+        "output.t-start",
+        "output.count",
+        "output.spacing",
+        "output.observables",
+        "run.replicas",
+        "run.seed",
+        "run.threads",
+        "title",
+        "nonsense.key",
+    ];
+    const VALUES: &[&str] = &[
+        "0",
+        "1",
+        "-1",
+        "2",
+        "3",
+        "0.5",
+        "1e308",
+        "-1e-308",
+        "nan",
+        "inf",
+        "4096",
+        "1000",
+        "18446744073709551615",
+        "9223372036854775807",
+        "\"constant\"",
+        "\"additive\"",
+        "\"product\"",
+        "\"physical\"",
+        "\"exponential\"",
+        "\"lognormal\"",
+        "\"sizes\"",
+        "\"counts\"",
+        "\"massflow\"",
+        "\"lowrank\"",
+        "\"rejection\"",
+        "\"inverse\"",
+        "\"rqmc\"",
+        "\"log\"",
+        "[1, 2, 3]",
+        "[0.5, 1.0]",
+        "[]",
+        "[\"M0\", \"gel\"]",
+        "[\"C(1,2)\"]",
+        "{}",
+        "true",
+        "\"x\"",
+        "[1.0, 1e300]",
+        "[1, 0]",
+    ];
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(2000))]
+        /// Random overrides of every key by hostile values on every example never
+        /// panic: the loader returns a plan or an error with a message.
+        #[test]
+        fn overrides_never_panic(
+            ex in 0..crate::examples::EXAMPLES.len(),
+            sets in prop::collection::vec((0..KEYS.len(), 0..VALUES.len()), 1..5),
+            drops in prop::collection::vec(0..KEYS.len(), 0..2),
+        ) {
+            let (name, text) = crate::examples::EXAMPLES[ex];
+            let mut ov = Vec::new();
+            for (k, v) in sets {
+                let (key, value) = parse_override(&format!("{}={}", KEYS[k], VALUES[v])).unwrap();
+                ov.push((key, value));
+            }
+            let drops: Vec<String> = drops.into_iter().map(|k| KEYS[k].to_string()).collect();
+            match load(&Source { name, text, overrides: &ov, drops: &drops }) {
+                Ok(plan) => prop_assert!(!plan.times.is_empty() && !plan.observables.is_empty()),
+                Err(e) => prop_assert!(!e.message.is_empty()),
+            }
+        }
+    }
+
     #[test]
     fn lines_of_keys() {
         let text = "title = \"x\"\n[kernel]\nkind = \"product\"\na = 1.5\n";
