@@ -10,12 +10,14 @@ cd "$(dirname "$0")/.."
 prefix=${1:-/usr/local}
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -n 1)
 cargo build --release -q -p coagula-ffi
+# cargo's output directory (CARGO_TARGET_DIR when set, relative to the workspace)
+target=${CARGO_TARGET_DIR:-target}
 major=${version%%.*}
 install -d "$prefix/lib/pkgconfig" "$prefix/include"
-install -m 644 target/release/libcoagula.a "$prefix/lib/"
+install -m 644 "$target/release/libcoagula.a" "$prefix/lib/"
 # libcoagula.so.VERSION, with the SONAME link libcoagula.so.MAJOR and the link-time
 # name libcoagula.so
-install -m 755 target/release/libcoagula.so "$prefix/lib/libcoagula.so.$version"
+install -m 755 "$target/release/libcoagula.so" "$prefix/lib/libcoagula.so.$version"
 ln -sf "libcoagula.so.$version" "$prefix/lib/libcoagula.so.$major"
 ln -sf "libcoagula.so.$major" "$prefix/lib/libcoagula.so"
 # the release profile keeps line tables for profiling; installed libraries do not

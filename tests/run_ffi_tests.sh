@@ -8,7 +8,11 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
 cargo build --release -q -p coagula-ffi
-lib="$root/target/release/libcoagula.a"
+# cargo's output directory (CARGO_TARGET_DIR when set; a relative one is relative to
+# the workspace root)
+target=${CARGO_TARGET_DIR:-target}
+case $target in /*) ;; *) target="$root/$target" ;; esac
+lib="$target/release/libcoagula.a"
 libs="-lpthread -ldl -lm"
 san="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1

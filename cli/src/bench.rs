@@ -35,7 +35,7 @@ const fn row(
     }
 }
 
-/// Osinsky (2023) tables 1–3 (SPEC §6).
+/// Osinsky (2023) tables 1–3.
 pub const BROWNIAN: [PaperRow; 5] = [
     row(10.0, 512, Some(67.0), Some(8.3), 3.5, 2.3e7),
     row(100.0, 4096, Some(3366.0), Some(18.5), 7.1, 3.9e7),

@@ -99,10 +99,19 @@ pub fn describe(plan: &Plan) -> String {
             plan.options.dt, plan.points
         ));
     }
+    let coefficient = match s.kernel.units {
+        crate::scenario::Units::Physical => {
+            // the physical coefficient, before the kernel was narrowed to sizes ≥ 1
+            format!(
+                "{:.4e} m³/s",
+                plan.kernel.coefficient() / plan.size_unit.powf(plan.kernel.homogeneity())
+            )
+        }
+        crate::scenario::Units::Dimensionless => format!("{}", s.kernel.coefficient.unwrap_or(1.0)),
+    };
     d.push_str(&format!(
-        "\nkernel: {} (coefficient {:.6e}{}), initial: {:?}",
+        "\nkernel: {} (coefficient {coefficient}){}, initial: {:?}",
         plan.kernel.name(),
-        plan.kernel.coefficient(),
         if plan.size_unit != 1.0 {
             format!(", sizes on a grid of {}", plan.size_unit)
         } else {

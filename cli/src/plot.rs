@@ -81,8 +81,8 @@ fn rasterise(svg: &str, path: &str) -> Result<(), String> {
 
 /// The plot of a run: per observable a panel of the mean against time with its 95%
 /// confidence band (replicas) and the exact solution, and under it, where the exact
-/// solution is known, the error `ours − exact` with the band, so that an error of 1e-4
-/// is as visible as one of 1.
+/// solution is known, the relative error `(ours − exact)/exact` with the band, so that
+/// an error of 1e-4 is as visible as one of 1.
 pub fn run(path: &str, plan: &Plan, out: &Outcome) -> Result<(), String> {
     let with_exact = plan.exact.is_some()
         && plan
@@ -238,10 +238,11 @@ where
             .map_err(err)?;
 
         if with_exact {
+            // relative errors, so that growing and decaying observables read alike
             let errs: Vec<(f64, f64, f64)> = pts
                 .iter()
-                .filter(|p| p.3.is_finite())
-                .map(|p| (p.0, p.1 - p.3, p.2))
+                .filter(|p| p.3.is_finite() && p.3 != 0.0)
+                .map(|p| (p.0, (p.1 - p.3) / p.3.abs(), p.2 / p.3.abs()))
                 .collect();
             let (elo, ehi) = span(
                 errs.iter()
@@ -252,7 +253,10 @@ where
                     .chain([0.0]),
             );
             let mut chart = ChartBuilder::on(&grid[cols + j])
-                .caption(format!("{name} − exact"), ("sans-serif", 18))
+                .caption(
+                    format!("{name}: (ours − exact) / exact"),
+                    ("sans-serif", 18),
+                )
                 .margin(12)
                 .x_label_area_size(35)
                 .y_label_area_size(70)

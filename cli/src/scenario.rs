@@ -45,7 +45,7 @@ pub struct Scenario {
     pub run: RunSpec,
 }
 
-/// The built-in kernels (SPEC §2 of the library; the papers' equations in the docs).
+/// The built-in kernels (Eibeck & Wagner 2000 §6; Osinsky 2023 eqs. 24, 27).
 #[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
 #[serde(rename_all = "kebab-case")]
 pub enum KernelKind {

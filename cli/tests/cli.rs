@@ -47,7 +47,7 @@ fn run_writes_csv_close_to_exact() {
     let svg_text = std::fs::read_to_string(&svg).unwrap();
     assert!(svg_text.starts_with("<svg"), "an SVG");
     assert!(
-        svg_text.contains("M2(t)") && svg_text.contains("M3 − exact"),
+        svg_text.contains("M2(t)") && svg_text.contains("M3: (ours − exact) / exact"),
         "panels"
     );
     std::fs::remove_dir_all(&dir).ok();
