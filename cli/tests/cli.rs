@@ -535,3 +535,42 @@ fn bench_scenario_compares_schemes() {
     assert!(text.lines().any(|l| l.starts_with("rejection ")), "{text}");
     assert!(text.contains("note: N0"), "{text}");
 }
+
+/// `--plot F.png` writes a PNG (the SVG rasterised), `--plot F.svg` an SVG with the
+/// exact curve and the error panels.
+#[test]
+fn plots_in_both_formats() {
+    let dir = std::env::temp_dir().join(format!("coagula-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for ext in ["png", "svg"] {
+        let path = dir.join(format!("p.{ext}"));
+        let out = coagula()
+            .args([
+                "run",
+                "quickstart-constant",
+                "--particles",
+                "2000",
+                "--replicas",
+                "3",
+            ])
+            .arg("--plot")
+            .arg(&path)
+            .arg("--quiet")
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let bytes = std::fs::read(&path).unwrap();
+        if ext == "png" {
+            assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+        } else {
+            let text = String::from_utf8(bytes).unwrap();
+            assert!(text.contains("n1: (ours − exact) / exact"), "error panel");
+            assert!(text.contains("95% CI of the mean"), "band");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
