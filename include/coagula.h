@@ -78,7 +78,7 @@
 #define COAG_PANIC 9
 
 /*
- Exact solutions of SPEC §3 (validation targets for hosts).
+ Exact solutions (Eibeck & Wagner 2000 eqs. 6.8-6.11; Lécot et al. 2019 §4), validation targets for hosts.
  */
 #define COAG_EXACT_CONSTANT 0
 

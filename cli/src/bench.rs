@@ -387,6 +387,13 @@ pub fn scenario(
     overrides: Vec<(String, toml::Value)>,
     repeat: u32,
 ) -> Result<(), String> {
+    if let Some((key, _)) = &vary
+        && (key.starts_with("output.") || key == "output")
+    {
+        return Err(format!(
+            "--vary {key}: the rows must share output times and observables (vary a kernel, initial, scheme or run setting)"
+        ));
+    }
     let base = crate::run::plan(file, overrides.clone(), None)?;
     let schemes: Vec<String> = if schemes.is_empty() {
         vec![base.scheme.name().to_string()]
@@ -463,9 +470,10 @@ pub fn scenario(
             1e9 * row.best / ev.max(1.0)
         );
         let last = row.plan.times.len() - 1;
+        let t_row = row.plan.times[last];
         for (j, o) in row.plan.observables.iter().enumerate() {
             let r = &out.stats[last][j];
-            let cell = match row.plan.exact.and_then(|e| e.value(o, t_end)) {
+            let cell = match row.plan.exact.and_then(|e| e.value(o, t_row)) {
                 Some(x) if r.count() >= 2 => {
                     let (lo, hi) = r.ci95();
                     format!("{:+.2e} (±{:.1e})", r.mean() - x, 0.5 * (hi - lo))

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 mod bench;
 mod examples;
 mod frag;
+mod moments;
 mod output;
 mod plot;
 mod reproduce;
@@ -102,8 +103,9 @@ enum Command {
         /// Independent replicas (run in parallel).
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
         replicas: Option<u64>,
-        /// Seed (replica r runs on stream r of the seed policy).
-        #[arg(long)]
+        /// Seed, 0..=2^63-1 (replica r runs on its substream of the seed policy; replica
+        /// 0 on the stream a C-ABI run with this seed uses).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
         seed: Option<u64>,
         /// Worker threads (0 = one per core; results do not depend on it).
         #[arg(long, value_parser = clap::value_parser!(u64).range(0..=1024))]
@@ -173,7 +175,7 @@ enum Command {
         /// Sizes x at which to print c(x, t) (continuous solutions).
         #[arg(long, value_delimiter = ',', value_parser = positive_f64)]
         x: Vec<f64>,
-        /// Comma-separated times (a negative one is an error, not a flag).
+        /// Comma-separated times, at most 100000 (a negative one is an error, not a flag).
         #[arg(
             long,
             value_delimiter = ',',
@@ -181,8 +183,8 @@ enum Command {
             allow_negative_numbers = true
         )]
         times: Vec<f64>,
-        /// Print n_1 .. n_kmax as well.
-        #[arg(long, default_value_t = 0)]
+        /// Print n_1 .. n_kmax as well (at most 100000).
+        #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=100_000))]
         kmax: u64,
     },
     /// Print the t-values of the digital sequences (rank test on generating matrices).
@@ -403,7 +405,7 @@ fn main() -> ExitCode {
                 put("run.replicas", toml::Value::Integer(r as i64));
             }
             if let Some(sd) = seed {
-                // TOML integers are i64: seeds above 2^63 wrap to their two's complement
+                // TOML integers are i64: clap keeps the seed below 2^63
                 put("run.seed", toml::Value::Integer(sd as i64));
             }
             if let Some(t) = threads {
@@ -484,7 +486,13 @@ fn main() -> ExitCode {
             x,
             times,
             kmax,
-        } => exact(solution, coefficient, &x, &times, kmax),
+        } => {
+            if times.len() > 100_000 || x.len() > 100_000 {
+                eprintln!("error: at most 100000 times and 100000 sizes");
+                return ExitCode::FAILURE;
+            }
+            exact(solution, coefficient, &x, &times, kmax)
+        }
         Command::Kernels { min, max, points } => {
             if max > min {
                 kernels(min, max, points as usize)

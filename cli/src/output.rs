@@ -123,7 +123,7 @@ pub fn describe(plan: &Plan) -> String {
         d.push_str(", binary uniform fragmentation");
     }
     d.push_str(&format!(
-        "\nreplicas: {}, seed {} (replica r on stream r of the seed policy); about {:.0} MiB at start",
+        "\nreplicas: {}, seed {} (replica r on its substream of the seed policy); about {:.0} MiB at start",
         plan.replicas,
         plan.seed,
         plan.memory as f64 / (1u64 << 20) as f64

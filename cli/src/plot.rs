@@ -89,8 +89,13 @@ pub fn run(path: &str, plan: &Plan, out: &Outcome) -> Result<(), String> {
             .observables
             .iter()
             .any(|o| plan.exact.and_then(|e| e.value(o, plan.times[0])).is_some());
-    let cols = plan.observables.len().min(4) as u32;
-    let size = (520 * cols.max(1) + 40, if with_exact { 820 } else { 480 });
+    let n = plan.observables.len() as u32;
+    let cols = n.clamp(1, 4);
+    let blocks = n.div_ceil(4).max(1);
+    let size = (
+        520 * cols + 40,
+        blocks * if with_exact { 780 } else { 440 } + 40,
+    );
     render(path, size, |root| draw_run(root, plan, out, with_exact))
 }
 
@@ -143,15 +148,20 @@ where
     root.fill(&WHITE).map_err(err)?;
     let root = root.titled(&plan.title, ("sans-serif", 22)).map_err(err)?;
     let data = rows(plan, out);
-    let cols = plan.observables.len().min(4);
-    let grid = root.split_evenly((if with_exact { 2 } else { 1 }, cols));
+    let n = plan.observables.len();
+    let cols = n.clamp(1, 4);
+    let per = if with_exact { 2 } else { 1 };
+    let grid = root.split_evenly((per * n.div_ceil(4).max(1), cols));
     let t_max = *plan.times.last().expect("times");
     let t_min = if plan.times.len() > 1 {
         0.0
     } else {
         t_max * 0.5
     };
-    for (j, o) in plan.observables.iter().take(cols).enumerate() {
+    for (j, o) in plan.observables.iter().enumerate() {
+        // observable j: block j / 4 of `per` panel rows, column j % 4
+        let (block, col) = (j / 4, j % 4);
+        let value_panel = block * per * cols + col;
         let color = COLORS[j % COLORS.len()];
         let name = o.name();
         let pts: Vec<(f64, f64, f64, f64)> = data
@@ -173,7 +183,7 @@ where
                 })
                 .chain(fine.iter().map(|p| p.1)),
         );
-        let mut chart = ChartBuilder::on(&grid[j])
+        let mut chart = ChartBuilder::on(&grid[value_panel])
             .caption(format!("{name}(t)"), ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(35)
@@ -252,7 +262,7 @@ where
                     })
                     .chain([0.0]),
             );
-            let mut chart = ChartBuilder::on(&grid[cols + j])
+            let mut chart = ChartBuilder::on(&grid[value_panel + cols])
                 .caption(
                     format!("{name}: (ours − exact) / exact"),
                     ("sans-serif", 18),

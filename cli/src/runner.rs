@@ -1,7 +1,8 @@
 //! Runs a scenario's replicas in parallel (rayon) and gathers their statistics.
 //!
-//! Replica r runs on `generator(seed, r)` of the core's seed policy (and, for RQMC,
-//! its own scrambling from `substream(seed, r, Scrambling)`), results are collected in
+//! Replica r runs on `substream(seed, 0, Purpose::Replica(r))` of the core's seed policy
+//! (replica 0 on `generator(seed, 0)`), and, for RQMC, on its own scrambling from
+//! `substream(seed, r, Scrambling)`, results are collected in
 //! replica order and merged sequentially, so every figure is bit-identical whatever
 //! the number of threads.
 

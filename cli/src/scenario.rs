@@ -216,9 +216,8 @@ pub struct OutputSpec {
     pub t_start: Option<f64>,
     /// Number of generated times.
     pub count: Option<u32>,
-    /// Linear or log spacing.
-    #[serde(default)]
-    pub spacing: Spacing,
+    /// Linear (default) or log spacing of generated times.
+    pub spacing: Option<Spacing>,
     /// Observables: `M<m>` (moment of real order m), `n<k>` (number density of integer
     /// size k), `C(a,b)` (number concentration of sizes in [a, b]), `gel` (gel-mass
     /// estimate), `N` (simulation particles).
@@ -232,7 +231,8 @@ pub struct RunSpec {
     /// Independent replicas (default 1).
     #[serde(default = "one")]
     pub replicas: u64,
-    /// Seed of the seed policy: replica r runs on stream r of this seed.
+    /// Seed of the seed policy (0..=2^63 − 1): replica r runs on its substream
+    /// `Purpose::Replica(r)` of this seed (replica 0 on `generator(seed, 0)`).
     #[serde(default = "one")]
     pub seed: u64,
     /// Worker threads (0 = one per core). Results do not depend on it.
@@ -375,6 +375,15 @@ pub enum Dist {
 }
 
 impl Dist {
+    /// The mean.
+    pub fn mean(&self) -> f64 {
+        match *self {
+            Dist::Exponential(mean) => mean,
+            Dist::ExponentialMass(mean) => 2.0 * mean,
+            Dist::Lognormal(median, sigma) => median * (0.5 * sigma * sigma).exp(),
+        }
+    }
+
     /// The inverse CDF at u in (0, 1).
     pub fn inverse(&self, u: f64) -> f64 {
         match *self {
@@ -596,10 +605,14 @@ pub fn parse_override(s: &str) -> Result<(String, toml::Value), String> {
 /// Parses and checks a scenario: syntax, unknown keys and types (with the line), then
 /// the overrides, then every value (ranges, combinations, memory).
 pub fn load(src: &Source<'_>) -> Result<Plan, ScenarioError> {
-    // syntax, unknown keys and wrong types, with the line, as written
-    let _: Scenario = toml::from_str(src.text).map_err(|e| ScenarioError {
+    let as_written = |e: toml::de::Error| ScenarioError {
         message: format!("{}: {}", src.name, e.to_string().trim_end()),
-    })?;
+    };
+    if src.overrides.is_empty() && src.drops.is_empty() {
+        // syntax, unknown keys and wrong types, with the line
+        let scenario: Scenario = toml::from_str(src.text).map_err(as_written)?;
+        return check(scenario, src);
+    }
     let mut table: toml::Table = toml::from_str(src.text).map_err(|e| ScenarioError {
         message: format!("{}: {e}", src.name),
     })?;
@@ -609,13 +622,25 @@ pub fn load(src: &Source<'_>) -> Result<Plan, ScenarioError> {
     for (key, value) in src.overrides {
         set_key(&mut table, key, value.clone()).map_err(|m| ScenarioError { message: m })?;
     }
-    let scenario = Scenario::deserialize(table).map_err(|e| ScenarioError {
-        message: format!(
-            "{} with the command line's overrides: {}",
-            src.name,
-            e.to_string().trim_end()
-        ),
-    })?;
+    let scenario = match Scenario::deserialize(table) {
+        Ok(s) => s,
+        Err(e) => {
+            // an error of the file as written keeps its line; else the overrides caused it
+            if let Err(raw) = toml::from_str::<Scenario>(src.text) {
+                let missing = raw.to_string().contains("missing field");
+                if !missing {
+                    return Err(as_written(raw));
+                }
+            }
+            return Err(ScenarioError {
+                message: format!(
+                    "{} with the command line's overrides: {}",
+                    src.name,
+                    e.to_string().trim_end()
+                ),
+            });
+        }
+    };
     check(scenario, src)
 }
 
@@ -813,23 +838,36 @@ fn kernel_of(k: &KernelSpec, src: &Source<'_>) -> Result<Coagulation, ScenarioEr
     }
 }
 
+/// The Gamma(2, 1) CDF `1 − (1 + x) e^{−x}`, without cancellation for small x (its
+/// series `x²/2 − x³/3 + x⁴/8 − x⁵/30` below 1e-3).
+fn gamma2_cdf(x: f64) -> f64 {
+    if x < 1e-3 {
+        x * x * (0.5 - x * (1.0 / 3.0 - x * (0.125 - x / 30.0)))
+    } else {
+        -(-x).exp_m1() - x * (-x).exp()
+    }
+}
+
 /// Inverse CDF of the Gamma(2, 1) law (the mass distribution x e^{−x} of an
-/// exponential number distribution): Newton on `1 − (1 + x) e^{−x} = u`.
+/// exponential number distribution): Newton on `gamma2_cdf(x) = u` from `√(2u)` (small
+/// u) or `−ln(1−u) + 1` (the CDF is convex then concave, so a few more steps).
 fn gamma2_inverse(u: f64) -> f64 {
-    // start from the exponential's quantile shifted by one, then Newton (monotone)
-    let mut x = (-(1.0 - u).ln()).max(1e-3) + 0.5;
+    let mut x = if u < 0.1 {
+        (2.0 * u).sqrt()
+    } else {
+        1.0 - (-u).ln_1p()
+    };
     for _ in 0..100 {
-        let f = 1.0 - (1.0 + x) * (-x).exp() - u;
         let d = x * (-x).exp();
         if d <= 0.0 {
             break;
         }
-        let next = (x - f / d).max(0.5 * x);
-        if (next - x).abs() <= 1e-15 * x {
-            x = next;
+        let next = (x - (gamma2_cdf(x) - u) / d).max(0.5 * x);
+        let done = (next - x).abs() <= 4.0 * f64::EPSILON * x;
+        x = next;
+        if done {
             break;
         }
-        x = next;
     }
     x
 }
@@ -912,9 +950,9 @@ fn counts_of(sizes: impl Iterator<Item = f64>, unit: f64, limit: u64) -> Result<
     let mut counts: Vec<u64> = Vec::new();
     for x in sizes {
         let i = (x / unit).round().max(1.0);
-        if i.is_nan() || i > limit as f64 || i > 1e8 {
+        if i.is_nan() || i > limit as f64 || i > 1e7 {
             return Err(format!(
-                "size {x} is {i} grid units: above the size limit or the 1e8 of a dense start"
+                "size {x} is {i} grid units: above the size limit or the 1e7 of a dense start"
             ));
         }
         let i = i as usize;
@@ -1006,6 +1044,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     let times: Vec<f64> = match (&o.times, o.t_end, o.count) {
         (Some(t), None, None) => {
             refuse(src, "output.t-start", &o.t_start, "explicit times")?;
+            refuse(src, "output.spacing", &o.spacing, "explicit times")?;
             t.clone()
         }
         (None, Some(end), Some(count)) => {
@@ -1013,7 +1052,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             if count == 0 || count > 100_000 {
                 return Err(src.at("output.count", format!("{count} must be in 1..=100000")));
             }
-            match o.spacing {
+            match o.spacing.unwrap_or_default() {
                 Spacing::Linear => {
                     refuse(
                         src,
@@ -1119,6 +1158,20 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                 "output.observables",
                 "gel: the mass-flow scheme has no gel estimate (use M1)",
             ));
+        }
+        if let Observable::Density(_) = ob {
+            if matches!(s.initial.kind, InitKind::Exponential | InitKind::Lognormal) {
+                return Err(src.at(
+                    "output.observables",
+                    format!("{name}: a continuous start has no integer sizes (use C(a,b) for a size range)"),
+                ));
+            }
+            if s.fragmentation.is_some() {
+                return Err(src.at(
+                    "output.observables",
+                    format!("{name}: fragmentation makes sizes non-integer (use C(a,b) for a size range)"),
+                ));
+            }
         }
         observables.push(ob);
     }
@@ -1232,10 +1285,10 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             let n = n_of(src)?;
             let size = positive(src, "initial.size", i.size.unwrap_or(1.0))?;
             if counts_scheme {
-                if size.fract() != 0.0 || size > 1e8 || size as u64 > limit {
+                if size.fract() != 0.0 || size > 1e7 || size as u64 > limit {
                     return Err(src.at(
                         "initial.size",
-                        format!("{size}: integer-size schemes need an integer size ≤ 1e8 and the size limit"),
+                        format!("{size}: integer-size schemes need an integer size ≤ 1e7 and the size limit"),
                     ));
                 }
                 let mut counts = vec![0u64; size as usize];
@@ -1400,6 +1453,15 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                     format!("{} sizes: above the size limit {limit}", counts.len()),
                 ));
             }
+            if total > 1 << 40 || total.saturating_mul(64).saturating_mul(concurrent) > budget {
+                return Err(src.at(
+                    "initial.counts",
+                    format!(
+                        "{total} particles: above 2^40 or, with {concurrent} replicas at once, this machine's memory budget of {:.1} GiB",
+                        budget as f64 / (1u64 << 30) as f64
+                    ),
+                ));
+            }
             let mass: f64 = counts
                 .iter()
                 .enumerate()
@@ -1456,6 +1518,52 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     let exact = exact_of(&s, frag, c0, mu, counts_scheme);
 
     // memory: per replica, times the replicas that run at once
+    // a grid too coarse for the distribution would round a share of the particles up to
+    // size 1 and bias every moment
+    if let Start::Quantiles {
+        dist,
+        unit: Some(u),
+        ..
+    } = &start
+    {
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if dist.inverse(mid) < 0.5 * u {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        // each of them gains at most a cell: a relative mass bias below share · δ / mean
+        let bias = lo * u / dist.mean();
+        if bias > 1e-3 {
+            return Err(src.at(
+                "initial.resolution",
+                format!(
+                    "{u}: {:.2}% of the particles are below half a grid cell and would be rounded up (a mass bias up to {:.1e}): use a finer resolution",
+                    100.0 * lo,
+                    bias
+                ),
+            ));
+        }
+    }
+    // the values kept: replicas x times x observables
+    let kept = r
+        .replicas
+        .saturating_mul(times.len() as u64)
+        .saturating_mul(observables.len() as u64);
+    if kept > 1 << 25 {
+        return Err(src.at(
+            "run.replicas",
+            format!(
+                "{} replicas x {} times x {} observables: more than 2^25 values to keep",
+                r.replicas,
+                times.len(),
+                observables.len()
+            ),
+        ));
+    }
     // the centred state, which also checks that the sizes fit the grid and the limit
     let init = start.data(0.5).map_err(|m| src.at("initial", m))?;
     let per = match &init {
@@ -1464,9 +1572,9 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             let n: u64 = counts.iter().sum();
             let dense = 64 * counts.len() as u64;
             if scheme == SchemeId::Rejection {
-                16 * n + dense
+                n.saturating_mul(16).saturating_add(dense)
             } else {
-                dense + 64 * (n.min(1 << 24))
+                dense.saturating_add(64 * n.min(1 << 24))
             }
         }
     };
@@ -1515,10 +1623,9 @@ fn exact_of(s: &Scenario, frag: Frag, c0: f64, mu: f64, counts_scheme: bool) -> 
     let mono = s.initial.kind == InitKind::Monodisperse;
     let expo = s.initial.kind == InitKind::Exponential;
     let (e, lambda, name) = match (s.kernel.kind, &frag) {
-        (KernelKind::Constant, Frag::Binary(f)) => {
+        (KernelKind::Constant, Frag::Binary(_)) => {
             // only Lécot's test: K = 1, F = 2/(x+y), unit monomers
             let rate = s.fragmentation.as_ref().and_then(|f| f.rate).unwrap_or(1.0);
-            let _ = f;
             if mono && b == 1.0 && rate == 1.0 && c0 == 1.0 && mu == 1.0 {
                 return Some(ExactRef {
                     solution: Exact::coagulation_fragmentation(),
@@ -1562,8 +1669,8 @@ fn exact_of(s: &Scenario, frag: Frag, c0: f64, mu: f64, counts_scheme: bool) -> 
         ),
         _ => return None,
     };
-    // n(t) = c0 μ^{-1}... the solution from c0 particles of size μ is the unit one at
-    // time b c0 μ^λ t, with M_m scaled by c0 μ^m
+    // the solution from concentration c0 of size scale μ with coefficient b is the unit
+    // one at time b c0 μ^λ t, with M_m scaled by c0 μ^m
     let e = e.with_coefficient(b * c0 * mu.powf(lambda)).ok()?;
     Some(ExactRef {
         solution: e,
@@ -1579,10 +1686,16 @@ mod tests {
 
     #[test]
     fn inverse_cdfs_invert() {
-        for &u in &[1e-9, 0.01, 0.3, 0.5, 0.9, 0.999_999] {
+        for &u in &[1e-12, 1e-9, 1e-5, 0.01, 0.3, 0.5, 0.9, 0.999_999] {
             let x = gamma2_inverse(u);
-            let f = 1.0 - (1.0 + x) * (-x).exp();
-            assert!((f - u).abs() < 1e-12, "gamma2 u={u} x={x} F={f}");
+            let f = gamma2_cdf(x);
+            assert!((f - u).abs() <= 1e-13 * u, "gamma2 u={u} x={x} F={f}");
+            // the small-x series agrees with the closed form where both are accurate
+            let y: f64 = 9e-4;
+            assert!(
+                (gamma2_cdf(y) - (-(-y).exp_m1() - y * (-y).exp())).abs()
+                    < 1e-15 * gamma2_cdf(y) * 1e3
+            );
             let z = normal_inverse(u);
             let p = 0.5 * libm::erfc(-z / std::f64::consts::SQRT_2);
             assert!(

@@ -3,6 +3,7 @@
 //! as `coagula run`.
 
 use crate::examples;
+use crate::moments::Closed;
 use crate::runner::{self, Outcome};
 use crate::scenario::{self, KernelKind, Observable, Plan, Source};
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
@@ -267,38 +268,22 @@ fn euler(plan: &Plan, order: f64, t: f64) -> Option<f64> {
         *v = e.value(&Observable::Moment(k as f64), 0.0)?;
     }
     let b = plan.kernel.coefficient();
-    let lambda = match plan.frag {
-        crate::frag::Frag::None => 0.0,
-        crate::frag::Frag::Binary(_) => plan
-            .scenario
-            .fragmentation
-            .as_ref()
-            .and_then(|f| f.rate)
-            .unwrap_or(1.0),
+    let closed = match (plan.scenario.kernel.kind, plan.frag) {
+        (KernelKind::Constant, crate::frag::Frag::None) => Closed::Constant { b, lambda: 0.0 },
+        (KernelKind::Constant, crate::frag::Frag::Binary(_)) => Closed::Constant {
+            b,
+            lambda: plan
+                .scenario
+                .fragmentation
+                .as_ref()
+                .and_then(|f| f.rate)
+                .unwrap_or(1.0),
+        },
+        (KernelKind::Additive, crate::frag::Frag::None) => Closed::Additive { b },
+        _ => return None,
     };
     let h = plan.options.dt;
-    let steps = (t / h).round() as u64;
-    let kind = plan.scenario.kernel.kind;
-    for _ in 0..steps {
-        let d = match kind {
-            KernelKind::Constant => [
-                lambda * m[0] - 0.5 * b * m[0] * m[0],
-                0.0,
-                b * m[1] * m[1] - lambda * m[2] / 3.0,
-                3.0 * b * m[1] * m[2] - 0.5 * lambda * m[3],
-            ],
-            KernelKind::Additive if lambda == 0.0 => [
-                -b * m[1] * m[0],
-                0.0,
-                2.0 * b * m[1] * m[2],
-                3.0 * b * (m[1] * m[3] + m[2] * m[2]),
-            ],
-            _ => return None,
-        };
-        for k in 0..4 {
-            m[k] += h * d[k];
-        }
-    }
+    let m = closed.euler(m, h, (t / h).round() as u64);
     Some(m[order as usize])
 }
 

@@ -1,9 +1,9 @@
-//! Exact solutions of the Smoluchowski equation (SPEC §3), the validation targets of
+//! Exact solutions of the Smoluchowski equation, the validation targets of
 //! every scheme.
 //!
 //! All but the two exponential starts begin from the monodisperse state `n_1(0) = 1`
 //! (`c(x, 0) = δ(x − 1)`), in the rate
-//! convention of SPEC §1 (each unordered pair coagulates at rate `K/V`).
+//! convention of the library (each unordered pair coagulates at rate `K/V`).
 //!
 //! | solution | n_k(t) | moments |
 //! |---|---|---|
@@ -187,8 +187,8 @@ impl Exact {
     }
 
     /// The solution for the kernel `b K` (b > 0 finite; coefficients compose): every
-    /// quantity at time t is the original's at `b t`, since all these solutions start
-    /// with unit mass. The coagulation–fragmentation test refuses a coefficient (its
+    /// quantity at time t is the original's at `b t` (the equation's right-hand side
+    /// scales with b). The coagulation–fragmentation test refuses a coefficient (its
     /// fragmentation rate would not scale with it).
     pub fn with_coefficient(mut self, b: f64) -> Result<Self> {
         crate::error::positive("coefficient", b)?;
@@ -230,14 +230,22 @@ impl Exact {
     /// The time of the unit-coefficient solution.
     fn scaled(&self, t: f64) -> Result<f64> {
         check_time(t)?;
-        Ok(if self.rate == 1.0 { t } else { t * self.rate })
+        Ok(t * self.rate)
     }
 
     /// Density `c(x, t)` of a continuous-size solution (the exponential starts) at size
-    /// x > 0. Errors for x ≤ 0 or not finite, a bad t, or a solution of integer sizes.
+    /// x ≥ 0 (at 0 its limit). Errors for x < 0 or not finite, a bad t, or a solution of
+    /// integer sizes.
     pub fn density(&self, x: f64, t: f64) -> Result<f64> {
         let t = self.scaled(t)?;
-        crate::error::positive("x", x)?;
+        finite("x", x)?;
+        if x < 0.0 {
+            return Err(Error::OutOfRange {
+                name: "x",
+                value: x,
+                range: "[0, inf)",
+            });
+        }
         Ok(match self.kind {
             Kind::ConstantExponential { k0 } => {
                 let s = 1.0 + 0.5 * k0 * t;
@@ -247,6 +255,9 @@ impl Exact {
                 let tt = -libm::expm1(-t);
                 if tt == 0.0 {
                     exp(-x)
+                } else if x == 0.0 {
+                    // I1(z)/(x√T) → 1 as x → 0, and 1 − T = e^{−t}
+                    exp(-t)
                 } else {
                     // (1−T) e^{−(1+T)x} I1(z)/(x√T), z = 2x√T, with I1 scaled by e^{−z}:
                     // the exponent is −(1−√T)² x
@@ -408,7 +419,7 @@ fn pre_gel_multiplicative(m: u32, t: f64) -> f64 {
 /// terms, no cancellation) up to z = 40, Hankel's asymptotic series above
 /// (`I_1(z) ≈ e^z/√(2πz) Σ (−1)^k a_k(1) z^{−k}`, whose terms fall below 1e-17 long
 /// before they turn), so the relative error is a few ulp everywhere.
-pub fn bessel_i1e(z: f64) -> f64 {
+pub(crate) fn bessel_i1e(z: f64) -> f64 {
     if z.is_nan() || z <= 0.0 {
         return 0.0;
     }
@@ -731,7 +742,9 @@ mod tests {
                 .is_err()
         );
         assert!(g.with_coefficient(0.0).is_err());
-        assert!(g.density(0.0, 1.0).is_err());
+        assert!(g.density(-1.0, 1.0).is_err());
+        assert!((g.density(0.0, 1.0).unwrap() - (-1.0f64).exp()).abs() < 1e-15);
+        assert!((g.density(1e-9, 1.0).unwrap() - (-1.0f64).exp()).abs() < 1e-8);
         assert!(Exact::additive().density(1.0, 1.0).is_err());
     }
 

@@ -9,7 +9,7 @@
 //! Modules:
 //! * [`checkpoint`] — save and restore a scheme's state into a caller buffer;
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
-//! * [`exact`] — exact solutions used as validation targets (SPEC §3);
+//! * [`exact`] — exact solutions used as validation targets;
 //! * [`sample`] — weighted samplers: the flat-array sum tree ([`tree`]) and Walker alias
 //!   tables;
 //! * [`random`] — random variates and the seed policy (`seed, stream → generator`);

@@ -1,4 +1,4 @@
-//! Observables of particle systems and statistics over replicas (SPEC §8).
+//! Observables of particle systems and statistics over replicas.
 //!
 //! Every scheme represents the number concentration as a weighted point measure
 //! `Σ_i w_i δ_{x_i}`: direct simulation uses `w = 1/N` (or `1/V`), the mass flow schemes

@@ -279,7 +279,7 @@ pub(crate) unsafe fn read_config<T: Copy>(
     Ok(out)
 }
 
-/// Exact solutions of SPEC §3 (validation targets for hosts).
+/// Exact solutions (Eibeck & Wagner 2000 eqs. 6.8-6.11; Lécot et al. 2019 §4), validation targets for hosts.
 pub const COAG_EXACT_CONSTANT: i32 = 0;
 /// Additive kernel `K = x + y`.
 pub const COAG_EXACT_ADDITIVE: i32 = 1;

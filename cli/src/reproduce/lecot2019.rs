@@ -114,12 +114,12 @@ pub fn errors(traj: &[(f64, f64, f64)]) -> [[f64; 4]; 2] {
 /// moment equations M2' = 1 − M2/3, M3' = 3 M2 − M3/2.
 pub fn euler_expectation(steps: u32, t: f64) -> (f64, f64) {
     let h = 1.0 / f64::from(steps);
-    let n = (t / h).round() as u32;
-    let (mut m2, mut m3) = (1.0, 1.0);
-    for _ in 0..n {
-        (m2, m3) = (m2 + h * (1.0 - m2 / 3.0), m3 + h * (3.0 * m2 - 0.5 * m3));
-    }
-    (m2, m3)
+    let k = crate::moments::Closed::Constant {
+        b: 1.0,
+        lambda: 1.0,
+    };
+    let m = k.euler([1.0; 4], h, (t / h).round() as u64);
+    (m[2], m[3])
 }
 
 /// One cell of the reproduction grid.
@@ -177,6 +177,10 @@ pub fn slope(points: &[(f64, f64)]) -> f64 {
 
 /// `coagula reproduce lecot2019`: the table of errors and the Figure-2 plot.
 pub fn reproduce(m_max: u32, mc_seeds: u64, rqmc: u32, plot: Option<&str>) -> Result<(), String> {
+    if let Some(path) = plot {
+        // a bad name or directory fails now, not after the grid
+        crate::plot::check(path)?;
+    }
     let ms: Vec<u32> = (7..=m_max).collect();
     let ps = [100, 200, 400, 800, 1600];
     let start = std::time::Instant::now();

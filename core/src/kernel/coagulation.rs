@@ -1,4 +1,4 @@
-//! The built-in coagulation kernels of SPEC §2 and their bounds.
+//! The built-in coagulation kernels (Eibeck & Wagner 2000 §6, Osinsky 2023 eqs. 24 and 27) and their bounds.
 
 use super::CoagulationKernel;
 use crate::error::{Error, Result, finite, positive};
@@ -37,7 +37,7 @@ const FM_UNIT_C2: f64 = 5.656_854_249_492_381;
 /// The Boltzmann constant k_B in J/K (exact since the 2019 SI).
 pub const BOLTZMANN: f64 = 1.380_649e-23;
 
-/// A built-in coagulation kernel (SPEC §2), with a product majorant and a low-rank bound.
+/// A built-in coagulation kernel, with a product majorant and a low-rank bound.
 ///
 /// Constructors validate their parameters. Bounds hold for all sizes `x > 0` unless
 /// [`with_min_size`](Self::with_min_size) narrows them to `x ≥ s` (which tightens the
@@ -330,7 +330,7 @@ impl CoagulationKernel for Coagulation {
     }
 
     fn majorant(&self, x: f64) -> Option<f64> {
-        self.unit_majorant(x).map(|h| self.scale_sqrt() * h)
+        self.unit_majorant(x).map(|h| sqrt(self.scale) * h)
     }
 
     fn rank(&self) -> usize {
@@ -378,15 +378,6 @@ impl CoagulationKernel for Coagulation {
 }
 
 impl Coagulation {
-    /// `√b`, exactly 1 for the plain kernels (so their bits do not change).
-    fn scale_sqrt(&self) -> f64 {
-        if self.scale == 1.0 {
-            1.0
-        } else {
-            sqrt(self.scale)
-        }
-    }
-
     /// The kernel with coefficient 1.
     fn unit_rate(&self, x: f64, y: f64) -> f64 {
         match self.kind {

@@ -1,6 +1,6 @@
 //! Coagulation and fragmentation kernels, with the bounds the stepping schemes need.
 //!
-//! A coagulation kernel `K(x, y)` is the rate constant of the pair (x, y) (SPEC §1: in a
+//! A coagulation kernel `K(x, y)` is the rate constant of the pair (x, y) (in a
 //! particle system of volume V each unordered pair coagulates at rate `K/V`). Schemes
 //! that sample by thinning need a bound on K:
 //!

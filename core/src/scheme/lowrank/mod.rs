@@ -3,7 +3,7 @@
 //! [`baseline`](crate::scheme::baseline).
 //!
 //! State: counts `N_i` of particles of integer size `i = 1..M` in a volume V; each
-//! unordered pair of distinct particles coagulates at rate `K(i, j)/V` (SPEC §1).
+//! unordered pair of distinct particles coagulates at rate `K(i, j)/V` (Osinsky 2023 §2).
 //!
 //! **Proposals.** The kernel is bounded by `K ≤ A + Aᵀ` with `A(i, j) = Σ_{k<R} a_k(i)
 //! b_k(j)` (see [`crate::kernel`]). Ordered pairs of particles (p, q) are proposed at rate
