@@ -156,6 +156,11 @@ pub fn lowrank(
         budgets.ar, budgets.inverse
     );
     println!("coll/s and ratios are ours; \"paper\" columns are the paper's low-rank figures.");
+    if n0 != 10_000_000 {
+        println!(
+            "note: N0 = {n0} here, the paper's tables use 1e7: compare collisions per second, not seconds or collisions."
+        );
+    }
     println!(
         "LR = bucketed low-rank (the default layout), fastest of {repeat} run(s); tree = low-rank with per-size 8-ary trees."
     );

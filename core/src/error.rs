@@ -112,17 +112,36 @@ pub enum Error {
     },
 }
 
+/// A number in a message, short: plain digits for moderate magnitudes, scientific
+/// notation otherwise (Rust's plain `{}` writes 5e-324 as a 330-character decimal).
+#[derive(Clone, Copy, Debug)]
+pub struct Short(pub f64);
+
+impl fmt::Display for Short {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = self.0;
+        let a = v.abs();
+        if !v.is_finite() || a == 0.0 || (1e-5..1e16).contains(&a) {
+            write!(f, "{v}")
+        } else {
+            write!(f, "{v:e}")
+        }
+    }
+}
+
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Error::NotFinite { name } => write!(f, "{name} must be finite (got NaN or infinity)"),
             Error::OutOfRange { name, value, range } => {
+                let value = Short(value);
                 write!(
                     f,
                     "{name} = {value} is outside the admissible range {range}"
                 )
             }
             Error::InvalidRate { name, value } => {
+                let value = Short(value);
                 write!(
                     f,
                     "{name} returned {value}; rates must be finite and non-negative"
@@ -151,14 +170,18 @@ impl fmt::Display for Error {
             Error::Empty => f.write_str("cannot sample: total weight is zero"),
             Error::TimeBackwards { now, requested } => write!(
                 f,
-                "requested time {requested} lies before the current time {now}"
+                "requested time {} lies before the current time {}",
+                Short(requested),
+                Short(now)
             ),
             Error::Unsupported { what } => write!(f, "not supported: {what}"),
             Error::Checkpoint { what } => write!(f, "cannot restore checkpoint: {what}"),
             Error::Overflow { name } => write!(f, "integer overflow in {name}"),
             Error::BoundExceeded { name, rate, bound } => write!(
                 f,
-                "the kernel returned {rate}, above its declared {name} {bound}: the bound must hold for every pair"
+                "the kernel returned {}, above its declared {name} {}: the bound must hold for every pair",
+                Short(rate),
+                Short(bound)
             ),
         }
     }
@@ -196,6 +219,31 @@ pub(crate) fn positive(name: &'static str, value: f64) -> Result<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Numbers in messages stay short at the extremes of f64 (5e-324 would be a
+    /// 330-character decimal with `{}`).
+    #[test]
+    fn messages_print_short_numbers() {
+        use alloc::string::ToString;
+        let e = Error::OutOfRange {
+            name: "v",
+            value: 5e-324,
+            range: "(0, 1]",
+        };
+        assert_eq!(
+            e.to_string(),
+            "v = 5e-324 is outside the admissible range (0, 1]"
+        );
+        let e = Error::OutOfRange {
+            name: "v",
+            value: 1e300,
+            range: "(0, 1]",
+        };
+        assert!(e.to_string().contains("1e300"));
+        assert!(Short(2.5).to_string() == "2.5" && Short(f64::MIN_POSITIVE).to_string().len() < 30);
+        assert_eq!(Short(0.0).to_string(), "0");
+        assert_eq!(Short(f64::NAN).to_string(), "NaN");
+    }
     use alloc::string::ToString;
 
     #[test]

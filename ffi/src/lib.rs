@@ -91,9 +91,33 @@ pub(crate) fn fail<T>(code: i32, msg: impl Into<String>) -> Result<T, Fail> {
     Err(Fail(code, msg.into()))
 }
 
+thread_local! {
+    /// Whether this thread is inside a library call (so a panic is the library's).
+    static IN_CALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Installs, once, a panic hook that keeps the library's panics off the host's stderr:
+/// a panic inside a library call is reported only as `COAG_PANIC` and its message
+/// (`coag_last_error_message`); any other panic goes to the hook that was there before.
+fn silence_panics() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !IN_CALL.with(|c| c.get()) {
+                previous(info);
+            }
+        }));
+    });
+}
+
 /// Runs `f` inside a panic boundary and turns its result into a status code.
 pub(crate) fn guard(f: impl FnOnce() -> Result<(), Fail>) -> i32 {
-    match catch_unwind(AssertUnwindSafe(f)) {
+    silence_panics();
+    let outer = IN_CALL.with(|c| c.replace(true));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    IN_CALL.with(|c| c.set(outer));
+    match result {
         Ok(Ok(())) => COAG_OK,
         Ok(Err(Fail(code, msg))) => {
             set_error(msg);
@@ -109,6 +133,13 @@ pub(crate) fn guard(f: impl FnOnce() -> Result<(), Fail>) -> i32 {
             COAG_PANIC
         }
     }
+}
+
+/// A panic inside a library call, for the panic-hook test only (not part of the C
+/// ABI): returns the status the boundary makes of it.
+#[doc(hidden)]
+pub fn panic_inside_a_call_for_tests() -> i32 {
+    guard(|| panic!("a panic inside a library call"))
 }
 
 /// Checks a pointer argument for NULL.
