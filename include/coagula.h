@@ -652,7 +652,8 @@ int32_t coag_sim_time(const coag_sim *sim, double *out);
 int32_t coag_sim_totals(const coag_sim *sim, coag_step_report *out);
 
 /*
- The moment `M_m` (any real order m) of the number concentration.
+ The moment `M_m` (any real order m) of the number concentration; a result that
+ overflows a double (e.g. M_{1e6}) is `COAG_CAPACITY`.
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.
@@ -660,7 +661,8 @@ int32_t coag_sim_totals(const coag_sim *sim, coag_step_report *out);
 int32_t coag_sim_moment(const coag_sim *sim, double m, double *out);
 
 /*
- The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b)).
+ The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b));
+ `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`.
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.

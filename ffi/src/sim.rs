@@ -708,7 +708,8 @@ pub unsafe extern "C" fn coag_sim_totals(sim: *const coag_sim, out: *mut coag_st
     })
 }
 
-/// The moment `M_m` (any real order m) of the number concentration.
+/// The moment `M_m` (any real order m) of the number concentration; a result that
+/// overflows a double (e.g. M_{1e6}) is `COAG_CAPACITY`.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
@@ -720,12 +721,24 @@ pub unsafe extern "C" fn coag_sim_moment(sim: *const coag_sim, m: f64, out: *mut
             if !m.is_finite() {
                 return fail(COAG_INVALID_ARGUMENT, "moment order must be finite");
             }
-            Ok(s.sim.moment(m))
+            let v = s.sim.moment(m);
+            if !v.is_finite() {
+                // e.g. M_{1e6}, or large sizes: not a number the host can use
+                return fail(
+                    crate::COAG_CAPACITY,
+                    format!(
+                        "moment of order {} overflows a double ({v})",
+                        coagula_core::error::Short(m)
+                    ),
+                );
+            }
+            Ok(v)
         })
     }
 }
 
-/// The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b)).
+/// The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b));
+/// `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
@@ -742,7 +755,18 @@ pub unsafe extern "C" fn coag_sim_concentration(
             if a.is_nan() || b.is_nan() {
                 return fail(COAG_INVALID_ARGUMENT, "concentration bounds are NaN");
             }
-            Ok(s.sim.concentration(a, b))
+            if a > b {
+                return fail(
+                    COAG_INVALID_ARGUMENT,
+                    format!(
+                        "concentration bounds a = {} > b = {}",
+                        coagula_core::error::Short(a),
+                        coagula_core::error::Short(b)
+                    ),
+                );
+            }
+            // + 0.0 turns an empty sum's −0.0 into 0
+            Ok(s.sim.concentration(a, b) + 0.0)
         })
     }
 }

@@ -147,6 +147,14 @@ int main(void) {
     EXPECT(coag_sim_moment(s, NAN, &d), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_moment(NULL, 1.0, &d), COAG_NULL_PARAMETER);
     EXPECT(coag_sim_concentration(s, NAN, 2.0, &d), COAG_INVALID_ARGUMENT);
+    /* issue 14: C(5, 1) returned -0.0, M_{1e6} inf with COAG_OK */
+    d = 42.0;
+    EXPECT(coag_sim_concentration(s, 5.0, 1.0, &d), COAG_INVALID_ARGUMENT);
+    CHECK(d == 42.0, "output untouched on error");
+    OK(coag_sim_concentration(s, 1e9, 1e9, &d));
+    CHECK(d == 0.0 && !signbit(d), "an empty range is +0: %g", d);
+    EXPECT(coag_sim_moment(s, 1e6, &d), COAG_CAPACITY);
+    OK(coag_sim_moment(s, 2.0, &d));
     EXPECT(coag_sim_get_sizes(s, sizes, 4), COAG_UNSUPPORTED); /* not a mass-flow sim */
     EXPECT(coag_sim_set_sizes(s, sizes, 4), COAG_UNSUPPORTED);
     EXPECT(coag_sim_set_dt(s, 0.1), COAG_UNSUPPORTED);
