@@ -3,7 +3,10 @@
 //! bucketed layout once lost its slot bookkeeping), run through at least six particle
 //! doublings, against the per-size tree layout (Welch) and, at N0 = 10^5, against the
 //! exact Smoluchowski solution (whose O(1/N) offset is far below the standard error
-//! there). A property test runs every scheme over random small systems and checks the
+//! there). The inverse method costs O(N) per event, 10^10 operations per replica at
+//! N0 = 10^5 with the additive kernel (three minutes of CI): it runs the three smaller
+//! cases here, the finite-N reference in `finite_n.rs`, and the exact solutions at
+//! N0 = 32768 in `coagula validate`. A property test runs every scheme over random small systems and checks the
 //! invariants that hold for every run: mass conserved up to doubling, no particle lost,
 //! the same seed giving the same state.
 
@@ -39,6 +42,7 @@ fn run_all(
     let init = &init;
     common::count_schemes()
         .enumerate()
+        .filter(|(_, info)| n0 < 100_000 || info.id != SchemeId::Inverse)
         .filter_map(|(i, info)| {
             common::build(info.id, kernel, init, v)?;
             let start = std::time::Instant::now();
@@ -61,8 +65,9 @@ fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
     let mut failures = String::new();
     for case in CASES {
         let runs = run_all(kernel, case, times);
-        assert!(runs.len() >= 5, "every size-count scheme ran");
         let (n0, _, reps) = case;
+        let expected = if n0 < 100_000 { 5 } else { 4 };
+        assert!(runs.len() >= expected, "every size-count scheme ran");
         let z = z_max(reps);
         let tree = &runs
             .iter()
