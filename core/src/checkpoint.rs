@@ -1,10 +1,17 @@
 //! Checkpoint and restore of a scheme's full state into a caller buffer.
 //!
-//! The format is little-endian: a magic word, a format version, the scheme's tag, then
-//! the scheme's fields. Kernels are not stored (user kernels are code): a checkpoint is
-//! restored into a scheme built with the same kernel and configuration, and a run split
-//! by save and restore is bit-identical to the run without a break. Restoring checks the
-//! magic, version, tag and lengths and leaves the target unchanged on any error.
+//! The format is little-endian: a magic word, a format version, the scheme's tag, the
+//! scheme's fields, and a 64-bit checksum of everything before it. Kernels are not
+//! stored (user kernels are code): a checkpoint is restored into a scheme built with
+//! the same kernel and configuration, and a run split by save and restore is
+//! bit-identical to the run without a break.
+//!
+//! Restoring checks the checksum first (any change of one 8-byte word is detected for
+//! certain, other corruption with probability 1 − 2⁻⁶⁴ — a check against storage and
+//! transmission errors, not an authentication), then the magic, version and tag, then
+//! every value with the checks the scheme's constructor makes and the invariants of its
+//! state (a crafted checkpoint with a valid checksum is refused as well), and leaves the
+//! target unchanged on any error.
 //!
 //! # Example
 //! ```
@@ -26,7 +33,7 @@ use crate::error::{Error, Result};
 use alloc::vec::Vec;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"COAGCKPT");
-const VERSION: u64 = 1;
+const VERSION: u64 = 2;
 
 /// Appends little-endian fields to a caller buffer, counting what would not fit.
 #[derive(Debug)]
@@ -78,6 +85,17 @@ impl<'a> Writer<'a> {
         for &x in v {
             self.f64(x);
         }
+    }
+
+    /// Appends the checksum of everything written so far (the last field of a
+    /// checkpoint; only counted when the buffer is too small).
+    pub fn seal(&mut self) {
+        let sum = if self.needed <= self.buf.len() {
+            checksum(&self.buf[..self.needed])
+        } else {
+            0
+        };
+        self.u64(sum);
     }
 
     /// Fails with [`Error::BufferLength`] if the buffer was too small.
@@ -176,6 +194,41 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// The checksum of a checkpoint: each 8-byte word (the last one zero-padded) is mixed
+/// in by a bijection of the running state, so a change in any single word always
+/// changes the result; the length and a final avalanche (splitmix64's) follow.
+pub fn checksum(bytes: &[u8]) -> u64 {
+    const K: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut h: u64 = 0x436f_6167_756c_6121; // "Coagula!"
+    for chunk in bytes.chunks(8) {
+        let mut w = [0u8; 8];
+        w[..chunk.len()].copy_from_slice(chunk);
+        h = (h ^ u64::from_le_bytes(w)).wrapping_mul(K);
+        h ^= h >> 29;
+    }
+    h ^= bytes.len() as u64;
+    h = (h ^ (h >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    h = (h ^ (h >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    h ^ (h >> 31)
+}
+
+/// The body of a sealed checkpoint (everything before its checksum), or
+/// [`Error::Checkpoint`] when the checksum does not match (a corrupted or truncated
+/// checkpoint).
+pub fn unseal(buf: &[u8]) -> Result<&[u8]> {
+    let Some(at) = buf.len().checked_sub(8) else {
+        return Err(bad("truncated"));
+    };
+    let (body, sum) = buf.split_at(at);
+    let sum = u64::from_le_bytes(sum.try_into().map_err(|_| bad("truncated"))?);
+    if checksum(body) != sum {
+        return Err(bad(
+            "checksum mismatch (the checkpoint is corrupted, truncated or not a checkpoint)",
+        ));
+    }
+    Ok(body)
+}
+
 /// Writes the header of a checkpoint of the scheme `tag`.
 pub(crate) fn header(w: &mut Writer, tag: u64) {
     w.u64(MAGIC);
@@ -241,27 +294,31 @@ pub trait Checkpoint {
     /// Writes the full state.
     fn save(&self, w: &mut Writer);
 
-    /// Replaces the state by the one in `r`; on error the state is unchanged.
+    /// Replaces the state by the one in `r`, which must hold nothing after it; on error
+    /// the state is unchanged.
     fn restore(&mut self, r: &mut Reader) -> Result<()>;
 
     /// Bytes a checkpoint needs now.
     fn checkpoint_len(&self) -> usize {
         let mut w = Writer::new(&mut []);
         self.save(&mut w);
+        w.seal();
         w.needed()
     }
 
-    /// Saves into `buf`, returning the bytes written; errors if `buf` is too small
-    /// (nothing is promised about `buf` then).
+    /// Saves into `buf` (the state, then its checksum), returning the bytes written;
+    /// errors if `buf` is too small (nothing is promised about `buf` then).
     fn save_to(&self, buf: &mut [u8]) -> Result<usize> {
         let mut w = Writer::new(buf);
         self.save(&mut w);
+        w.seal();
         w.finish()
     }
 
-    /// Restores from a buffer written by [`save_to`](Self::save_to).
+    /// Restores from a buffer written by [`save_to`](Self::save_to): the checksum is
+    /// verified before anything is read.
     fn restore_from(&mut self, buf: &[u8]) -> Result<()> {
-        let mut r = Reader::new(buf);
+        let mut r = Reader::new(unseal(buf)?);
         self.restore(&mut r)
     }
 }

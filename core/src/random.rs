@@ -160,14 +160,23 @@ pub(crate) fn exp1<R: Rng + ?Sized>(rng: &mut R) -> f64 {
     -libm::log(open_unit(rng))
 }
 
+/// Rejection loops give up after this many tries in a row and return a fallback
+/// value: a real generator fails one of them that often with probability below
+/// 2^-1000, so only a degenerate stream (a host callback returning constant bits)
+/// gets there — and it cannot hang a call. (The C ABI detects such a stream itself
+/// and reports it.)
+pub(crate) const MAX_TRIES: u32 = 1000;
+
 /// A uniform integer in `[0, n)`, exactly (Lemire's multiply-and-reject), `n ≥ 1`.
 #[inline]
 pub(crate) fn below<Rn: Rng + ?Sized>(rng: &mut Rn, n: u64) -> u64 {
     let mut m = u128::from(rng.next_u64()) * u128::from(n);
     if (m as u64) < n {
         let threshold = n.wrapping_neg() % n;
-        while (m as u64) < threshold {
+        let mut tries = 0;
+        while (m as u64) < threshold && tries < MAX_TRIES {
             m = u128::from(rng.next_u64()) * u128::from(n);
+            tries += 1;
         }
     }
     (m >> 64) as u64
@@ -187,7 +196,7 @@ pub(crate) fn geometric<Rn: Rng + ?Sized>(p: f64, rng: &mut Rn) -> u64 {
 
 /// A standard normal variate (Marsaglia's polar method).
 pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
-    loop {
+    for _ in 0..MAX_TRIES {
         let u = 2.0 * open_unit(rng) - 1.0;
         let v = 2.0 * open_unit(rng) - 1.0;
         let s = u * u + v * v;
@@ -195,6 +204,7 @@ pub(crate) fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
             return u * libm::sqrt(-2.0 * libm::log(s) / s);
         }
     }
+    0.0
 }
 
 /// A gamma variate of shape `a ≥ 1` and unit scale (Marsaglia & Tsang 2000).
@@ -202,7 +212,7 @@ pub(crate) fn gamma<R: Rng + ?Sized>(a: f64, rng: &mut R) -> f64 {
     debug_assert!(a >= 1.0);
     let d = a - 1.0 / 3.0;
     let c = 1.0 / libm::sqrt(9.0 * d);
-    loop {
+    for _ in 0..MAX_TRIES {
         let x = normal(rng);
         let v = 1.0 + c * x;
         if v <= 0.0 {
@@ -215,6 +225,7 @@ pub(crate) fn gamma<R: Rng + ?Sized>(a: f64, rng: &mut R) -> f64 {
             return d * v;
         }
     }
+    d
 }
 
 /// A beta variate of shapes `a, b ≥ 1`.
@@ -277,7 +288,7 @@ impl Ziggurat {
     #[inline(always)]
     pub(crate) fn sample<R: Rng + ?Sized>(&self, rng: &mut R) -> f64 {
         let (xs, fs) = (&ziggurat_table::X, &ziggurat_table::F);
-        loop {
+        for _ in 0..MAX_TRIES {
             let bits = rng.next_u64();
             let i = (bits & 0xff) as usize;
             let u = (bits >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
@@ -294,6 +305,7 @@ impl Ziggurat {
                 return x;
             }
         }
+        1.0
     }
 }
 

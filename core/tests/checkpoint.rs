@@ -168,10 +168,15 @@ fn bucketed_restore_refuses_a_particle_past_the_maximum_size() {
     let mut b = Bucketed::<_, 1, 2>::new(k, &init, 1001.0).unwrap();
     b.restore_from(&buf).unwrap();
     assert_eq!(a.counts(), b.counts());
-    // the last word is that particle's offset in its bucket: 1 means size 65 > M
-    let at = buf.len() - 8;
-    assert_eq!(u64::from_le_bytes(buf[at..].try_into().unwrap()), 0);
+    // the word before the overflow stream (3 words) and the checksum is that
+    // particle's offset in its bucket: 1 means size 65 > M (resealed, so that the
+    // state's own check is what refuses it)
+    let at = buf.len() - 8 - 24 - 8;
+    assert_eq!(u64::from_le_bytes(buf[at..at + 8].try_into().unwrap()), 0);
     buf[at] = 1;
+    let body = buf.len() - 8;
+    let sum = coagula_core::checkpoint::checksum(&buf[..body]);
+    buf[body..].copy_from_slice(&sum.to_le_bytes());
     let mut c = Bucketed::<_, 1, 2>::monodisperse(k, 10).unwrap();
     let before = c.counts().into_owned();
     assert!(c.restore_from(&buf).is_err());

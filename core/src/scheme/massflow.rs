@@ -61,7 +61,7 @@
 //! assert!((sim.moment(2.0) - exact).abs() < 0.01);
 //! ```
 
-use super::{Scheme, StepReport, check_target};
+use super::{Budget, Scheme, StepReport, check_target};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::tree::{Weight, unit_f64};
@@ -476,7 +476,16 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
 
     /// Takes steps of Δt until `t`; a last, shorter step lands exactly on `t` when `t`
     /// is not a multiple of Δt.
-    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport> {
+    ///
+    /// Each step costs N units of the budget (a step is taken whole while a unit is
+    /// left). A step too small to move the clock at the current time (`time + Δt ==
+    /// time`: a tiny Δt, or a time near the end of the doubles) is an error, not a hang.
+    fn advance_within<R: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+    ) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         loop {
@@ -490,6 +499,19 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             } else {
                 self.dt
             };
+            if self.time + h <= self.time {
+                rep.time = self.time;
+                self.totals.accumulate(&rep);
+                return Err(Error::OutOfRange {
+                    name: "dt",
+                    value: h,
+                    range: "above the resolution of the current time (time + dt > time)",
+                });
+            }
+            if !budget.poll() || !budget.take(self.n as u64) {
+                rep.interrupted = true;
+                break;
+            }
             let r = match self.step(h, rng) {
                 Ok(r) => r,
                 Err(e) => {
@@ -581,18 +603,23 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         r.f64s_into(next).map_err(|_| Error::Checkpoint {
             what: "different number of particles",
         })?;
-        if !(mass > 0.0
-            && dt > 0.0
-            && time >= 0.0
-            && mass.is_finite()
-            && dt.is_finite()
-            && time.is_finite())
-            || next.iter().any(|&v| !(v > 0.0 && v.is_finite()))
+        // the constructor's checks, the sizes' order (the adaptive sort merges into
+        // it), a time that is finite and not negative, a step count whose point index
+        // fits the sequence, and nothing after the state
+        let n = next.len() as u64;
+        if check_setup(next, mass, dt).is_err()
+            || next.windows(2).any(|w| w[0] > w[1])
+            || !(time >= 0.0 && time.is_finite())
+            || steps
+                .checked_add(1)
+                .and_then(|s| s.checked_mul(n))
+                .is_none()
         {
             return Err(Error::Checkpoint {
-                what: "invalid values",
+                what: "invalid values (sizes not positive, finite and ascending, or mass, dt, time or step count out of range)",
             });
         }
+        r.finish()?;
         self.sorting = sorting;
         self.mass = mass;
         self.dt = dt;

@@ -2,9 +2,15 @@
 //!
 //! A host time integrator calls `advance_to(t, rng)` once per outer step: time-driven
 //! schemes take their steps up to `t`, event-driven ones process every event before `t`
-//! and stop exactly at `t` (the exponential waiting times are memoryless, so the residual
-//! wait is simply redrawn). The returned [`StepReport`] says what happened; observables
-//! are read between calls.
+//! and stop exactly at `t`, keeping the time of their next proposal (already drawn) for
+//! the next call — so a run stopped at 0.7 and 1.3 on its way to 2 is bit for bit the
+//! run that went to 2 in one call. The returned [`StepReport`] says what happened;
+//! observables are read between calls.
+//!
+//! [`Scheme::advance_within`] bounds the work of one call by a [`Budget`] (a number of
+//! proposals or particle updates, and a cancellation callback): past it the call returns
+//! with `interrupted` set, the state consistent at the time reached, and the host may
+//! call again (the run is the same as an uninterrupted one).
 //!
 //! Schemes:
 //! * [`massflow`] — the time-driven mass-flow scheme of Lécot et al. (2019): QMC, MC,
@@ -56,6 +62,9 @@ pub struct StepReport {
     /// Collisions that bounced instead of merging (schemes with restitution, specular
     /// walls); 0 for pure coagulation.
     pub bounces: u64,
+    /// The call stopped before its target time because its [`Budget`] ran out or was
+    /// cancelled; `time` is the time reached.
+    pub interrupted: bool,
 }
 
 impl StepReport {
@@ -70,6 +79,104 @@ impl StepReport {
         self.doublings += other.doublings;
         self.removed += other.removed;
         self.bounces += other.bounces;
+        self.interrupted = other.interrupted;
+    }
+}
+
+/// Work units between two polls of a [`Budget`]'s cancellation callback.
+pub const POLL_EVERY: u64 = 1 << 14;
+
+/// What one call of [`Scheme::advance_within`] may do: a number of work units
+/// (proposals of an event-driven scheme, particle updates of a time-driven one — N per
+/// time step) and an optional cancellation callback, polled every [`POLL_EVERY`]
+/// units (and before a time step). A call always makes progress while a unit is left:
+/// a time step is taken whole when at least one unit remains.
+///
+/// ```
+/// use coagula_core::kernel::Coagulation;
+/// use coagula_core::scheme::{Budget, Scheme, lowrank::LowRank};
+/// let mut sim = LowRank::<_, 1>::monodisperse(Coagulation::constant(1.0).unwrap(), 10_000).unwrap();
+/// let mut rng = rand_pcg::Pcg64Mcg::new(3);
+/// // at most 1000 proposals per call: call again until the target is reached
+/// let mut calls = 0;
+/// loop {
+///     calls += 1;
+///     let rep = sim.advance_within(1.0, &mut Budget::work(1000), &mut rng).unwrap();
+///     if !rep.interrupted {
+///         break;
+///     }
+///     assert!(rep.time < 1.0);
+/// }
+/// assert!(calls > 1);
+/// assert_eq!(sim.time(), 1.0);
+/// ```
+pub struct Budget<'a> {
+    left: u64,
+    until_poll: u64,
+    cancel: Option<&'a mut dyn FnMut() -> bool>,
+}
+
+impl core::fmt::Debug for Budget<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Budget")
+            .field("left", &self.left)
+            .field("cancel", &self.cancel.is_some())
+            .finish()
+    }
+}
+
+impl<'a> Budget<'a> {
+    /// No limit (what [`Scheme::advance_to`] uses).
+    pub fn unlimited() -> Self {
+        Self::work(u64::MAX)
+    }
+
+    /// At most `units` work units.
+    pub fn work(units: u64) -> Self {
+        Budget {
+            left: units,
+            until_poll: POLL_EVERY,
+            cancel: None,
+        }
+    }
+
+    /// Adds a cancellation callback: returning `true` stops the call at the next poll.
+    pub fn with_cancel(mut self, cancel: &'a mut dyn FnMut() -> bool) -> Self {
+        self.cancel = Some(cancel);
+        self
+    }
+
+    /// Units left.
+    pub fn left(&self) -> u64 {
+        self.left
+    }
+
+    /// Takes `units` (at least one must be left; the rest is taken as far as it goes);
+    /// `false` when the budget is spent or the callback cancels.
+    #[inline(always)]
+    pub(crate) fn take(&mut self, units: u64) -> bool {
+        if self.left == 0 {
+            return false;
+        }
+        self.left = self.left.saturating_sub(units);
+        if self.until_poll > units {
+            self.until_poll -= units;
+            return true;
+        }
+        self.poll()
+    }
+
+    /// Polls the callback (before a costly unit, e.g. a time step).
+    #[cold]
+    pub(crate) fn poll(&mut self) -> bool {
+        self.until_poll = POLL_EVERY;
+        if let Some(f) = self.cancel.as_mut()
+            && f()
+        {
+            self.left = 0;
+            return false;
+        }
+        true
     }
 }
 
@@ -78,10 +185,88 @@ pub trait Scheme {
     /// Current simulation time.
     fn time(&self) -> f64;
 
-    /// Runs until time `t ≥ self.time()`. Errors (a time in the past, a capacity
-    /// exceeded, a kernel returning NaN) leave the state as it was before the failing
-    /// event.
-    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport>;
+    /// Runs until time `t ≥ self.time()`, or until `budget` is spent (then the report
+    /// says `interrupted`, its time is the time reached and the state is consistent
+    /// there; calling again continues the same run). Errors (a time in the past, a
+    /// capacity exceeded, a kernel returning NaN, a rate so large that waiting times
+    /// vanish) leave the state as it was before the failing event.
+    fn advance_within<R: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+    ) -> Result<StepReport>;
+
+    /// Runs until time `t ≥ self.time()` ([`advance_within`](Self::advance_within)
+    /// with no budget).
+    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport> {
+        self.advance_within(t, &mut Budget::unlimited(), rng)
+    }
+}
+
+/// The pending proposal of an event-driven scheme: its time and the mean waiting time
+/// it was drawn with. Kept between calls (a call stopping at `t` leaves it for the next
+/// one), forgotten when the state is replaced from outside.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Pending {
+    /// Time of the next proposal.
+    pub at: f64,
+    /// Mean waiting time between proposals at the current rate.
+    pub mean_dt: f64,
+}
+
+impl Pending {
+    /// Checks that waiting times of mean `mean_dt` move a clock standing at `now`: an
+    /// error for a zero or non-finite mean, or one so small against `now` (huge rates, a
+    /// late time) that `now + mean_dt == now` and no target could ever be reached.
+    #[inline]
+    pub(crate) fn check(now: f64, mean_dt: f64) -> Result<()> {
+        if mean_dt > 0.0 && mean_dt.is_finite() && now + mean_dt > now {
+            Ok(())
+        } else {
+            Err(crate::error::Error::InvalidRate {
+                name: "mean waiting time between proposals (zero, or below the resolution of the current time: the rates are too large)",
+                value: mean_dt,
+            })
+        }
+    }
+
+    /// The proposal after one at `now`, `e` (an Exp(1) variate) mean waiting times later.
+    #[inline(always)]
+    pub(crate) fn after(now: f64, mean_dt: f64, e: f64) -> Pending {
+        Pending {
+            at: now + e * mean_dt,
+            mean_dt,
+        }
+    }
+
+    /// Writes an optional pending proposal.
+    pub(crate) fn save(p: &Option<Pending>, w: &mut crate::checkpoint::Writer) {
+        match p {
+            Some(p) => {
+                w.u64(1);
+                w.f64(p.at);
+                w.f64(p.mean_dt);
+            }
+            None => w.u64(0),
+        }
+    }
+
+    /// Reads an optional pending proposal, which must lie at or after `now`.
+    pub(crate) fn read(r: &mut crate::checkpoint::Reader, now: f64) -> Result<Option<Pending>> {
+        let bad = |what| crate::error::Error::Checkpoint { what };
+        match r.u64()? {
+            0 => Ok(None),
+            1 => {
+                let (at, mean_dt) = (r.f64()?, r.f64()?);
+                if !(at >= now && at.is_finite() && mean_dt > 0.0 && mean_dt.is_finite()) {
+                    return Err(bad("invalid pending proposal"));
+                }
+                Ok(Some(Pending { at, mean_dt }))
+            }
+            _ => Err(bad("invalid flag")),
+        }
+    }
 }
 
 /// Validates a target time against the current time.

@@ -32,7 +32,7 @@
 use super::baseline::{AcceptanceRejection, Inverse};
 use super::lowrank::{BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, ProposalEngine};
 use super::massflow::{MassFlow, PointSource, Sorting};
-use super::{Scheme, StepReport};
+use super::{Budget, Scheme, StepReport};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
@@ -182,11 +182,15 @@ pub struct Options {
     pub points: PointSource,
     /// Sorting strategy (mass flow).
     pub sorting: Sorting,
+    /// Proposal times in batches (low-rank schemes; on by default: faster, but a run
+    /// then depends on where it is stopped — see
+    /// [`LowRankMc::with_batched_clock`](super::lowrank::LowRankMc::with_batched_clock)).
+    pub batched_clock: bool,
 }
 
 impl Default for Options {
     /// Size limit 2^32, memory budget 2 GiB, Δt = 0.01, Niederreiter points, adaptive
-    /// sorting.
+    /// sorting, batched proposal times.
     fn default() -> Self {
         Options {
             size_limit: super::lowrank::DEFAULT_SIZE_LIMIT,
@@ -194,6 +198,7 @@ impl Default for Options {
             dt: 0.01,
             points: PointSource::niederreiter(),
             sorting: Sorting::Adaptive,
+            batched_clock: true,
         }
     }
 }
@@ -219,7 +224,14 @@ impl Options {
         self.points = points;
         self
     }
-    /// Sets the sorting strategy.
+    /// Draws low-rank proposal times in batches (faster for large systems; a run then
+    /// depends on where it is stopped, see [`Options::batched_clock`]).
+    pub fn with_batched_clock(mut self, on: bool) -> Self {
+        self.batched_clock = on;
+        self
+    }
+
+    /// Sets the mass-flow sorting strategy.
     pub fn with_sorting(mut self, sorting: Sorting) -> Self {
         self.sorting = sorting;
         self
@@ -243,6 +255,13 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
     fn time(&self) -> f64;
     /// [`Scheme::advance_to`].
     fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport>;
+    /// [`Scheme::advance_within`]: at most `budget`'s work, then `interrupted`.
+    fn advance_within(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport>;
     /// The state (sizes or counts).
     fn state(&self) -> State<'_>;
     /// Largest size the state can hold now (size-count schemes' M), if any.
@@ -344,6 +363,14 @@ where
     }
     fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport> {
         self.s.advance_to(t, rng)
+    }
+    fn advance_within(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport> {
+        self.s.advance_within(t, budget, rng)
     }
     fn state(&self) -> State<'_> {
         self.s.state()
@@ -467,7 +494,8 @@ where
         (SchemeId::LowRank, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
                 let s = Bucketed::<K, R, W>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
-                    .with_size_limit(opts.size_limit);
+                    .with_size_limit(opts.size_limit)
+                    .with_batched_clock(opts.batched_clock);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }
@@ -475,7 +503,8 @@ where
             by_rank!(kernel.rank(), R, W => {
                 let _ = W;
                 let s = LowRank::<K, R>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
-                    .with_size_limit(opts.size_limit);
+                    .with_size_limit(opts.size_limit)
+                    .with_batched_clock(opts.batched_clock);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }
@@ -483,7 +512,8 @@ where
             by_rank!(kernel.rank(), R, W => {
                 let _ = W;
                 let s = LowRank::<K, R, BinaryTree<R>>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
-                    .with_size_limit(opts.size_limit);
+                    .with_size_limit(opts.size_limit)
+                    .with_batched_clock(opts.batched_clock);
                 Ok(boxed::<_, K, F, G>(s, id))
             })
         }

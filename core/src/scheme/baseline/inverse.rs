@@ -21,7 +21,7 @@ use crate::kernel::CoagulationKernel;
 use crate::scheme::population::{
     DEFAULT_MEMORY_BUDGET, Population, rate_overflow, try_reserve, try_resize, within_budget,
 };
-use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
+use crate::scheme::{Budget, Pending, Scheme, StepReport, check_target, exp1, open_unit};
 use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -64,6 +64,8 @@ pub struct Inverse<K> {
     /// N, N0, V, the size limit and the memory budget.
     pop: Population,
     time: f64,
+    /// The next event, drawn at the current rate (kept between calls).
+    pending: Option<Pending>,
     totals: StepReport,
 }
 
@@ -118,6 +120,7 @@ impl<K: CoagulationKernel> Inverse<K> {
                 .clamp(64, CACHE_DIM),
             pop,
             time: 0.0,
+            pending: None,
             totals: StepReport::default(),
         };
         try_resize(&mut s.slot, len, NONE)?;
@@ -237,29 +240,46 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
         self.time
     }
 
-    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport> {
+    fn advance_within<R: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+    ) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let result = loop {
-            if self.pop.n < 2 {
-                self.time = t;
-                break Ok(());
-            }
             let occ = self.size.len();
             let mut total = 0.0;
             for a in 0..occ {
                 total += self.count[a] as f64 * (self.row[a] - self.diag[a]).max(0.0);
             }
-            if !total.is_finite() {
-                break Err(rate_overflow(total));
-            }
-            if total <= 0.0 {
+            // the next event: kept from the last call, or drawn at the rate just summed
+            let next = match self.pending {
+                Some(p) => p,
+                None => {
+                    if !total.is_finite() {
+                        break Err(rate_overflow(total));
+                    }
+                    if self.pop.n < 2 || total <= 0.0 {
+                        self.time = t;
+                        break Ok(());
+                    }
+                    let mean_dt = 2.0 * self.pop.volume / total;
+                    if let Err(e) = Pending::check(self.time, mean_dt) {
+                        break Err(e);
+                    }
+                    let p = Pending::after(self.time, mean_dt, exp1(rng));
+                    self.pending = Some(p);
+                    p
+                }
+            };
+            if next.at > t {
                 self.time = t;
                 break Ok(());
             }
-            let dt = exp1(rng) * 2.0 * self.pop.volume / total;
-            if self.time + dt > t {
-                self.time = t;
+            if !budget.take(1) {
+                rep.interrupted = true;
                 break Ok(());
             }
             // i ∝ s_i
@@ -317,7 +337,8 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 break Err(e);
             }
             rep.proposals += 1;
-            self.time += dt;
+            self.time = next.at;
+            self.pending = None;
             self.apply_event(ia, ja, merged, dm);
             self.pop.n -= 1;
             rep.events += 1;
@@ -446,6 +467,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         w.u64(self.pop.n0);
         w.f64(self.pop.volume);
         w.f64(self.time);
+        Pending::save(&self.pending, w);
         save_report(w, &self.totals);
         w.u64s(&self.size);
         w.u64s(&self.count);
@@ -458,6 +480,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         check_header(r, tag::INVERSE)?;
         let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
+        let pending = Pending::read(r, time)?;
         let totals = read_report(r)?;
         let (size, count, row, diag) = (r.u64s()?, r.u64s()?, r.f64s()?, r.f64s()?);
         let k = size.len();
@@ -473,6 +496,44 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         if count.iter().try_fold(0u64, |a, &c| a.checked_add(c)) != Some(n) {
             return Err(Error::Checkpoint {
                 what: "counts do not add up",
+            });
+        }
+        if !(volume > 0.0
+            && volume.is_finite()
+            && time >= 0.0
+            && time.is_finite()
+            && (1..=n0).contains(&n))
+            || count.contains(&0)
+        {
+            return Err(Error::Checkpoint {
+                what: "invalid volume, time, particle number or count",
+            });
+        }
+        r.finish()?;
+        // the kernel's diagonal exactly, and the row sums Σ_b K(a, b) N_b up to the
+        // rounding of their incremental updates (O(occupied²), as set_kernel)
+        let mut fresh = Vec::new();
+        try_resize(&mut fresh, k, 0.0)?;
+        for a in 0..k {
+            let x = size[a] as f64;
+            if crate::kernel::checked_rate(&self.kernel, x, x)?.to_bits() != diag[a].to_bits() {
+                return Err(Error::Checkpoint {
+                    what: "diagonal rates do not match the kernel",
+                });
+            }
+            for b in 0..k {
+                fresh[a] +=
+                    crate::kernel::checked_rate(&self.kernel, x, size[b] as f64)? * count[b] as f64;
+            }
+        }
+        let scale = fresh.iter().fold(0.0f64, |a, &b| a.max(b));
+        if row
+            .iter()
+            .zip(&fresh)
+            .any(|(&g, &w)| !(g >= 0.0 && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
+        {
+            return Err(Error::Checkpoint {
+                what: "row sums do not match the counts and the kernel",
             });
         }
         let max = size.iter().copied().max().unwrap_or(1) as usize;
@@ -496,6 +557,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         self.pop.n0 = n0;
         self.pop.volume = volume;
         self.time = time;
+        self.pending = pending;
         self.totals = totals;
         self.size = size;
         self.count = count;
@@ -537,6 +599,7 @@ impl<K: CoagulationKernel> Inverse<K> {
         );
         *self = fresh;
         self.time = time;
+        self.pending = None;
         self.totals = totals;
         self.pop.size_limit = limit;
         self.pop.memory_budget = budget;

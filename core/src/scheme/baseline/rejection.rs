@@ -6,7 +6,7 @@ use crate::kernel::CoagulationKernel;
 use crate::scheme::population::{
     DEFAULT_MEMORY_BUDGET, Population, rate_overflow, try_reserve, within_budget,
 };
-use crate::scheme::{Scheme, StepReport, check_target, exp1, open_unit};
+use crate::scheme::{Budget, Pending, Scheme, StepReport, check_target, exp1, open_unit};
 use crate::tree::Weight;
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -31,6 +31,8 @@ pub struct AcceptanceRejection<K> {
     /// N (= the list's length), N0, V, the size limit and the memory budget.
     pop: Population,
     time: f64,
+    /// The next proposal, drawn at the current rate (kept between calls).
+    pending: Option<Pending>,
     max_present: u64,
     cmax: f64,
     totals: StepReport,
@@ -78,6 +80,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             sizes,
             pop,
             time: 0.0,
+            pending: None,
             max_present,
             cmax: 0.0,
             totals: StepReport::default(),
@@ -170,22 +173,42 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
         self.time
     }
 
-    fn advance_to<R: Rng + ?Sized>(&mut self, t: f64, rng: &mut R) -> Result<StepReport> {
+    fn advance_within<R: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+    ) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let result = loop {
             let n = self.sizes.len() as u64;
-            if n < 2 || self.cmax <= 0.0 {
+            // the next proposal: kept from the last call, or drawn at the current rate
+            let next = match self.pending {
+                Some(p) => p,
+                None => {
+                    if n < 2 || self.cmax <= 0.0 {
+                        self.time = t;
+                        break Ok(());
+                    }
+                    let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.pop.volume);
+                    if !rate.is_finite() {
+                        break Err(rate_overflow(rate));
+                    }
+                    if let Err(e) = Pending::check(self.time, 1.0 / rate) {
+                        break Err(e);
+                    }
+                    let p = Pending::after(self.time, 1.0 / rate, exp1(rng));
+                    self.pending = Some(p);
+                    p
+                }
+            };
+            if next.at > t {
                 self.time = t;
                 break Ok(());
             }
-            let rate = self.cmax * (n * (n - 1)) as f64 / (2.0 * self.pop.volume);
-            if !rate.is_finite() {
-                break Err(rate_overflow(rate));
-            }
-            let dt = exp1(rng) / rate;
-            if self.time + dt > t {
-                self.time = t;
+            if !budget.take(1) {
+                rep.interrupted = true;
                 break Ok(());
             }
             rep.proposals += 1;
@@ -206,8 +229,14 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 Err(e) => break Err(e),
             };
             if self.cmax * open_unit(rng) > c {
-                self.time += dt;
+                self.time = next.at;
                 rep.rejections += 1;
+                // the rate is unchanged: the next proposal at the same mean waiting time
+                if let Err(e) = Pending::check(next.at, next.mean_dt) {
+                    self.pending = None;
+                    break Err(e);
+                }
+                self.pending = Some(Pending::after(next.at, next.mean_dt, exp1(rng)));
                 continue;
             }
             let merged = match self.pop.merged(x, y) {
@@ -222,7 +251,8 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 self.max_present = merged;
                 self.cmax = c;
             }
-            self.time += dt;
+            self.time = next.at;
+            self.pending = None;
             self.sizes[p] = merged;
             self.sizes.swap_remove(q);
             self.pop.n -= 1;
@@ -247,6 +277,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         w.u64(self.pop.n0);
         w.f64(self.pop.volume);
         w.f64(self.time);
+        Pending::save(&self.pending, w);
         w.u64(self.max_present);
         w.f64(self.cmax);
         save_report(w, &self.totals);
@@ -258,15 +289,24 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         check_header(r, tag::REJECTION)?;
         let (size_limit, n0) = (r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
+        let pending = Pending::read(r, time)?;
         let (max_present, cmax) = (r.u64()?, r.f64()?);
         let totals = read_report(r)?;
         let mut sizes = r.u64s()?;
         if sizes.iter().any(|&s| s == 0 || s > max_present)
-            || !(cmax >= 0.0 && volume > 0.0)
-            || sizes.len() as u64 > n0
+            || max_present > size_limit
+            || !(volume > 0.0 && volume.is_finite() && time >= 0.0 && time.is_finite())
+            || !(1..=n0).contains(&(sizes.len() as u64))
         {
             return Err(Error::Checkpoint {
-                what: "inconsistent particle sizes",
+                what: "inconsistent particle sizes, volume or time",
+            });
+        }
+        r.finish()?;
+        // the supremum as the kernel gives it for the largest size
+        if self.sup(max_present)?.to_bits() != cmax.to_bits() {
+            return Err(Error::Checkpoint {
+                what: "the rate supremum does not match the kernel",
             });
         }
         // room for the doublings to come (the list never passes N0)
@@ -283,6 +323,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         self.pop.n0 = n0;
         self.pop.volume = volume;
         self.time = time;
+        self.pending = pending;
         self.max_present = max_present;
         self.cmax = cmax;
         self.totals = totals;
@@ -299,6 +340,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         match self.sup(self.max_present) {
             Ok(c) => {
                 self.cmax = c;
+                self.pending = None;
                 Ok(())
             }
             Err(e) => {
@@ -322,6 +364,7 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         self.pop.n = n;
         self.pop.n0 = n;
         self.pop.volume = volume;
+        self.pending = None;
         self.max_present = max;
         self.cmax = cmax;
         Ok(())

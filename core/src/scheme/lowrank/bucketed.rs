@@ -1128,6 +1128,11 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 w.u64(u64::from(off));
             }
         }
+        // the overflow stream as the last refresh left it (a scheme between proposals
+        // keeps it across calls)
+        w.f64(self.over_rate);
+        w.f64(self.over_p);
+        w.u64(self.countdown);
     }
 
     fn load<K: CoagulationKernel>(
@@ -1205,6 +1210,10 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 l.push(u32::try_from(r.u64()?).map_err(|_| bad("list offset"))?);
             }
             *list = l;
+        }
+        let (over_rate, over_p, countdown) = (r.f64()?, r.f64()?, r.u64()?);
+        if !(over_rate >= 0.0 && over_rate.is_finite() && (0.0..=1.0).contains(&over_p)) {
+            return Err(bad("overflow stream inconsistent"));
         }
         // every redundant piece must agree, or a later proposal would index out of
         // range: particles, grid levels, list offsets, the overflow and the draw ahead
@@ -1288,6 +1297,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         s.rates_changed = changed;
         s.pipeline = pipeline;
         s.next_u = next_u;
+        (s.over_rate, s.over_p, s.countdown) = (over_rate, over_p, countdown);
         if poisoned {
             s.poison();
         }

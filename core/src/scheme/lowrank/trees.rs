@@ -58,6 +58,9 @@ pub trait ProposalTree<const R: usize>: Sized {
     fn wants_rebuild(&self) -> bool {
         false
     }
+    /// Every stored weight, in a fixed order (for comparing a restored tree with one
+    /// rebuilt from the counts).
+    fn values(&self) -> Vec<f64>;
     /// Writes the exact contents (for a bit-identical restore).
     fn save(&self, w: &mut Writer);
     /// Reads contents written by [`save`](Self::save) for a tree over `m` leaves.
@@ -152,13 +155,15 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
         }
     }
 
-    fn save(&self, w: &mut Writer) {
-        let flat: Vec<f64> = self
-            .nodes
+    fn values(&self) -> Vec<f64> {
+        self.nodes
             .iter()
             .flat_map(|n| n.iter().flat_map(|p| p.iter().copied()))
-            .collect();
-        w.f64s(&flat);
+            .collect()
+    }
+
+    fn save(&self, w: &mut Writer) {
+        w.f64s(&self.values());
     }
 
     fn load(m: usize, r: &mut Reader) -> Result<Self> {
@@ -396,8 +401,8 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
         self.updates >= REBUILD
     }
 
-    fn save(&self, w: &mut Writer) {
-        let flat: Vec<f64> = self
+    fn values(&self) -> Vec<f64> {
+        let mut v: Vec<f64> = self
             .rows
             .iter()
             .flat_map(|n| {
@@ -405,9 +410,15 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
                     .flat_map(|p| p.iter().flat_map(|row| row.0.iter().copied()))
             })
             .collect();
-        w.f64s(&flat);
-        let tot: Vec<f64> = self.total.iter().flat_map(|p| p.iter().copied()).collect();
-        w.f64s(&tot);
+        v.extend(self.total.iter().flat_map(|p| p.iter().copied()));
+        v
+    }
+
+    fn save(&self, w: &mut Writer) {
+        let v = self.values();
+        let (flat, tot) = v.split_at(v.len() - 2 * R);
+        w.f64s(flat);
+        w.f64s(tot);
         w.u64(self.updates);
     }
 

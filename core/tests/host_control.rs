@@ -1,0 +1,268 @@
+//! What a host that drives a scheme step by step relies on (issue 14):
+//! * an event-driven run does not depend on where the host stops it (the next proposal
+//!   time is kept, not redrawn) — with the exact clock every scheme offers;
+//! * a per-call budget interrupts a call with the state consistent at the time reached,
+//!   and calling again continues the same run, bit for bit;
+//! * a cancellation callback stops a call;
+//! * rates whose waiting times cannot move the clock, a time step below the clock's
+//!   resolution and a degenerate random stream are errors or bounded calls, never a
+//!   hang.
+
+mod common;
+
+use coagula_core::Error;
+use coagula_core::kernel::{Coagulation, NoFragmentation};
+use coagula_core::scheme::Budget;
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
+use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::{Infallible, TryRng};
+
+type Sim = dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>;
+
+/// Scheme `id` from 3000 monomers plus a few larger particles, with the exact clock.
+fn counts_sim(id: SchemeId, k: Coagulation) -> Option<Box<Sim>> {
+    let counts = [3000, 40, 0, 7];
+    let init = Init::Counts {
+        counts: &counts,
+        volume: 3000.0,
+    };
+    let opts = Options::default().with_batched_clock(false);
+    match registry::build(id, k, NoFragmentation, &init, &opts) {
+        Ok(s) => Some(s),
+        Err(Error::Unsupported { .. }) => None,
+        Err(e) => panic!("{}: {e}", id.name()),
+    }
+}
+
+fn massflow_sim() -> Box<Sim> {
+    let sizes: Vec<f64> = (0..256).map(|i| 1.0 + (i % 7) as f64).collect();
+    let init = Init::Sizes {
+        sizes: &sizes,
+        mass: 1.0,
+    };
+    let opts = Options::default().with_dt(0.05);
+    registry::build(
+        SchemeId::MassFlow,
+        Coagulation::additive(),
+        NoFragmentation,
+        &init,
+        &opts,
+    )
+    .unwrap()
+}
+
+/// Everything observable: time, state bits and totals.
+fn snapshot(s: &Sim) -> (u64, Vec<u64>, u64, u64, u64) {
+    let state = match s.state() {
+        State::Counts(c, v) => c.iter().copied().chain([v.to_bits()]).collect::<Vec<u64>>(),
+        State::Sizes(x) => x.iter().map(|v| v.to_bits()).collect(),
+    };
+    let t = s.totals();
+    (
+        s.time().to_bits(),
+        state,
+        t.events,
+        t.proposals,
+        t.doublings,
+    )
+}
+
+fn kernels() -> [Coagulation; 3] {
+    [
+        Coagulation::constant(1.0).unwrap(),
+        Coagulation::additive(),
+        Coagulation::brownian(),
+    ]
+}
+
+#[test]
+fn stopping_on_the_way_does_not_change_an_event_driven_run() {
+    let mut checked = 0;
+    for k in kernels() {
+        for info in common::count_schemes() {
+            let Some(mut a) = counts_sim(info.id, k) else {
+                continue;
+            };
+            let mut b = counts_sim(info.id, k).unwrap();
+            let (mut ra, mut rb) = (Pcg64Mcg::new(5), Pcg64Mcg::new(5));
+            a.advance_to(2.0, &mut ra).unwrap();
+            for t in [0.7, 1.3, 1.3, 2.0] {
+                b.advance_to(t, &mut rb).unwrap();
+            }
+            assert!(a.totals().events > 1000, "{}", info.name);
+            assert_eq!(snapshot(&*a), snapshot(&*b), "{} {k:?}", info.name);
+            checked += 1;
+        }
+    }
+    assert!(checked >= 14, "{checked}");
+}
+
+#[test]
+fn a_budget_interrupts_and_the_next_call_continues_the_same_run() {
+    type Make = Box<dyn Fn() -> Box<Sim>>;
+    let mut sims: Vec<(&str, Make, u64)> = vec![(
+        "massflow",
+        Box::new(massflow_sim),
+        // particle updates: 256 per step, so a step at a time
+        200,
+    )];
+    for info in common::count_schemes() {
+        let id = info.id;
+        let k = Coagulation::additive();
+        if counts_sim(id, k).is_some() {
+            sims.push((info.name, Box::new(move || counts_sim(id, k).unwrap()), 97));
+        }
+    }
+    assert!(sims.len() >= 6);
+    for (name, make, units) in sims {
+        let (mut a, mut b) = (make(), make());
+        let (mut ra, mut rb) = (Pcg64Mcg::new(9), Pcg64Mcg::new(9));
+        a.advance_to(1.5, &mut ra).unwrap();
+        let mut calls = 0u64;
+        let mut proposals = 0;
+        loop {
+            calls += 1;
+            let before = b.time();
+            let rep = b
+                .advance_within(1.5, &mut Budget::work(units), &mut rb)
+                .unwrap();
+            proposals += rep.proposals;
+            assert_eq!(rep.time, b.time(), "{name}");
+            assert!(b.time() >= before, "{name}");
+            if !rep.interrupted {
+                break;
+            }
+            assert!(b.time() < 1.5, "{name}: interrupted at the target");
+            assert!(calls < 1_000_000, "{name}: no progress");
+        }
+        assert!(calls > 5, "{name}: {calls} calls");
+        assert_eq!(proposals, b.totals().proposals, "{name}");
+        assert_eq!(b.time(), 1.5, "{name}");
+        assert_eq!(snapshot(&*a), snapshot(&*b), "{name}");
+    }
+}
+
+#[test]
+fn a_cancellation_callback_stops_the_call() {
+    let mut s = counts_sim(SchemeId::LowRank, Coagulation::constant(1.0).unwrap()).unwrap();
+    let mut rng = Pcg64Mcg::new(1);
+    let mut polls = 0;
+    let mut cancel = || {
+        polls += 1;
+        polls >= 2
+    };
+    let rep = s
+        .advance_within(
+            1e6,
+            &mut Budget::unlimited().with_cancel(&mut cancel),
+            &mut rng,
+        )
+        .unwrap();
+    assert!(rep.interrupted);
+    assert_eq!(polls, 2);
+    // polled before every POLL_EVERY-th proposal: the second poll stopped the call
+    // before its proposal
+    assert_eq!(rep.proposals, 2 * coagula_core::scheme::POLL_EVERY - 1);
+    assert!(s.time() < 1e6);
+    // the mass-flow scheme polls before each step
+    let mut m = massflow_sim();
+    let mut steps = 0;
+    let mut cancel = || {
+        steps += 1;
+        steps > 3
+    };
+    let rep = m
+        .advance_within(
+            10.0,
+            &mut Budget::unlimited().with_cancel(&mut cancel),
+            &mut rng,
+        )
+        .unwrap();
+    assert!(rep.interrupted);
+    assert_eq!(m.time(), 3.0 * 0.05);
+}
+
+#[test]
+fn waiting_times_that_cannot_move_the_clock_are_errors() {
+    // K = 1e300: the mean wait between proposals is ~1e-303, below the resolution of
+    // any time past 1e-287
+    for info in common::count_schemes() {
+        let Some(mut s) = counts_sim(info.id, Coagulation::constant(1e300).unwrap()) else {
+            continue;
+        };
+        let mut rng = Pcg64Mcg::new(2);
+        let r = s.advance_to(1.0, &mut rng);
+        assert!(
+            matches!(r, Err(Error::InvalidRate { .. } | Error::Capacity { .. })),
+            "{}: {r:?}",
+            info.name
+        );
+    }
+    // a time step that cannot move the mass-flow clock
+    let mut m = massflow_sim();
+    let mut rng = Pcg64Mcg::new(2);
+    m.advance_to(1.0, &mut rng).unwrap();
+    m.set_dt(1e-300).unwrap();
+    let r = m.advance_to(2.0, &mut rng);
+    assert!(matches!(r, Err(Error::OutOfRange { .. })), "{r:?}");
+    assert_eq!(m.time(), 1.0);
+}
+
+/// A generator stuck on one word (a broken host callback).
+struct Stuck(u64);
+
+impl TryRng for Stuck {
+    type Error = Infallible;
+    fn try_next_u32(&mut self) -> Result<u32, Infallible> {
+        Ok(self.0 as u32)
+    }
+    fn try_next_u64(&mut self) -> Result<u64, Infallible> {
+        Ok(self.0)
+    }
+    fn try_fill_bytes(&mut self, dst: &mut [u8]) -> Result<(), Infallible> {
+        dst.fill(self.0 as u8);
+        Ok(())
+    }
+}
+
+#[test]
+fn a_stuck_random_stream_cannot_hang_a_call() {
+    type StuckSim = dyn Simulation<Coagulation, NoFragmentation, Stuck>;
+    for word in [0, u64::MAX, 0x8000_0000_0000_0000, 0x0123_4567_89ab_cdef] {
+        for info in registry::SCHEMES {
+            for batched in [false, true] {
+                let opts = Options::default().with_batched_clock(batched).with_dt(0.1);
+                let sizes = [1.0, 2.0, 3.0, 4.0];
+                let counts = [5000, 3];
+                let init = if info.id == SchemeId::MassFlow {
+                    Init::Sizes {
+                        sizes: &sizes,
+                        mass: 1.0,
+                    }
+                } else {
+                    Init::Counts {
+                        counts: &counts,
+                        volume: 5000.0,
+                    }
+                };
+                let mut s: Box<StuckSim> = match registry::build(
+                    info.id,
+                    Coagulation::additive(),
+                    NoFragmentation,
+                    &init,
+                    &opts,
+                ) {
+                    Ok(s) => s,
+                    Err(Error::Unsupported { .. }) => continue,
+                    Err(e) => panic!("{e}"),
+                };
+                // bounded by the budget, whatever the stream does
+                let mut rng = Stuck(word);
+                let r = s.advance_within(2.0, &mut Budget::work(1 << 20), &mut rng);
+                if let Ok(rep) = r {
+                    assert!(rep.proposals <= 1 << 20, "{}", info.name);
+                }
+            }
+        }
+    }
+}
