@@ -78,6 +78,19 @@
 #define COAG_PANIC 9
 
 /*
+ `coag_sim_advance_to` stopped before its target time: its work limit was spent or
+ its cancellation callback asked (the sim is consistent at the time reached; call
+ again to continue). Not an error of the sim.
+ */
+#define COAG_INTERRUPTED 10
+
+/*
+ The host's random callback is degenerate (returned the same word 8 times in a row);
+ the call was undone.
+ */
+#define COAG_RNG_FAILURE 11
+
+/*
  Exact solutions (Eibeck & Wagner 2000 eqs. 6.8-6.11; Lécot et al. 2019 §4), validation targets for hosts.
  */
 #define COAG_EXACT_CONSTANT 0
@@ -378,7 +391,21 @@ typedef struct {
    Stream id.
    */
   uint64_t stream;
+  /*
+   Non-zero: low-rank proposal times in batches (1.2–1.5× faster for large systems,
+   but a run then depends on where the host stops it). 0, the default: every
+   proposal has its own waiting time and the next one is kept between calls, so a
+   run stopped at 0.7 and 1.3 on its way to 2 is bit for bit the run that went to 2
+   in one call. (Appended in 0.1: a caller compiled against a header without it
+   gets 0.)
+   */
+  int32_t batched_clock;
 } coag_counts_config;
+
+/*
+ A host callback polled during `coag_sim_advance_to`: non-zero cancels the call.
+ */
+typedef int32_t (*coag_cancel_callback)(void *user_data);
 
 /*
  A host callback returning 64 uniformly random bits per call.
@@ -628,12 +655,42 @@ void coag_sim_free(coag_sim *sim);
 /*
  Runs the sim until time `t` (≥ its current time): time-driven schemes take steps of
  Δt (a last shorter one lands on t), event-driven schemes process every event before
- t. `report` may be NULL; otherwise its `struct_size` must be set.
+ t (and keep the time of the next one for the next call: see
+ `coag_counts_config.batched_clock`). `report` may be NULL; otherwise its
+ `struct_size` must be set.
+
+ Bounded calls: with `coag_sim_set_work_limit` or `coag_sim_set_cancel_callback`, a
+ call that spends its work units or is cancelled returns `COAG_INTERRUPTED` with the
+ sim consistent at the time reached (written to `report->time`, read with
+ `coag_sim_time`); calling again continues the same run. With a host random
+ callback (`coag_sim_set_rng_callback`) that turns out stuck (the same word 8 times
+ in a row), the call returns `COAG_RNG_FAILURE` and the sim is as before the call.
 
  # Safety
  `sim` must be NULL or live; `report` NULL or writable.
  */
 int32_t coag_sim_advance_to(coag_sim *sim, double t, coag_step_report *report);
+
+/*
+ Sets the work one `coag_sim_advance_to` may do: `units` proposals (event-driven
+ schemes) or particle updates (mass flow: N per time step; a step is taken whole
+ while a unit is left); 0 removes the limit (the default). Past it the call returns
+ `COAG_INTERRUPTED`, the sim consistent at the time reached.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_work_limit(coag_sim *sim, uint64_t units);
+
+/*
+ Installs a callback polled during `coag_sim_advance_to` (every 16384 proposals, and
+ before every mass-flow step): a non-zero return stops the call with
+ `COAG_INTERRUPTED`, the sim consistent at the time reached. `cancel` NULL removes it.
+
+ # Safety
+ `sim` NULL or live; `cancel` and `user_data` valid while installed.
+ */
+int32_t coag_sim_set_cancel_callback(coag_sim *sim, coag_cancel_callback cancel, void *user_data);
 
 /*
  The sim's current time.
@@ -760,6 +817,49 @@ int32_t coag_sim_set_fragmentation(coag_sim *sim, const coag_fragmentation *frag
 int32_t coag_sim_set_dt(coag_sim *sim, double dt);
 
 /*
+ Sets the sim's clock to `t` (finite, not negative): a host that keeps its own time
+ origin, e.g. after a restart. An event-driven scheme draws its next proposal afresh.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_time(coag_sim *sim, double t);
+
+/*
+ Changes the total mass M1 a mass-flow sim's particles carry (finite, > 0): a host
+ adding mass (condensation, a feed) or removing it between steps; each particle
+ then carries `M1 / N`. `COAG_UNSUPPORTED` for a size-count sim (its mass is its
+ counts: use `coag_sim_set_counts` or `coag_sim_set_pairs`).
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_mass(coag_sim *sim, double mass);
+
+/*
+ The configuration of a mass-flow sim as it stands (what it was made with, with Δt
+ and the mass as `coag_sim_set_dt` and `coag_sim_set_mass` left them) into a struct
+ of `size` bytes (`sizeof(coag_massflow_config)`); `COAG_UNSUPPORTED` for a
+ size-count sim.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ */
+int32_t coag_sim_massflow_config(const coag_sim *sim, coag_massflow_config *out, size_t size);
+
+/*
+ The configuration of a size-count sim as it stands (the volume and size limit
+ resolved: never 0; the volume as given at construction or by the last
+ `coag_sim_set_counts` — doublings since are in `coag_sim_get_counts`) into a struct
+ of `size` bytes (`sizeof(coag_counts_config)`); `COAG_UNSUPPORTED` for a mass-flow
+ sim.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ */
+int32_t coag_sim_counts_config(const coag_sim *sim, coag_counts_config *out, size_t size);
+
+/*
  Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
  call) instead of its own stream; `next` NULL switches back to the own stream, which
  resumes where it stopped. Randomness drawn from a callback is not part of a
@@ -798,13 +898,29 @@ int32_t coag_sim_checkpoint_size(const coag_sim *sim, size_t *out);
 int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_t *written);
 
 /*
- Restores a checkpoint into a sim made with the same scheme, kernel and
- configuration. On error the sim is unchanged.
+ Restores a checkpoint into a sim made with the same scheme and configuration
+ (`mass`, `dt`, points, randomisation and sorting; method, volume, size limit and
+ clock — seed, stream and memory budget may differ) and the same kernels as the sim
+ that wrote it has now. A checkpoint that is corrupted (checksum), truncated, of
+ another format, of another configuration, or whose state fails the checks its
+ scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
+ unchanged.
 
  # Safety
  `sim` NULL or live; `buf` valid for `len` bytes.
  */
 int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
+
+/*
+ A new sim that is an exact copy of `sim` — state, configuration, kernels, own random
+ stream, host callbacks and limits — into `*out`: the two continue identically and
+ independently (a host forking a run, or trying a step it may discard). A mass-flow
+ sim in caller-owned memory is copied into memory the library owns.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_clone(const coag_sim *sim, coag_sim **out);
 
 #ifdef __cplusplus
 }  // extern "C"

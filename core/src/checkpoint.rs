@@ -324,8 +324,8 @@ pub trait Checkpoint {
 }
 
 /// FNV-1a over 64-bit words: a fingerprint of configuration that is not stored but must
-/// match on restore (e.g. the scrambling of a point sequence).
-pub(crate) fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
+/// match on restore (e.g. the scrambling of a point sequence, a kernel's parameters).
+pub fn fingerprint(words: impl IntoIterator<Item = u64>) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
     for w in words {
         for b in w.to_le_bytes() {

@@ -54,6 +54,13 @@ pub const COAG_TIME_BACKWARDS: i32 = 7;
 pub const COAG_BAD_CHECKPOINT: i32 = 8;
 /// A panic was caught inside the library (a bug: please report it).
 pub const COAG_PANIC: i32 = 9;
+/// `coag_sim_advance_to` stopped before its target time: its work limit was spent or
+/// its cancellation callback asked (the sim is consistent at the time reached; call
+/// again to continue). Not an error of the sim.
+pub const COAG_INTERRUPTED: i32 = 10;
+/// The host's random callback is degenerate (returned the same word 8 times in a row);
+/// the call was undone.
+pub const COAG_RNG_FAILURE: i32 = 11;
 
 thread_local! {
     static LAST_ERROR: RefCell<String> = const { RefCell::new(String::new()) };
@@ -172,6 +179,8 @@ pub extern "C" fn coag_status_name(status: i32) -> *const c_char {
         COAG_TIME_BACKWARDS => "COAG_TIME_BACKWARDS\0",
         COAG_BAD_CHECKPOINT => "COAG_BAD_CHECKPOINT\0",
         COAG_PANIC => "COAG_PANIC\0",
+        COAG_INTERRUPTED => "COAG_INTERRUPTED\0",
+        COAG_RNG_FAILURE => "COAG_RNG_FAILURE\0",
         _ => "COAG_UNKNOWN\0",
     };
     s.as_ptr().cast()

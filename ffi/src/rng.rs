@@ -13,16 +13,59 @@ pub type coag_rng_callback = Option<unsafe extern "C" fn(user_data: *mut c_void)
 #[derive(Clone, Debug)]
 pub(crate) enum Source {
     Own(Generator),
-    Callback(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void),
+    /// A host callback, with the last word it returned and how often in a row.
+    Callback {
+        f: unsafe extern "C" fn(*mut c_void) -> u64,
+        data: *mut c_void,
+        last: u64,
+        repeats: u32,
+    },
 }
 
-/// One word from a host callback (out of line: the sim's own stream is the hot path).
+/// A host stream that returned the same word this many times in a row is degenerate
+/// (a real generator does so with probability 2⁻⁴⁴⁸).
+pub(crate) const STUCK_AFTER: u32 = 8;
+
+std::thread_local! {
+    /// Set when a host stream on this thread turned out degenerate during a call (read
+    /// by the call's cancellation poll and after it; cleared when a call starts).
+    pub(crate) static DEGENERATE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+impl Source {
+    /// A host callback as a fresh source.
+    pub(crate) fn callback(f: unsafe extern "C" fn(*mut c_void) -> u64, data: *mut c_void) -> Self {
+        Source::Callback {
+            f,
+            data,
+            last: 0,
+            repeats: 0,
+        }
+    }
+}
+
+/// One word from a host callback (out of line: the sim's own stream is the hot path),
+/// watching for a stuck stream.
 #[cold]
 #[inline(never)]
-fn call(f: unsafe extern "C" fn(*mut c_void) -> u64, d: *mut c_void) -> u64 {
+fn call(
+    f: unsafe extern "C" fn(*mut c_void) -> u64,
+    d: *mut c_void,
+    last: &mut u64,
+    repeats: &mut u32,
+) -> u64 {
     // SAFETY: the host registered this callback and user_data for this purpose and
     // guarantees both stay valid while the sim uses them.
-    unsafe { f(d) }
+    let w = unsafe { f(d) };
+    if w == *last {
+        *repeats += 1;
+        if *repeats + 1 >= STUCK_AFTER {
+            DEGENERATE.with(|c| c.set(true));
+        }
+    } else {
+        (*last, *repeats) = (w, 0);
+    }
+    w
 }
 
 impl TryRng for Source {
@@ -37,7 +80,12 @@ impl TryRng for Source {
     fn try_next_u64(&mut self) -> Result<u64, Infallible> {
         Ok(match self {
             Source::Own(p) => p.next_u64(),
-            Source::Callback(f, d) => call(*f, *d),
+            Source::Callback {
+                f,
+                data,
+                last,
+                repeats,
+            } => call(*f, *data, last, repeats),
         })
     }
 

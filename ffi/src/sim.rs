@@ -2,17 +2,17 @@
 //! `coag_sim_advance_to`.
 
 use crate::kernel::{Fragmentation, Kernel, coag_fragmentation, coag_kernel};
-use crate::rng::{Generator, Source, coag_rng_callback};
+use crate::rng::{DEGENERATE, Generator, STUCK_AFTER, Source, coag_rng_callback};
 use crate::{
-    COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, Fail, fail, guard, non_null, read_config, slice,
-    slice_mut, write,
+    COAG_INTERRUPTED, COAG_INVALID_ARGUMENT, COAG_RNG_FAILURE, COAG_UNSUPPORTED, Fail, fail, guard,
+    non_null, read_config, slice, slice_mut, write,
 };
 use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::qmc::Randomization;
 use coagula_core::random::{Purpose, generator, substream};
-use coagula_core::scheme::StepReport;
 use coagula_core::scheme::massflow::{PointSource, Sorting};
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
+use coagula_core::scheme::{Budget, StepReport};
 use std::ffi::c_void;
 
 /// Niederreiter's (1,3)-sequence (Lécot et al.'s choice).
@@ -93,6 +93,13 @@ pub struct coag_counts_config {
     pub seed: u64,
     /// Stream id.
     pub stream: u64,
+    /// Non-zero: low-rank proposal times in batches (1.2–1.5× faster for large systems,
+    /// but a run then depends on where the host stops it). 0, the default: every
+    /// proposal has its own waiting time and the next one is kept between calls, so a
+    /// run stopped at 0.7 and 1.3 on its way to 2 is bit for bit the run that went to 2
+    /// in one call. (Appended in 0.1: a caller compiled against a header without it
+    /// gets 0.)
+    pub batched_clock: i32,
 }
 
 /// What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
@@ -124,7 +131,7 @@ pub struct coag_step_report {
 
 /// Bytes of the first version of each config (the smallest `struct_size` accepted).
 const MASSFLOW_CONFIG_V1: usize = std::mem::size_of::<coag_massflow_config>();
-const COUNTS_CONFIG_V1: usize = std::mem::size_of::<coag_counts_config>();
+const COUNTS_CONFIG_V1: usize = std::mem::offset_of!(coag_counts_config, batched_clock);
 const STEP_REPORT_V1: usize = std::mem::size_of::<coag_step_report>();
 
 fn report_of(r: StepReport) -> coag_step_report {
@@ -175,26 +182,57 @@ unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), 
 /// The facade over every scheme, as the C ABI instantiates it.
 type Dyn = dyn Simulation<Kernel, Fragmentation, Source>;
 
+/// A host callback polled during `coag_sim_advance_to`: non-zero cancels the call.
+pub type coag_cancel_callback = Option<unsafe extern "C" fn(user_data: *mut c_void) -> i32>;
+
+/// How a sim was configured: the config struct it was made with.
+#[derive(Clone, Copy, Debug)]
+enum Config {
+    MassFlow(coag_massflow_config),
+    Counts(coag_counts_config),
+}
+
 /// Opaque simulation handle (`coag_sim` in C).
 pub struct coag_sim {
     sim: Box<Dyn>,
     /// The sim's own stream (kept even while a callback is installed).
     own: Generator,
     callback: Option<(unsafe extern "C" fn(*mut c_void) -> u64, *mut c_void)>,
+    /// The configuration it was made with (what a checkpoint must match) ...
+    built: Config,
+    /// ... and as it stands (Δt, mass, volume changed by the setters since).
+    config: Config,
+    /// The current kernels (for clones and checkpoint fingerprints).
+    kernel: Kernel,
+    frag: Fragmentation,
+    /// Work units per `coag_sim_advance_to` (0: no limit) and the cancellation poll.
+    work_limit: u64,
+    cancel: Option<(unsafe extern "C" fn(*mut c_void) -> i32, *mut c_void)>,
 }
 
 /// # Safety
 /// `out` checked non-null and writable (caller contract).
 unsafe fn new_sim(
     sim: Box<Dyn>,
-    seed: u64,
-    stream: u64,
+    config: Config,
+    kernel: Kernel,
+    frag: Fragmentation,
     out: *mut *mut coag_sim,
 ) -> Result<(), Fail> {
+    let (seed, stream) = match config {
+        Config::MassFlow(c) => (c.seed, c.stream),
+        Config::Counts(c) => (c.seed, c.stream),
+    };
     let sim = coag_sim {
         sim,
         own: generator(seed, stream),
         callback: None,
+        built: config,
+        config,
+        kernel,
+        frag,
+        work_limit: 0,
+        cancel: None,
     };
     // SAFETY: the function's contract.
     unsafe { write(out, Box::into_raw(Box::new(sim))) };
@@ -296,6 +334,7 @@ fn default_counts() -> coag_counts_config {
         memory_budget: 0,
         seed: 0,
         stream: 0,
+        batched_clock: 0,
     }
 }
 
@@ -440,7 +479,7 @@ pub unsafe extern "C" fn coag_massflow_new(
         };
         let sim = registry::build(SchemeId::MassFlow, k, f, &init, &opts)?;
         // SAFETY: `out` checked non-null; writable (contract).
-        unsafe { new_sim(sim, c.seed, c.stream, out) }
+        unsafe { new_sim(sim, Config::MassFlow(c), k, f, out) }
     })
 }
 
@@ -531,7 +570,7 @@ pub unsafe extern "C" fn coag_massflow_new_in(
         };
         let sim = registry::build_in(SchemeId::MassFlow, k, f, &init, &opts, ws)?;
         // SAFETY: `out` checked non-null; writable (contract).
-        unsafe { new_sim(sim, c.seed, c.stream, out) }
+        unsafe { new_sim(sim, Config::MassFlow(c), k, f, out) }
     })
 }
 
@@ -563,24 +602,33 @@ pub unsafe extern "C" fn coag_counts_new(
             );
         };
         let total: u64 = n.iter().fold(0u64, |a, &b| a.saturating_add(b));
-        let volume = if c.volume == 0.0 {
-            total as f64
-        } else {
-            c.volume
+        let mut c = c;
+        if c.volume == 0.0 {
+            c.volume = total as f64;
+        }
+        if c.size_limit == 0 {
+            c.size_limit = Options::default().size_limit;
+        }
+        let init = Init::Counts {
+            counts: n,
+            volume: c.volume,
         };
-        let mut opts = Options::default()
-            .with_memory_budget(coagula_core::scheme::population::machine_memory_budget());
-        if c.size_limit != 0 {
-            opts = opts.with_size_limit(c.size_limit);
-        }
-        if c.memory_budget != 0 {
-            opts = opts.with_memory_budget(usize::try_from(c.memory_budget).unwrap_or(usize::MAX));
-        }
-        let init = Init::Counts { counts: n, volume };
-        let sim = registry::build(id, k, Fragmentation::None, &init, &opts)?;
+        let sim = registry::build(id, k, Fragmentation::None, &init, &counts_options(&c))?;
         // SAFETY: `out` checked non-null; writable (contract).
-        unsafe { new_sim(sim, c.seed, c.stream, out) }
+        unsafe { new_sim(sim, Config::Counts(c), k, Fragmentation::None, out) }
     })
+}
+
+/// The registry options of a counts config (volume and size limit resolved).
+fn counts_options(c: &coag_counts_config) -> Options {
+    let budget = match c.memory_budget {
+        0 => coagula_core::scheme::population::machine_memory_budget(),
+        b => usize::try_from(b).unwrap_or(usize::MAX),
+    };
+    Options::default()
+        .with_memory_budget(budget)
+        .with_size_limit(c.size_limit)
+        .with_batched_clock(c.batched_clock != 0)
 }
 
 /// The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).
@@ -640,7 +688,16 @@ unsafe fn read<T>(
 
 /// Runs the sim until time `t` (≥ its current time): time-driven schemes take steps of
 /// Δt (a last shorter one lands on t), event-driven schemes process every event before
-/// t. `report` may be NULL; otherwise its `struct_size` must be set.
+/// t (and keep the time of the next one for the next call: see
+/// `coag_counts_config.batched_clock`). `report` may be NULL; otherwise its
+/// `struct_size` must be set.
+///
+/// Bounded calls: with `coag_sim_set_work_limit` or `coag_sim_set_cancel_callback`, a
+/// call that spends its work units or is cancelled returns `COAG_INTERRUPTED` with the
+/// sim consistent at the time reached (written to `report->time`, read with
+/// `coag_sim_time`); calling again continues the same run. With a host random
+/// callback (`coag_sim_set_rng_callback`) that turns out stuck (the same word 8 times
+/// in a row), the call returns `COAG_RNG_FAILURE` and the sim is as before the call.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `report` NULL or writable.
@@ -667,10 +724,47 @@ pub unsafe extern "C" fn coag_sim_advance_to(
             }
         }
         let mut rng = match s.callback {
-            Some((f, d)) => Source::Callback(f, d),
+            Some((f, d)) => Source::callback(f, d),
             None => Source::Own(s.own.clone()),
         };
-        let r = s.sim.advance_to(t, &mut rng);
+        // a host stream may turn out stuck: the state before the call, to go back to
+        let before = if s.callback.is_some() {
+            let mut w = Writer::new(&mut []);
+            s.sim.save(&mut w);
+            let mut buf = vec![0u8; w.needed()];
+            s.sim.save(&mut Writer::new(&mut buf));
+            Some(buf)
+        } else {
+            None
+        };
+        DEGENERATE.with(|c| c.set(false));
+        let host_cancel = s.cancel;
+        let mut cancel = || {
+            DEGENERATE.with(|c| c.get())
+                || host_cancel.is_some_and(|(f, d)| {
+                    // SAFETY: the host registered the callback and user_data and keeps
+                    // them valid while installed.
+                    unsafe { f(d) != 0 }
+                })
+        };
+        let units = if s.work_limit == 0 {
+            u64::MAX
+        } else {
+            s.work_limit
+        };
+        let mut budget = Budget::work(units).with_cancel(&mut cancel);
+        let r = s.sim.advance_within(t, &mut budget, &mut rng);
+        if DEGENERATE.with(|c| c.get()) {
+            if let Some(buf) = before {
+                s.sim.restore(&mut Reader::new(&buf))?;
+            }
+            return fail(
+                COAG_RNG_FAILURE,
+                format!(
+                    "the host random callback returned the same word {STUCK_AFTER} times in a row: the call was undone"
+                ),
+            );
+        }
         if let Source::Own(p) = rng {
             s.own = p;
         }
@@ -679,6 +773,53 @@ pub unsafe extern "C" fn coag_sim_advance_to(
             // SAFETY: non-null, validated size; writable by contract.
             unsafe { write_report(report, r) }?;
         }
+        if r.interrupted {
+            return fail(
+                COAG_INTERRUPTED,
+                format!(
+                    "interrupted at t = {} on the way to {} (work limit or cancellation): call again to continue",
+                    coagula_core::error::Short(r.time),
+                    coagula_core::error::Short(t)
+                ),
+            );
+        }
+        Ok(())
+    })
+}
+
+/// Sets the work one `coag_sim_advance_to` may do: `units` proposals (event-driven
+/// schemes) or particle updates (mass flow: N per time step; a step is taken whole
+/// while a unit is left); 0 removes the limit (the default). Past it the call returns
+/// `COAG_INTERRUPTED`, the sim consistent at the time reached.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_work_limit(sim: *mut coag_sim, units: u64) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.work_limit = units;
+        Ok(())
+    })
+}
+
+/// Installs a callback polled during `coag_sim_advance_to` (every 16384 proposals, and
+/// before every mass-flow step): a non-zero return stops the call with
+/// `COAG_INTERRUPTED`, the sim consistent at the time reached. `cancel` NULL removes it.
+///
+/// # Safety
+/// `sim` NULL or live; `cancel` and `user_data` valid while installed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_cancel_callback(
+    sim: *mut coag_sim,
+    cancel: coag_cancel_callback,
+    user_data: *mut c_void,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.cancel = cancel.map(|f| (f, user_data));
         Ok(())
     })
 }
@@ -922,6 +1063,9 @@ pub unsafe extern "C" fn coag_sim_set_counts(
         let s = unsafe { handle_mut(sim, "sim") }?;
         let n = unsafe { slice(counts, len, "counts") }?;
         s.sim.set_counts(n, volume)?;
+        if let Config::Counts(c) = &mut s.config {
+            c.volume = volume;
+        }
         Ok(())
     })
 }
@@ -941,6 +1085,7 @@ pub unsafe extern "C" fn coag_sim_set_kernel(
         let s = unsafe { handle_mut(sim, "sim") }?;
         let k = unsafe { handle(kernel, "kernel") }?.k;
         s.sim.set_kernel(k)?;
+        s.kernel = k;
         Ok(())
     })
 }
@@ -963,6 +1108,7 @@ pub unsafe extern "C" fn coag_sim_set_fragmentation(
             unsafe { handle(frag, "frag") }?.f
         };
         s.sim.set_fragmentation(f)?;
+        s.frag = f;
         Ok(())
     })
 }
@@ -977,7 +1123,100 @@ pub unsafe extern "C" fn coag_sim_set_dt(sim: *mut coag_sim, dt: f64) -> i32 {
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle_mut(sim, "sim") }?;
         s.sim.set_dt(dt)?;
+        if let Config::MassFlow(c) = &mut s.config {
+            c.dt = dt;
+        }
         Ok(())
+    })
+}
+
+/// Sets the sim's clock to `t` (finite, not negative): a host that keeps its own time
+/// origin, e.g. after a restart. An event-driven scheme draws its next proposal afresh.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_time(sim: *mut coag_sim, t: f64) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.sim.set_time(t)?;
+        Ok(())
+    })
+}
+
+/// Changes the total mass M1 a mass-flow sim's particles carry (finite, > 0): a host
+/// adding mass (condensation, a feed) or removing it between steps; each particle
+/// then carries `M1 / N`. `COAG_UNSUPPORTED` for a size-count sim (its mass is its
+/// counts: use `coag_sim_set_counts` or `coag_sim_set_pairs`).
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_mass(sim: *mut coag_sim, mass: f64) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        s.sim.set_mass(mass)?;
+        if let Config::MassFlow(c) = &mut s.config {
+            c.mass = mass;
+        }
+        Ok(())
+    })
+}
+
+/// The configuration of a mass-flow sim as it stands (what it was made with, with Δt
+/// and the mass as `coag_sim_set_dt` and `coag_sim_set_mass` left them) into a struct
+/// of `size` bytes (`sizeof(coag_massflow_config)`); `COAG_UNSUPPORTED` for a
+/// size-count sim.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_massflow_config(
+    sim: *const coag_sim,
+    out: *mut coag_massflow_config,
+    size: usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let Config::MassFlow(c) = s.config else {
+            return fail(
+                COAG_UNSUPPORTED,
+                "config: a size-count sim (use coag_sim_counts_config)",
+            );
+        };
+        // SAFETY: forwarded contract.
+        unsafe { write_sized(out, size, MASSFLOW_CONFIG_V1, c, "massflow config") }
+    })
+}
+
+/// The configuration of a size-count sim as it stands (the volume and size limit
+/// resolved: never 0; the volume as given at construction or by the last
+/// `coag_sim_set_counts` — doublings since are in `coag_sim_get_counts`) into a struct
+/// of `size` bytes (`sizeof(coag_counts_config)`); `COAG_UNSUPPORTED` for a mass-flow
+/// sim.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_counts_config(
+    sim: *const coag_sim,
+    out: *mut coag_counts_config,
+    size: usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let Config::Counts(c) = s.config else {
+            return fail(
+                COAG_UNSUPPORTED,
+                "config: a mass-flow sim (use coag_sim_massflow_config)",
+            );
+        };
+        // SAFETY: forwarded contract.
+        unsafe { write_sized(out, size, COUNTS_CONFIG_V1, c, "counts config") }
     })
 }
 
@@ -1017,17 +1256,117 @@ pub unsafe extern "C" fn coag_sim_reseed(sim: *mut coag_sim, seed: u64, stream: 
     })
 }
 
-/// The first word of a C-ABI checkpoint: the sim's own generator is xoshiro256++ (a
-/// checkpoint from before the seed policy changed, whose first word is a PCG state,
-/// is refused instead of resuming on another stream).
+/// The first word of a format-1 C-ABI checkpoint (the generator's tag, no checksum):
+/// recognised to say why it is refused.
 const GENERATOR_TAG: u64 = u64::from_le_bytes(*b"XOSHI256");
+/// The first word of a C-ABI checkpoint, and its format.
+const CABI_MAGIC: u64 = u64::from_le_bytes(*b"COAGCABI");
+const CABI_VERSION: u64 = 2;
 
+/// A configuration as named words; the ones marked `true` must match on restore.
+fn config_words(c: &Config) -> Vec<(&'static str, u64, bool)> {
+    match *c {
+        Config::MassFlow(c) => vec![
+            ("kind (mass flow)", 0, true),
+            ("mass", c.mass.to_bits(), true),
+            ("dt", c.dt.to_bits(), true),
+            ("points", c.points as u64, true),
+            ("randomization", c.randomization as u64, true),
+            ("full_sort", c.full_sort as u64, true),
+            ("seed", c.seed, false),
+            ("stream", c.stream, false),
+        ],
+        Config::Counts(c) => vec![
+            ("kind (counts)", 1, true),
+            ("method", c.method as u64, true),
+            ("volume", c.volume.to_bits(), true),
+            ("size_limit", c.size_limit, true),
+            ("batched_clock", c.batched_clock as u64, true),
+            ("memory_budget", c.memory_budget, false),
+            ("seed", c.seed, false),
+            ("stream", c.stream, false),
+        ],
+    }
+}
+
+/// The configuration back from its words (the kind already known from `like`).
+fn config_from(like: &Config, w: &[u64]) -> Config {
+    match *like {
+        Config::MassFlow(c) => Config::MassFlow(coag_massflow_config {
+            mass: f64::from_bits(w[1]),
+            dt: f64::from_bits(w[2]),
+            points: w[3] as i32,
+            randomization: w[4] as i32,
+            full_sort: w[5] as i32,
+            seed: w[6],
+            stream: w[7],
+            ..c
+        }),
+        Config::Counts(c) => Config::Counts(coag_counts_config {
+            method: w[1] as i32,
+            volume: f64::from_bits(w[2]),
+            size_limit: w[3],
+            batched_clock: w[4] as i32,
+            memory_budget: w[5],
+            seed: w[6],
+            stream: w[7],
+            ..c
+        }),
+    }
+}
+
+/// A fingerprint of a kernel: its kind and parameters (built-in kernels), or what a
+/// user kernel declares (its callbacks are code, not stored).
+fn kernel_fingerprint(k: &Kernel) -> u64 {
+    match k {
+        Kernel::Builtin(c) => c.fingerprint(),
+        Kernel::User(u) => coagula_core::checkpoint::fingerprint([
+            0x5553_4552, // "USER"
+            u64::from(u.rank),
+            u.low_rank_exact as u64,
+            u64::from(u.majorant.is_some()),
+            u64::from(u.factors.is_some()),
+            u64::from(u.sup.is_some()),
+        ]),
+    }
+}
+
+fn frag_fingerprint(f: &Fragmentation) -> u64 {
+    match f {
+        Fragmentation::None => 0,
+        Fragmentation::Binary(b) => {
+            coagula_core::checkpoint::fingerprint([1, b.lambda().to_bits()])
+        }
+        Fragmentation::User(u) => coagula_core::checkpoint::fingerprint([2, u.sup_rate.to_bits()]),
+    }
+}
+
+/// The index of a scheme in the registry (its code in a checkpoint).
+fn scheme_code(id: SchemeId) -> u64 {
+    registry::SCHEMES
+        .iter()
+        .position(|s| s.id == id)
+        .unwrap_or(usize::MAX) as u64
+}
+
+/// A C-ABI checkpoint: magic and format, the scheme, both configurations and the
+/// kernels' fingerprints, the sim's own stream, the scheme's state, and the checksum.
 fn save_sim(s: &coag_sim, w: &mut Writer) {
-    w.u64(GENERATOR_TAG);
+    w.u64(CABI_MAGIC);
+    w.u64(CABI_VERSION);
+    w.u64(scheme_code(s.sim.id()));
+    for c in [&s.built, &s.config] {
+        for (_, v, _) in config_words(c) {
+            w.u64(v);
+        }
+    }
+    w.u64(kernel_fingerprint(&s.kernel));
+    w.u64(frag_fingerprint(&s.frag));
     for p in s.own.parts() {
         w.u64(p);
     }
     s.sim.save(w);
+    w.seal();
 }
 
 /// Bytes a checkpoint of the sim needs now.
@@ -1086,8 +1425,13 @@ pub unsafe extern "C" fn coag_sim_checkpoint(
     })
 }
 
-/// Restores a checkpoint into a sim made with the same scheme, kernel and
-/// configuration. On error the sim is unchanged.
+/// Restores a checkpoint into a sim made with the same scheme and configuration
+/// (`mass`, `dt`, points, randomisation and sorting; method, volume, size limit and
+/// clock — seed, stream and memory budget may differ) and the same kernels as the sim
+/// that wrote it has now. A checkpoint that is corrupted (checksum), truncated, of
+/// another format, of another configuration, or whose state fails the checks its
+/// scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
+/// unchanged.
 ///
 /// # Safety
 /// `sim` NULL or live; `buf` valid for `len` bytes.
@@ -1097,12 +1441,68 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
         // SAFETY: NULL checked; live / readable by contract.
         let s = unsafe { handle_mut(sim, "sim") }?;
         let data = unsafe { slice(buf, len, "buf") }?;
-        let mut r = Reader::new(data);
-        if r.u64()? != GENERATOR_TAG {
-            return Err(coagula_core::Error::Checkpoint {
-                what: "not a checkpoint of this library's generator (xoshiro256++)",
+        let bad = |what: String| Fail(crate::COAG_BAD_CHECKPOINT, format!("checkpoint: {what}"));
+        if data.len() >= 8 && data[..8] == GENERATOR_TAG.to_le_bytes() {
+            return Err(bad(
+                "format 1 (before checksums and configuration records) is not supported".into(),
+            ));
+        }
+        let body = coagula_core::checkpoint::unseal(data)?;
+        let mut r = Reader::new(body);
+        if r.u64()? != CABI_MAGIC {
+            return Err(bad("not a checkpoint of coagula's C ABI".into()));
+        }
+        let v = r.u64()?;
+        if v != CABI_VERSION {
+            return Err(bad(format!(
+                "format {v} (this library reads format {CABI_VERSION})"
+            )));
+        }
+        let code = r.u64()?;
+        if code != scheme_code(s.sim.id()) {
+            let other = registry::SCHEMES
+                .get(code as usize)
+                .map_or("an unknown scheme", |i| i.name);
+            return Err(bad(format!(
+                "of scheme {other}, restored into a {} sim",
+                s.sim.id().name()
+            )));
+        }
+        let ours = config_words(&s.built);
+        let mut words = [Vec::new(), Vec::new()];
+        for w in words.iter_mut() {
+            for _ in 0..ours.len() {
+                w.push(r.u64()?);
             }
-            .into());
+        }
+        for (i, &(name, v, must)) in ours.iter().enumerate() {
+            if must && words[0][i] != v {
+                return Err(bad(format!(
+                    "made with another {name} ({} there, {} here)",
+                    show(name, words[0][i]),
+                    show(name, v)
+                )));
+            }
+        }
+        // seed and stream are the stream's now in use; the memory budget stays this
+        // sim's (the state was checked against it)
+        let keep_budget = |c: Config| match (c, s.built) {
+            (Config::Counts(mut c), Config::Counts(ours)) => {
+                c.memory_budget = ours.memory_budget;
+                Config::Counts(c)
+            }
+            (c, _) => c,
+        };
+        let built = keep_budget(config_from(&s.built, &words[0]));
+        let current = keep_budget(config_from(&s.built, &words[1]));
+        if r.u64()? != kernel_fingerprint(&s.kernel) {
+            return Err(bad(
+                "written under another coagulation kernel (kind, parameters or declared bounds)"
+                    .into(),
+            ));
+        }
+        if r.u64()? != frag_fingerprint(&s.frag) {
+            return Err(bad("written under another fragmentation kernel".into()));
         }
         let parts = [r.u64()?, r.u64()?, r.u64()?, r.u64()?];
         let own = Generator::from_parts(parts).ok_or(coagula_core::Error::Checkpoint {
@@ -1110,6 +1510,71 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
         })?;
         s.sim.restore(&mut r)?;
         s.own = own;
+        s.built = built;
+        s.config = current;
+        Ok(())
+    })
+}
+
+/// A configuration word for a message: floats as numbers.
+fn show(name: &str, w: u64) -> String {
+    if matches!(name, "mass" | "dt" | "volume") {
+        coagula_core::error::Short(f64::from_bits(w)).to_string()
+    } else {
+        (w as i64).to_string()
+    }
+}
+
+/// A new sim that is an exact copy of `sim` — state, configuration, kernels, own random
+/// stream, host callbacks and limits — into `*out`: the two continue identically and
+/// independently (a host forking a run, or trying a step it may discard). A mass-flow
+/// sim in caller-owned memory is copied into memory the library owns.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coag_sim) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        non_null(out, "out")?;
+        let id = s.sim.id();
+        let mut fresh = match (s.sim.state(), s.built) {
+            (State::Sizes(x), Config::MassFlow(c)) => {
+                let init = Init::Sizes {
+                    sizes: x,
+                    mass: c.mass,
+                };
+                registry::build(id, s.kernel, s.frag, &init, &massflow_options(&c)?)?
+            }
+            (_, Config::Counts(c)) => {
+                // a trivial state of the same scheme and options, replaced below
+                let init = Init::Counts {
+                    counts: &[2],
+                    volume: 1.0,
+                };
+                registry::build(id, s.kernel, s.frag, &init, &counts_options(&c))?
+            }
+            _ => return fail(COAG_UNSUPPORTED, "clone: unknown state"),
+        };
+        let mut w = Writer::new(&mut []);
+        s.sim.save(&mut w);
+        let mut buf = vec![0u8; w.needed()];
+        s.sim.save(&mut Writer::new(&mut buf));
+        fresh.restore(&mut Reader::new(&buf))?;
+        let copy = coag_sim {
+            sim: fresh,
+            own: s.own.clone(),
+            callback: s.callback,
+            built: s.built,
+            config: s.config,
+            kernel: s.kernel,
+            frag: s.frag,
+            work_limit: s.work_limit,
+            cancel: s.cancel,
+        };
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, Box::into_raw(Box::new(copy))) };
         Ok(())
     })
 }

@@ -74,6 +74,29 @@ enum Kind {
 }
 
 impl Coagulation {
+    /// A fingerprint of the kernel and every parameter (equal for equal kernels): what
+    /// a checkpoint records so that it is restored only under the same kernel.
+    pub fn fingerprint(&self) -> u64 {
+        let (tag, p) = match self.kind {
+            Kind::Constant(k0) => (1, k0),
+            Kind::Additive => (2, 0.0),
+            Kind::Multiplicative => (3, 0.0),
+            Kind::Product(a) => (4, a),
+            Kind::Homogeneous(g) => (5, g),
+            Kind::FreeMolecular => (6, 0.0),
+            Kind::Brownian => (7, 0.0),
+        };
+        crate::checkpoint::fingerprint([
+            tag,
+            p.to_bits(),
+            self.scale.to_bits(),
+            self.min_size.to_bits(),
+            self.c.to_bits(),
+        ])
+    }
+}
+
+impl Coagulation {
     /// `K = k0` (k0 > 0).
     pub fn constant(k0: f64) -> Result<Self> {
         positive("k0", k0)?;

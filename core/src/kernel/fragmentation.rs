@@ -71,6 +71,11 @@ impl BinaryUniform {
         Ok(BinaryUniform { lambda })
     }
 
+    /// The break-up rate λ.
+    pub fn lambda(&self) -> f64 {
+        self.lambda
+    }
+
     /// The kernel itself, `F(x, y) = 2λ / (x + y)`.
     pub fn rate(&self, x: f64, y: f64) -> f64 {
         2.0 * self.lambda / (x + y)

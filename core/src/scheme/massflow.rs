@@ -647,6 +647,20 @@ impl<K, F, B> MassFlow<K, F, B> {
         self.dt = crate::error::positive("dt", dt)?;
         Ok(())
     }
+
+    /// Sets the clock (finite, not negative): a host that keeps its own time origin.
+    /// The point sequence continues where it stands.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        self.time = super::check_time(t)?;
+        Ok(())
+    }
+
+    /// Changes the total mass M1 the particles carry (finite and positive): a host
+    /// adding or removing mass between steps (each particle then carries `M1 / N`).
+    pub fn set_mass(&mut self, mass: f64) -> Result<()> {
+        self.mass = crate::error::positive("mass", mass)?;
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -269,6 +269,19 @@ impl Pending {
     }
 }
 
+/// Validates a time a host sets (`set_time`): finite and not negative.
+pub(crate) fn check_time(t: f64) -> Result<f64> {
+    crate::error::finite("t", t)?;
+    if t < 0.0 {
+        return Err(crate::error::Error::OutOfRange {
+            name: "t",
+            value: t,
+            range: "[0, inf)",
+        });
+    }
+    Ok(t)
+}
+
 /// Validates a target time against the current time.
 pub(crate) fn check_target(now: f64, t: f64) -> Result<()> {
     crate::error::finite("t", t)?;

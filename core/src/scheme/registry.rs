@@ -276,6 +276,11 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
     fn set_fragmentation(&mut self, frag: F) -> Result<()>;
     /// Changes the time step (time-driven schemes; others: `Unsupported`).
     fn set_dt(&mut self, dt: f64) -> Result<()>;
+    /// Sets the clock (finite, not negative); an event-driven scheme draws its next
+    /// proposal afresh.
+    fn set_time(&mut self, t: f64) -> Result<()>;
+    /// Changes the total mass the particles carry (mass flow; others: `Unsupported`).
+    fn set_mass(&mut self, mass: f64) -> Result<()>;
     /// Writes the full state ([`Checkpoint::save`]).
     fn save(&self, w: &mut Writer);
     /// Restores a state written by `save` of the same scheme and set-up.
@@ -315,6 +320,14 @@ pub trait Facet<K, F> {
     fn set_dt(&mut self, _dt: f64) -> Result<()> {
         Err(Error::Unsupported {
             what: "dt: event-driven schemes have no time step",
+        })
+    }
+    /// Sets the clock.
+    fn set_time(&mut self, t: f64) -> Result<()>;
+    /// Changes the total mass.
+    fn set_mass(&mut self, _mass: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "mass: a size-count scheme's mass is its counts (use set_counts)",
         })
     }
 }
@@ -392,6 +405,12 @@ where
     }
     fn set_dt(&mut self, dt: f64) -> Result<()> {
         self.s.set_dt(dt)
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        self.s.set_time(t)
+    }
+    fn set_mass(&mut self, mass: f64) -> Result<()> {
+        self.s.set_mass(mass)
     }
     fn save(&self, w: &mut Writer) {
         self.s.save(w)
@@ -627,6 +646,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn set_dt(&mut self, dt: f64) -> Result<()> {
         MassFlow::set_dt(self, dt)
     }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        MassFlow::set_time(self, t)
+    }
+    fn set_mass(&mut self, mass: f64) -> Result<()> {
+        MassFlow::set_mass(self, mass)
+    }
 }
 
 /// [`Facet`] of a size-count scheme from its inherent methods.
@@ -645,6 +670,9 @@ macro_rules! counts_facet {
             }
             fn set_kernel(&mut self, kernel: K) -> Result<()> {
                 <$ty>::set_kernel(self, kernel)
+            }
+            fn set_time(&mut self, t: f64) -> Result<()> {
+                <$ty>::set_time(self, t)
             }
         }
     };

@@ -589,6 +589,14 @@ impl<K: CoagulationKernel> Inverse<K> {
         Ok(())
     }
 
+    /// Sets the clock (finite, not negative): a host that keeps its own time origin.
+    /// The next event is drawn afresh from the new time.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        self.time = crate::scheme::check_time(t)?;
+        self.pending = None;
+        Ok(())
+    }
+
     /// Takes the state of `fresh`, keeping time, totals and the size limit.
     fn install(&mut self, fresh: Inverse<K>) {
         let (time, totals, limit, budget) = (

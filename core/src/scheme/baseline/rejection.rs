@@ -350,6 +350,14 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         }
     }
 
+    /// Sets the clock (finite, not negative): a host that keeps its own time origin.
+    /// The next proposal is drawn afresh from the new time.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        self.time = crate::scheme::check_time(t)?;
+        self.pending = None;
+        Ok(())
+    }
+
     /// Replaces the counts and the volume; the particle number becomes the reference
     /// for particle doubling. Errors leave the scheme unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {

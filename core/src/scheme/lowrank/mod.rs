@@ -305,6 +305,14 @@ where
         Ok(())
     }
 
+    /// Sets the clock (finite, not negative): a host that keeps its own time origin.
+    /// The next proposal is drawn afresh from the new time.
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        self.time = super::check_time(t)?;
+        self.clock = Clock::Stale;
+        Ok(())
+    }
+
     /// The mean waiting time between proposals and whether proposals happen at all,
     /// after the engine's refresh.
     #[inline]

@@ -149,13 +149,22 @@ pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
     })
 }
 
-/// Validates an initial count vector and returns its particle number.
+/// Validates an initial count vector and returns its particle number: the number and
+/// the total mass `Σ i N_i` must fit 64 bits (sizes are 64-bit integers, so a larger
+/// mass could only fail later, at a merge).
 pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
     let mut n: u64 = 0;
-    for &c in counts {
+    let mut mass: u64 = 0;
+    for (i, &c) in counts.iter().enumerate() {
         n = n.checked_add(c).ok_or(Error::Overflow {
             name: "particle number",
         })?;
+        mass = (i as u64 + 1)
+            .checked_mul(c)
+            .and_then(|m| mass.checked_add(m))
+            .ok_or(Error::Overflow {
+                name: "total mass (sum of i N_i)",
+            })?;
     }
     if n == 0 {
         return Err(Error::Empty);
