@@ -31,3 +31,16 @@ g++ -std=c++17 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
 gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
     include/coagula.f90 tests/fortran/test_fortran.f90 "$lib" $libs -o "$out/test_fortran"
 "$out/test_fortran"
+
+# The C tests again without sanitizers, under valgrind's memcheck (leaks, uninitialised
+# reads, invalid accesses the sanitizers' instrumentation does not see in the Rust
+# library); test_hostile in its quick mode (smaller work limits, fewer crafted
+# checkpoints: the same checks).
+if [ "${COAG_VALGRIND:-0}" = 1 ]; then
+    for t in test_schemes test_misuse test_regressions test_hostile; do
+        gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
+            "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
+        COAG_TEST_QUICK=1 valgrind -q --error-exitcode=99 --leak-check=full \
+            --errors-for-leak-kinds=definite,indirect "$out/vg_$t" | tail -n 1
+    done
+fi

@@ -99,6 +99,8 @@ pub(crate) fn fail<T>(code: i32, msg: impl Into<String>) -> Result<T, Fail> {
 }
 
 thread_local! {
+    /// Where the last panic inside a library call on this thread happened.
+    static PANIC_AT: RefCell<String> = const { RefCell::new(String::new()) };
     /// Whether this thread is inside a library call (so a panic is the library's).
     static IN_CALL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
@@ -111,7 +113,14 @@ fn silence_panics() {
     ONCE.call_once(|| {
         let previous = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
-            if !IN_CALL.with(|c| c.get()) {
+            if IN_CALL.with(|c| c.get()) {
+                // where, for the message of COAG_PANIC (a bug report needs it)
+                let at = info
+                    .location()
+                    .map(|l| format!("{}:{}", l.file(), l.line()))
+                    .unwrap_or_default();
+                PANIC_AT.with(|p| *p.borrow_mut() = at);
+            } else {
                 previous(info);
             }
         }));
@@ -136,7 +145,8 @@ pub(crate) fn guard(f: impl FnOnce() -> Result<(), Fail>) -> i32 {
                 .map(|s| s.to_string())
                 .or_else(|| p.downcast_ref::<String>().cloned())
                 .unwrap_or_else(|| "unknown panic".into());
-            set_error(format!("internal error (panic): {msg}"));
+            let at = PANIC_AT.with(|p| std::mem::take(&mut *p.borrow_mut()));
+            set_error(format!("internal error (panic at {at}): {msg}"));
             COAG_PANIC
         }
     }

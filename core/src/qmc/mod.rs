@@ -75,6 +75,7 @@
 
 pub mod net;
 mod niederreiter;
+mod niederreiter_table;
 pub mod points;
 mod scramble;
 mod sobol;

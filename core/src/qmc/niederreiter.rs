@@ -163,6 +163,19 @@ impl<W: Word> Niederreiter2<W> {
     }
 }
 
+impl Niederreiter2<u64> {
+    /// The sequence in dimension 3 from a precomputed table (what
+    /// [`PointSource::niederreiter`](crate::qmc::PointSource::niederreiter) uses): equal to
+    /// `new(3)`, without its ~2 ms of polynomial arithmetic.
+    pub fn dim3() -> Self {
+        Niederreiter2 {
+            dim: 3,
+            cols: super::niederreiter_table::COLS.to_vec(),
+            polys: super::niederreiter_table::POLYS.to_vec(),
+        }
+    }
+}
+
 impl<W: Word> DigitalSequence for Niederreiter2<W> {
     type Word = W;
 
@@ -180,6 +193,14 @@ impl<W: Word> DigitalSequence for Niederreiter2<W> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn the_dimension_3_table_is_the_computation() {
+        assert_eq!(
+            super::Niederreiter2::<u64>::dim3(),
+            super::Niederreiter2::<u64>::new(3).unwrap()
+        );
+    }
+
     use super::*;
     use crate::qmc::{Sobol, gray_code, net};
 

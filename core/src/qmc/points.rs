@@ -42,7 +42,7 @@ pub enum PointSource {
 impl PointSource {
     /// Niederreiter's sequence in dimension 3.
     pub fn niederreiter() -> Self {
-        PointSource::Niederreiter(Niederreiter2::new(3).expect("dimension 3 is supported"))
+        PointSource::Niederreiter(Niederreiter2::dim3())
     }
 
     /// Sobol' in dimension 3.
@@ -54,7 +54,7 @@ impl PointSource {
     /// the key drawn from `rng` (one replica; build R of them for R independent
     /// replicas).
     pub fn randomized_niederreiter<R: Rng + ?Sized>(kind: Randomization, rng: &mut R) -> Self {
-        let seq = Niederreiter2::new(3).expect("dimension 3 is supported");
+        let seq = Niederreiter2::dim3();
         let key = rng.next_u64();
         PointSource::RerandomizedNiederreiter {
             work: Scrambled::new(seq, kind, &mut BlockRng::new(key, 0)),

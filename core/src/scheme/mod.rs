@@ -71,14 +71,15 @@ impl StepReport {
     /// Adds the counts of `other` (time is taken from `other`).
     pub fn accumulate(&mut self, other: &StepReport) {
         self.time = other.time;
-        self.events += other.events;
-        self.proposals += other.proposals;
-        self.rejections += other.rejections;
-        self.bound_violations += other.bound_violations;
-        self.clipped += other.clipped;
-        self.doublings += other.doublings;
-        self.removed += other.removed;
-        self.bounces += other.bounces;
+        // saturating: counters restored from a checkpoint may stand anywhere
+        self.events = self.events.saturating_add(other.events);
+        self.proposals = self.proposals.saturating_add(other.proposals);
+        self.rejections = self.rejections.saturating_add(other.rejections);
+        self.bound_violations = self.bound_violations.saturating_add(other.bound_violations);
+        self.clipped = self.clipped.saturating_add(other.clipped);
+        self.doublings = self.doublings.saturating_add(other.doublings);
+        self.removed = self.removed.saturating_add(other.removed);
+        self.bounces = self.bounces.saturating_add(other.bounces);
         self.interrupted = other.interrupted;
     }
 }

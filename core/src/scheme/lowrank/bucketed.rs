@@ -1070,6 +1070,17 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         Cow::Owned(self.count_vec())
     }
 
+    fn rate_now(&self) -> Option<f64> {
+        if self.stale() {
+            return None;
+        }
+        let r = self.rates();
+        let consistent = r.over.to_bits() == self.over_rate.to_bits()
+            && (r.total == 0.0
+                || (r.over / r.total).clamp(0.0, 1.0).to_bits() == self.over_p.to_bits());
+        consistent.then_some(r.total)
+    }
+
     fn max_size(&self) -> u64 {
         self.m
     }

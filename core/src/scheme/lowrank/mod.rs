@@ -337,7 +337,7 @@ where
             rep.rejections += 1;
             return Ok(false);
         };
-        let spot = (self.totals.proposals + rep.proposals).is_multiple_of(SPOT_CHECK);
+        let spot = (self.totals.proposals.wrapping_add(rep.proposals)).is_multiple_of(SPOT_CHECK);
         let engine = &self.engine;
         let bounds = || engine.bounds(&c.at);
         let Some(outcome) =
@@ -568,6 +568,20 @@ where
             return Err(bad("a particle is larger than the size limit"));
         }
         drop(counts);
+        // a clock that resumes without a refresh needs an engine that can
+        let rate = engine.rate_now();
+        let fits = |mean_dt: f64| {
+            pop.n >= 2 && rate.is_some_and(|sa| (pop.volume / sa).to_bits() == mean_dt.to_bits())
+        };
+        let consistent = match clock {
+            Clock::Stale => true,
+            Clock::Idle => pop.n < 2 || rate == Some(0.0),
+            Clock::Rate(m) => fits(m),
+            Clock::Next(p) => fits(p.mean_dt),
+        };
+        if !consistent {
+            return Err(bad("the clock does not match the engine's rate"));
+        }
         self.engine = engine;
         self.pop = pop;
         self.time = time;

@@ -98,6 +98,12 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// Current maximum size M (a power of two).
     fn max_size(&self) -> u64;
 
+    /// The total proposal rate `S_A` as the last refresh left it, when the engine's
+    /// draw state is current (no refresh pending), without drawing: a restored clock
+    /// that resumes without a refresh must match it (what a run that stopped between
+    /// two proposals leaves; a crafted checkpoint that claims otherwise is refused).
+    fn rate_now(&self) -> Option<f64>;
+
     /// Writes the engine's state after the scheme's common fields.
     fn save(&self, w: &mut Writer);
 

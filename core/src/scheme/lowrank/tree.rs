@@ -155,6 +155,15 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
     }
 
     #[inline]
+    fn rate_now(&self) -> Option<f64> {
+        let root = self.tree.totals();
+        let mut sa = 0.0;
+        for k in 0..R {
+            sa += root[0][k] * root[1][k];
+        }
+        Some(sa)
+    }
+
     fn refresh<G: Rng + ?Sized>(&mut self, _pop: &Population, _rng: &mut G) -> Result<f64> {
         let root = self.tree.totals();
         let mut sa = 0.0;

@@ -1,0 +1,42 @@
+//! The CI smoke run of the C-ABI fuzz targets (`fuzz/`): every input of their committed
+//! corpora and every crash reproducer under `fuzz/regressions/` runs through the
+//! target's own code (the same functions `cargo fuzz` drives, without libFuzzer's
+//! mutation and instrumentation). The campaigns themselves run with
+//! `fuzz/campaign.sh` (docs/design/fuzzing.md).
+
+#[path = "../../fuzz/src/lib.rs"]
+#[allow(dead_code)]
+mod fuzz;
+
+use std::path::{Path, PathBuf};
+
+/// The files of `fuzz/{corpus,regressions}/<target>/`, sorted.
+fn inputs(target: &str) -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
+    let mut files = Vec::new();
+    for dir in ["corpus", "regressions"] {
+        if let Ok(entries) = std::fs::read_dir(root.join(dir).join(target)) {
+            files.extend(entries.filter_map(|e| e.ok()).map(|e| e.path()));
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn checkpoint_restore_corpus_and_regressions() {
+    let files = inputs("checkpoint_restore");
+    assert!(files.len() >= 30, "{} inputs", files.len());
+    for f in files {
+        fuzz::checkpoint_restore(&std::fs::read(&f).unwrap());
+    }
+}
+
+#[test]
+fn call_sequence_corpus_and_regressions() {
+    let files = inputs("call_sequence");
+    assert!(files.len() >= 10, "{} inputs", files.len());
+    for f in files {
+        fuzz::call_sequence::run(&std::fs::read(&f).unwrap());
+    }
+}

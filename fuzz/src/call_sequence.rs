@@ -1,0 +1,323 @@
+//! Random call sequences over live handles of every scheme, with random arguments
+//! (NaN, infinities, huge and tiny values included). After each successful call the
+//! invariants hold: a sim's time is finite and where the call put it, moments are
+//! finite (or `COAG_CAPACITY`), and under pure coagulation an advance keeps the mass
+//! concentration M1 and does not raise the number concentration M0. A failed call
+//! leaves the sim as it was. No call returns `COAG_PANIC`.
+
+use super::{KINDS, check_observables, checkpoint, is_status, last_error, small_sim};
+use arbitrary::Arbitrary;
+use coagula::*;
+use std::ptr::{null, null_mut};
+
+/// A double from a byte code: the interesting values, or a scaled one.
+#[derive(Arbitrary, Debug, Clone, Copy)]
+enum Num {
+    Zero,
+    Neg(u8),
+    Small(u16),
+    Big(u16),
+    Tiny,
+    Huge,
+    Nan,
+    Inf,
+    Raw(u64),
+}
+
+impl Num {
+    fn value(self) -> f64 {
+        match self {
+            Num::Zero => 0.0,
+            Num::Neg(v) => -f64::from(v) - 0.5,
+            Num::Small(v) => f64::from(v) / 256.0,
+            Num::Big(v) => f64::from(v) * 1e3,
+            Num::Tiny => 5e-324,
+            Num::Huge => 1e300,
+            Num::Nan => f64::NAN,
+            Num::Inf => f64::INFINITY,
+            Num::Raw(b) => f64::from_bits(b),
+        }
+    }
+}
+
+#[derive(Arbitrary, Debug)]
+enum Op {
+    New(u8),
+    Free(u8),
+    Advance(u8, Num),
+    AdvanceBy(u8, u8),
+    SetCounts(u8, Vec<u16>, Num),
+    SetSizes(u8, Vec<u16>),
+    SetKernel(u8, u8, Num),
+    SetDt(u8, Num),
+    SetTime(u8, Num),
+    SetMass(u8, Num),
+    WorkLimit(u8, u16),
+    Reseed(u8, u64),
+    Moment(u8, Num),
+    Concentration(u8, Num, Num),
+    Counts(u8, u16),
+    Sizes(u8, u16),
+    RoundTrip(u8),
+    RestoreInto(u8, u8),
+    Clone(u8),
+}
+
+const SLOTS: usize = 4;
+
+fn slot(i: u8) -> usize {
+    usize::from(i) % SLOTS
+}
+
+/// M0 and M1 of a sim when both are finite.
+unsafe fn m01(s: *const coag_sim) -> Option<(f64, f64)> {
+    let (mut a, mut b) = (0.0, 0.0);
+    unsafe {
+        (coag_sim_moment(s, 0.0, &mut a) == COAG_OK && coag_sim_moment(s, 1.0, &mut b) == COAG_OK)
+            .then_some((a, b))
+    }
+}
+
+unsafe fn kernel(code: u8, p: Num) -> Option<*mut coag_kernel> {
+    let mut k = null_mut();
+    let st = unsafe {
+        match code % 5 {
+            0 => coag_kernel_new_constant(p.value(), &mut k),
+            1 => coag_kernel_new_additive(0.0, &mut k),
+            2 => coag_kernel_new_multiplicative(&mut k),
+            3 => coag_kernel_new_product(p.value(), &mut k),
+            _ => coag_kernel_new_brownian(&mut k),
+        }
+    };
+    assert!(is_status(st));
+    (st == COAG_OK).then_some(k)
+}
+
+/// Runs the operations decoded from `data` (as libFuzzer's typed target decodes
+/// them: `Vec<Op>` from the whole input).
+pub fn run(data: &[u8]) {
+    let u = arbitrary::Unstructured::new(data);
+    let Ok(ops) = <Vec<Op> as Arbitrary>::arbitrary_take_rest(u) else {
+        return;
+    };
+    let mut sims: [(*mut coag_sim, usize); SLOTS] = [(null_mut(), 0); SLOTS];
+    unsafe {
+        for op in ops.into_iter().take(48) {
+            macro_rules! live {
+                ($i:expr) => {
+                    sims[slot($i)].0
+                };
+            }
+            match op {
+                Op::New(kind) => {
+                    let i = slot(kind);
+                    coag_sim_free(sims[i].0);
+                    let kind = usize::from(kind >> 2) % KINDS;
+                    let s = small_sim(kind);
+                    // short calls: many operations per execution
+                    assert_eq!(coag_sim_set_work_limit(s, 2000), COAG_OK);
+                    sims[i] = (s, kind);
+                }
+                Op::Free(i) => {
+                    coag_sim_free(sims[slot(i)].0);
+                    sims[slot(i)].0 = null_mut();
+                }
+                Op::Advance(i, t) | Op::SetCounts(i, _, t) if live!(i).is_null() => {
+                    let _ = t;
+                    let st = coag_sim_advance_to(null_mut(), 1.0, null_mut());
+                    assert_eq!(st, COAG_NULL_PARAMETER);
+                }
+                Op::Advance(i, t) => {
+                    let s = live!(i);
+                    let before = m01(s);
+                    let mut t0 = 0.0;
+                    coag_sim_time(s, &mut t0);
+                    let ck = checkpoint(s);
+                    let target = t.value().min(t0 + 50.0);
+                    let st = coag_sim_advance_to(s, target, null_mut());
+                    assert!(is_status(st), "advance: {st}: {}", last_error());
+                    let mut t1 = -1.0;
+                    assert_eq!(coag_sim_time(s, &mut t1), COAG_OK);
+                    if st == COAG_OK {
+                        assert_eq!(t1, target, "time after advance");
+                        if let (Some((n0, m0)), Some((n1, m1)), true) =
+                            (before, m01(s), sims[slot(i)].1 != 0)
+                        {
+                            assert!(n1 <= n0 * (1.0 + 1e-12), "N/V rose: {n0} -> {n1}");
+                            assert!((m1 - m0).abs() <= 1e-9 * m0, "M1 changed: {m0} -> {m1}");
+                        }
+                    } else if st == COAG_TIME_BACKWARDS
+                        || st == COAG_INVALID_ARGUMENT && !target.is_finite()
+                    {
+                        assert_eq!(checkpoint(s), ck, "refused advance changed the sim");
+                    } else if st == COAG_INTERRUPTED {
+                        assert!(t1 >= t0 && t1 <= target);
+                    }
+                    check_observables(s);
+                }
+                Op::AdvanceBy(i, h) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let mut t0 = 0.0;
+                    coag_sim_time(s, &mut t0);
+                    let st = coag_sim_advance_to(s, t0 + f64::from(h) / 64.0, null_mut());
+                    assert!(is_status(st));
+                    check_observables(s);
+                }
+                Op::SetCounts(i, counts, v) => {
+                    let s = live!(i);
+                    let c: Vec<u64> = counts.iter().take(64).map(|&c| u64::from(c)).collect();
+                    let ck = checkpoint(s);
+                    let st = coag_sim_set_counts(s, c.as_ptr(), c.len(), v.value());
+                    assert!(is_status(st));
+                    if st != COAG_OK {
+                        assert_eq!(checkpoint(s), ck, "refused set_counts changed the sim");
+                    }
+                    check_observables(s);
+                }
+                Op::SetSizes(i, sizes) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let x: Vec<f64> = sizes.iter().take(64).map(|&v| f64::from(v) / 8.0).collect();
+                    let ck = checkpoint(s);
+                    let st = coag_sim_set_sizes(s, x.as_ptr(), x.len());
+                    assert!(is_status(st));
+                    if st != COAG_OK {
+                        assert_eq!(checkpoint(s), ck, "refused set_sizes changed the sim");
+                    }
+                    check_observables(s);
+                }
+                Op::SetKernel(i, code, p) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    if let Some(k) = kernel(code, p) {
+                        let ck = checkpoint(s);
+                        let st = coag_sim_set_kernel(s, k);
+                        assert!(is_status(st));
+                        if st != COAG_OK {
+                            assert_eq!(checkpoint(s), ck);
+                        }
+                        coag_kernel_free(k);
+                    }
+                }
+                Op::SetDt(i, v) | Op::SetTime(i, v) | Op::SetMass(i, v) if live!(i).is_null() => {
+                    let _ = v;
+                }
+                Op::SetDt(i, v) => {
+                    let st = coag_sim_set_dt(live!(i), v.value());
+                    assert!(is_status(st));
+                }
+                Op::SetTime(i, v) => {
+                    let st = coag_sim_set_time(live!(i), v.value());
+                    assert!(is_status(st));
+                    if st == COAG_OK {
+                        let mut t = 0.0;
+                        coag_sim_time(live!(i), &mut t);
+                        assert_eq!(t, v.value());
+                    }
+                }
+                Op::SetMass(i, v) => {
+                    let st = coag_sim_set_mass(live!(i), v.value());
+                    assert!(is_status(st));
+                    check_observables(live!(i));
+                }
+                Op::WorkLimit(i, units) => {
+                    if !live!(i).is_null() {
+                        assert_eq!(
+                            coag_sim_set_work_limit(live!(i), u64::from(units) * 64),
+                            COAG_OK
+                        );
+                    }
+                }
+                Op::Reseed(i, seed) => {
+                    let st = coag_sim_reseed(live!(i), seed, 0);
+                    assert!(st == COAG_OK || live!(i).is_null() && st == COAG_NULL_PARAMETER);
+                }
+                Op::Moment(i, m) => {
+                    let mut v = 0.0;
+                    let st = coag_sim_moment(live!(i), m.value(), &mut v);
+                    assert!(is_status(st));
+                    if st == COAG_OK {
+                        assert!(v.is_finite());
+                    }
+                }
+                Op::Concentration(i, a, b) => {
+                    let mut v = 0.0;
+                    let st = coag_sim_concentration(live!(i), a.value(), b.value(), &mut v);
+                    assert!(is_status(st));
+                    if st == COAG_OK {
+                        assert!(v.is_finite() && v >= 0.0 && v.is_sign_positive());
+                    }
+                }
+                Op::Counts(i, len) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let mut need = 0usize;
+                    if coag_sim_state_len(s, &mut need) == COAG_OK && need <= 1 << 20 {
+                        let mut buf = vec![0u64; usize::from(len).min(need + 2)];
+                        let mut v = 0.0;
+                        let st = coag_sim_get_counts(s, buf.as_mut_ptr(), buf.len(), &mut v);
+                        assert!(is_status(st));
+                    }
+                }
+                Op::Sizes(i, len) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let mut buf = vec![0.0f64; usize::from(len) % 64];
+                    let st = coag_sim_get_sizes(s, buf.as_mut_ptr(), buf.len());
+                    assert!(is_status(st));
+                }
+                Op::RoundTrip(i) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let ck = checkpoint(s);
+                    assert_eq!(coag_sim_restore(s, ck.as_ptr(), ck.len()), COAG_OK);
+                    assert_eq!(checkpoint(s), ck, "round trip changed the sim");
+                }
+                Op::RestoreInto(i, j) => {
+                    let (a, b) = (live!(i), live!(j));
+                    if a.is_null() || b.is_null() {
+                        continue;
+                    }
+                    let (ca, cb) = (checkpoint(a), checkpoint(b));
+                    let st = coag_sim_restore(b, ca.as_ptr(), ca.len());
+                    assert!(
+                        st == COAG_OK || st == COAG_BAD_CHECKPOINT || st == COAG_CAPACITY,
+                        "{st}"
+                    );
+                    if st != COAG_OK {
+                        assert_eq!(checkpoint(b), cb);
+                    }
+                }
+                Op::Clone(i) => {
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let mut c = null_mut();
+                    assert_eq!(coag_sim_clone(s, &mut c), COAG_OK);
+                    assert_eq!(checkpoint(c), checkpoint(s), "clone differs");
+                    let j = (slot(i) + 1) % SLOTS;
+                    coag_sim_free(sims[j].0);
+                    sims[j] = (c, sims[slot(i)].1);
+                }
+            }
+        }
+        for (s, _) in sims {
+            coag_sim_free(s);
+        }
+        let _ = null::<u8>();
+    }
+}

@@ -1,0 +1,152 @@
+//! Shared by the fuzz targets: small sims of every scheme through the C ABI, and the
+//! checks every call must pass.
+
+use coagula::*;
+use std::ptr::null_mut;
+
+/// The scheme kinds the targets build: mass flow, then the `COAG_METHOD_*`.
+pub const KINDS: usize = 5;
+
+/// Statuses a call may return (anything else, in particular `COAG_PANIC`, is a bug).
+pub fn is_status(st: i32) -> bool {
+    (COAG_OK..=COAG_RNG_FAILURE).contains(&st) && st != COAG_PANIC
+}
+
+/// A small sim of kind `kind % KINDS` under the additive kernel (mass flow: 16
+/// particles; counts: 300 monomers and a few larger), its growing tables capped at
+/// 16 MiB and every call at 20 000 proposals, so that an execution stays short.
+///
+/// # Safety
+/// Returns a live handle, freed by the caller with `coag_sim_free`.
+pub unsafe fn small_sim(kind: usize) -> *mut coag_sim {
+    unsafe {
+        let mut k = null_mut();
+        assert_eq!(coag_kernel_new_additive(0.0, &mut k), COAG_OK);
+        let mut s = null_mut();
+        if kind.is_multiple_of(KINDS) {
+            let mut c: coag_massflow_config = std::mem::zeroed();
+            assert_eq!(
+                coag_massflow_default_config(&mut c, size_of_val(&c)),
+                COAG_OK
+            );
+            c.dt = 0.05;
+            let x: Vec<f64> = (0..16).map(|i| 1.0 + (i % 3) as f64).collect();
+            assert_eq!(
+                coag_massflow_new(&c, k, std::ptr::null(), x.as_ptr(), 16, &mut s),
+                COAG_OK
+            );
+        } else {
+            let mut c: coag_counts_config = std::mem::zeroed();
+            assert_eq!(coag_counts_default_config(&mut c, size_of_val(&c)), COAG_OK);
+            c.method = [
+                COAG_METHOD_LOWRANK,
+                COAG_METHOD_LOWRANK_TREE,
+                COAG_METHOD_INVERSE,
+                COAG_METHOD_REJECTION,
+            ][kind % KINDS - 1];
+            c.memory_budget = 16 << 20;
+            let n = [300u64, 20, 0, 3];
+            assert_eq!(coag_counts_new(&c, k, n.as_ptr(), n.len(), &mut s), COAG_OK);
+        }
+        coag_kernel_free(k);
+        assert_eq!(coag_sim_set_work_limit(s, 20_000), COAG_OK);
+        s
+    }
+}
+
+/// The sim's checkpoint.
+///
+/// # Safety
+/// `s` live.
+pub unsafe fn checkpoint(s: *const coag_sim) -> Vec<u8> {
+    unsafe {
+        let mut n = 0usize;
+        assert_eq!(coag_sim_checkpoint_size(s, &mut n), COAG_OK);
+        let mut b = vec![0u8; n];
+        assert_eq!(
+            coag_sim_checkpoint(s, b.as_mut_ptr(), n, null_mut()),
+            COAG_OK
+        );
+        b
+    }
+}
+
+/// Replaces the last 8 bytes by the checksum of the rest (so that the fuzzer reaches
+/// the state's own validation).
+pub fn reseal(b: &mut [u8]) {
+    if b.len() >= 8 {
+        let at = b.len() - 8;
+        let sum = coagula_core::checkpoint::checksum(&b[..at]);
+        b[at..].copy_from_slice(&sum.to_le_bytes());
+    }
+}
+
+/// The checks every live sim passes: a finite time that is not negative; M0 and M1
+/// finite and not negative, or `COAG_CAPACITY` when they overflow a double.
+///
+/// # Safety
+/// `s` live.
+pub unsafe fn check_observables(s: *const coag_sim) {
+    unsafe {
+        let mut t = -1.0;
+        assert_eq!(coag_sim_time(s, &mut t), COAG_OK);
+        assert!(t.is_finite() && t >= 0.0, "time {t}");
+        for m in [0.0, 1.0] {
+            let mut v = -1.0;
+            let st = coag_sim_moment(s, m, &mut v);
+            assert!(
+                st == COAG_CAPACITY || (st == COAG_OK && v.is_finite() && v >= 0.0),
+                "M{m} = {v} ({st})"
+            );
+        }
+        let mut n = 0u64;
+        assert_eq!(coag_sim_particle_count(s, &mut n), COAG_OK);
+    }
+}
+
+/// The message of the last failed call on this thread.
+pub fn last_error() -> String {
+    let mut buf = vec![0 as std::ffi::c_char; 1024];
+    unsafe { coag_last_error_message(buf.as_mut_ptr(), buf.len(), std::ptr::null_mut()) };
+    unsafe { std::ffi::CStr::from_ptr(buf.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Restore from arbitrary bytes into a sim of every scheme: a checkpoint is either
+/// refused (`COAG_BAD_CHECKPOINT`, or `COAG_CAPACITY` past the memory budget) with the
+/// sim unchanged, or accepted as a valid state that a bounded advance takes to a
+/// status. The first byte picks the scheme and whether the bytes are resealed with a
+/// correct checksum (to reach the state's own validation).
+pub fn checkpoint_restore(data: &[u8]) {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let mut buf = rest.to_vec();
+    if mode & 1 == 1 {
+        reseal(&mut buf);
+    }
+    unsafe {
+        let s = small_sim(usize::from(mode >> 1));
+        let before = checkpoint(s);
+        let st = coag_sim_restore(s, buf.as_ptr(), buf.len());
+        match st {
+            COAG_OK => {
+                check_observables(s);
+                let mut t = 0.0;
+                assert_eq!(coag_sim_time(s, &mut t), COAG_OK);
+                let a = coag_sim_advance_to(s, t + 0.5, std::ptr::null_mut());
+                assert!(is_status(a), "advance after restore: {a}: {}", last_error());
+                check_observables(s);
+            }
+            COAG_BAD_CHECKPOINT | COAG_CAPACITY => {
+                assert_eq!(checkpoint(s), before, "a refused restore changed the sim");
+            }
+            other => panic!("restore returned {other}"),
+        }
+        coag_sim_free(s);
+    }
+}
+
+#[path = "call_sequence.rs"]
+pub mod call_sequence;
