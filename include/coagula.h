@@ -745,13 +745,51 @@ int32_t coag_sim_particle_count(const coag_sim *sim, uint64_t *out);
 
 /*
  Length of the sim's state vector: the number of particles (mass-flow: read with
- `coag_sim_get_sizes`) or the number of size classes (size-count schemes: read with
- `coag_sim_get_counts`).
+ `coag_sim_get_sizes`) or the largest occupied size (size-count schemes: the dense
+ vector `coag_sim_get_counts` fills; 0 for an empty system). Nothing is allocated:
+ a state whose largest size is huge but whose occupied sizes are few is better read
+ with `coag_sim_occupied` and `coag_sim_get_pairs`.
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.
  */
 int32_t coag_sim_state_len(const coag_sim *sim, size_t *out);
+
+/*
+ The number of occupied sizes of a size-count sim (the pairs `coag_sim_get_pairs`
+ writes), or of particles of a mass-flow sim.
+
+ # Safety
+ `sim` must be NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_occupied(const coag_sim *sim, size_t *out);
+
+/*
+ The occupied sizes of a size-count sim and their counts, ascending: `sizes[i]` has
+ `counts[i]` particles, for `i < *written` (= `coag_sim_occupied`); both buffers hold
+ `len` values (`COAG_BUFFER_TOO_SMALL` below the occupied count, nothing written).
+ No dense vector is built: O(occupied sizes) however large the sizes are. The volume
+ goes to `*volume` (may be NULL); `written` may be NULL.
+
+ # Safety
+ `sim` NULL or live; `sizes` and `counts` valid for `len` values; `volume` and
+ `written` NULL or writable.
+ */
+int32_t coag_sim_get_pairs(const coag_sim *sim, uint64_t *sizes, uint64_t *counts, size_t len, double *volume, size_t *written);
+
+/*
+ Replaces the state of a size-count sim by `counts[i]` particles of size `sizes[i]`
+ (`len` pairs, any order, each size ≥ 1 and within the size limit, a size at most
+ once) in volume `volume`, as `coag_sim_set_counts` does — without a dense vector
+ from the host. Acceptance–rejection builds its particle list from them directly;
+ the low-rank and inverse schemes keep tables up to the largest size anyway and
+ build from a count vector within the memory budget (`COAG_CAPACITY` past it).
+ Errors leave the sim unchanged.
+
+ # Safety
+ `sim` NULL or live; `sizes` and `counts` valid for `len` values.
+ */
+int32_t coag_sim_set_pairs(coag_sim *sim, const uint64_t *sizes, const uint64_t *counts, size_t len, double volume);
 
 /*
  Copies the particle sizes of a mass-flow sim (sorted ascending) into `buf`, which

@@ -66,6 +66,50 @@ pub trait Observe {
     fn totals(&self) -> crate::scheme::StepReport;
 }
 
+/// `C(a, b)` from occupied `(size, N)` pairs: `Σ N / V` over the sizes in `[a, b]`
+/// (0 for an empty or NaN range).
+pub fn concentration_of_pairs(
+    pairs: impl FnOnce(&mut dyn FnMut(u64, u64)),
+    volume: f64,
+    a: f64,
+    b: f64,
+) -> f64 {
+    if a.is_nan() || b.is_nan() || a > b {
+        return 0.0;
+    }
+    let mut sum = 0.0;
+    pairs(&mut |s, n| {
+        let x = s as f64;
+        if x >= a && x <= b {
+            sum += n as f64 / volume;
+        }
+    });
+    sum
+}
+
+/// The largest occupied size per volume (the gel-mass estimate) from `(size, N)` pairs.
+pub fn largest_of_pairs(pairs: impl FnOnce(&mut dyn FnMut(u64, u64)), volume: f64) -> f64 {
+    let mut largest = 0u64;
+    pairs(&mut |s, n| {
+        if n > 0 {
+            largest = largest.max(s);
+        }
+    });
+    largest as f64 / volume
+}
+
+/// `Σ s^m N / V` from `(size, N)` pairs, summed in their order (ascending sizes gives
+/// the bits of [`moment_of_counts`]).
+pub fn moment_of_pairs(pairs: impl FnOnce(&mut dyn FnMut(u64, u64)), volume: f64, m: f64) -> f64 {
+    let mut sum = 0.0;
+    pairs(&mut |s, n| {
+        if n > 0 {
+            sum += (n as f64 / volume) * power(s as f64, m);
+        }
+    });
+    sum
+}
+
 /// `C(a, b)` of a size-count state, `counts[i − 1] = N_i`: the sizes `⌈a⌉ ..= ⌊b⌋`,
 /// visited directly (O(b − a), not O(M)).
 pub fn concentration_of_counts(counts: &[u64], volume: f64, a: f64, b: f64) -> f64 {

@@ -266,3 +266,81 @@ fn a_stuck_random_stream_cannot_hang_a_call() {
         }
     }
 }
+
+#[test]
+fn occupied_sizes_without_a_count_vector_match_the_dense_state() {
+    for k in kernels() {
+        for info in common::count_schemes() {
+            let Some(mut s) = counts_sim(info.id, k) else {
+                continue;
+            };
+            s.advance_to(1.5, &mut Pcg64Mcg::new(4)).unwrap();
+            let mut pairs = Vec::new();
+            s.for_each_count(&mut |size, n| pairs.push((size, n)))
+                .unwrap();
+            let State::Counts(dense, v) = s.state() else {
+                panic!("counts")
+            };
+            let want: Vec<(u64, u64)> = dense
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0)
+                .map(|(i, &n)| (i as u64 + 1, n))
+                .collect();
+            assert_eq!(pairs, want, "{}", info.name);
+            assert!(pairs.len() > 5, "{}: {} sizes", info.name, pairs.len());
+            // the moments from the occupied sizes are the dense ones, bit for bit
+            for m in [0.0, 1.0, 2.0, 0.5] {
+                let dense_m = coagula_core::observe::moment_of_counts(&dense, v, m);
+                let got = s.moment(m);
+                if matches!(info.id, SchemeId::Inverse | SchemeId::Rejection) {
+                    // (summed in their own order: occupied slots, particles)
+                    assert!((got - dense_m).abs() <= 1e-12 * dense_m, "{}", info.name);
+                } else {
+                    assert_eq!(got.to_bits(), dense_m.to_bits(), "{} M{m}", info.name);
+                }
+            }
+            assert!(s.for_each_count(&mut |_, _| {}).is_ok());
+        }
+    }
+    assert!(massflow_sim().for_each_count(&mut |_, _| {}).is_err());
+}
+
+#[test]
+fn an_empty_system_is_valid_and_can_be_refilled() {
+    for info in common::count_schemes() {
+        let init = Init::Counts {
+            counts: &[0, 0, 0],
+            volume: 10.0,
+        };
+        let mut s: Box<Sim> = match registry::build(
+            info.id,
+            Coagulation::additive(),
+            NoFragmentation,
+            &init,
+            &Options::default(),
+        ) {
+            Ok(s) => s,
+            Err(Error::Unsupported { .. }) => continue,
+            Err(e) => panic!("{}: {e}", info.name),
+        };
+        let mut rng = Pcg64Mcg::new(3);
+        s.advance_to(2.0, &mut rng).unwrap();
+        assert_eq!((s.particles(), s.moment(0.0), s.moment(1.0)), (0, 0.0, 0.0));
+        assert_eq!(s.gel_mass(), Some(0.0));
+        assert_eq!(s.concentration(0.0, 10.0), 0.0);
+        let mut w = coagula_core::checkpoint::Writer::new(&mut []);
+        s.save(&mut w);
+        let mut buf = vec![0u8; w.needed()];
+        s.save(&mut coagula_core::checkpoint::Writer::new(&mut buf));
+        s.restore(&mut coagula_core::checkpoint::Reader::new(&buf))
+            .unwrap();
+        // drained, refilled, run on
+        s.set_counts(&[500, 10], 500.0).unwrap();
+        s.advance_to(3.0, &mut rng).unwrap();
+        assert!(s.particles() < 510 && s.particles() > 0, "{}", info.name);
+        s.set_counts(&[], 500.0).unwrap();
+        s.advance_to(4.0, &mut rng).unwrap();
+        assert_eq!(s.particles(), 0, "{}", info.name);
+    }
+}

@@ -934,8 +934,10 @@ pub unsafe extern "C" fn coag_sim_particle_count(sim: *const coag_sim, out: *mut
 }
 
 /// Length of the sim's state vector: the number of particles (mass-flow: read with
-/// `coag_sim_get_sizes`) or the number of size classes (size-count schemes: read with
-/// `coag_sim_get_counts`).
+/// `coag_sim_get_sizes`) or the largest occupied size (size-count schemes: the dense
+/// vector `coag_sim_get_counts` fills; 0 for an empty system). Nothing is allocated:
+/// a state whose largest size is huge but whose occupied sizes are few is better read
+/// with `coag_sim_occupied` and `coag_sim_get_pairs`.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
@@ -944,12 +946,140 @@ pub unsafe extern "C" fn coag_sim_state_len(sim: *const coag_sim, out: *mut usiz
     // SAFETY: forwarded contract.
     unsafe {
         read(sim, out, |s| {
-            Ok(match s.sim.state() {
-                State::Sizes(x) => x.len(),
-                State::Counts(c, _) => c.len(),
+            if let Some(n) = particle_sizes_len(s) {
+                return Ok(n);
+            }
+            let mut largest = 0u64;
+            s.sim.for_each_count(&mut |size, _| largest = size)?;
+            usize::try_from(largest).or_else(|_| {
+                fail(
+                    crate::COAG_CAPACITY,
+                    "state length: the largest size does not fit size_t",
+                )
             })
         })
     }
+}
+
+/// The number of particles of a mass-flow sim (its state is its sizes; `None` for a
+/// size-count sim, whose dense state is not built to find out).
+fn particle_sizes_len(s: &coag_sim) -> Option<usize> {
+    if s.sim.id().info().state != registry::StateKind::Sizes {
+        return None;
+    }
+    match s.sim.state() {
+        State::Sizes(x) => Some(x.len()),
+        State::Counts(..) => None,
+    }
+}
+
+/// The number of occupied sizes of a size-count sim (the pairs `coag_sim_get_pairs`
+/// writes), or of particles of a mass-flow sim.
+///
+/// # Safety
+/// `sim` must be NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_occupied(sim: *const coag_sim, out: *mut usize) -> i32 {
+    // SAFETY: forwarded contract.
+    unsafe {
+        read(sim, out, |s| {
+            if let Some(n) = particle_sizes_len(s) {
+                return Ok(n);
+            }
+            let mut n = 0usize;
+            s.sim.for_each_count(&mut |_, _| n += 1)?;
+            Ok(n)
+        })
+    }
+}
+
+/// The occupied sizes of a size-count sim and their counts, ascending: `sizes[i]` has
+/// `counts[i]` particles, for `i < *written` (= `coag_sim_occupied`); both buffers hold
+/// `len` values (`COAG_BUFFER_TOO_SMALL` below the occupied count, nothing written).
+/// No dense vector is built: O(occupied sizes) however large the sizes are. The volume
+/// goes to `*volume` (may be NULL); `written` may be NULL.
+///
+/// # Safety
+/// `sim` NULL or live; `sizes` and `counts` valid for `len` values; `volume` and
+/// `written` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_get_pairs(
+    sim: *const coag_sim,
+    sizes: *mut u64,
+    counts: *mut u64,
+    len: usize,
+    volume: *mut f64,
+    written: *mut usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let mut n = 0usize;
+        s.sim.for_each_count(&mut |_, _| n += 1)?;
+        if len < n {
+            return fail(
+                crate::COAG_BUFFER_TOO_SMALL,
+                format!("pairs: buffers of {len} for {n} occupied sizes"),
+            );
+        }
+        // SAFETY: NULL checked; `len` writable values by contract.
+        let out_s = unsafe { slice_mut(sizes, len, "sizes") }?;
+        let out_c = unsafe { slice_mut(counts, len, "counts") }?;
+        let mut i = 0;
+        s.sim.for_each_count(&mut |size, c| {
+            if i < len {
+                out_s[i] = size;
+                out_c[i] = c;
+            }
+            i += 1;
+        })?;
+        if !volume.is_null() {
+            // SAFETY: non-null; writable by contract.
+            unsafe { write(volume, s.sim.volume()) };
+        }
+        if !written.is_null() {
+            // SAFETY: non-null; writable by contract.
+            unsafe { write(written, n) };
+        }
+        Ok(())
+    })
+}
+
+/// Replaces the state of a size-count sim by `counts[i]` particles of size `sizes[i]`
+/// (`len` pairs, any order, each size ≥ 1 and within the size limit, a size at most
+/// once) in volume `volume`, as `coag_sim_set_counts` does — without a dense vector
+/// from the host. Acceptance–rejection builds its particle list from them directly;
+/// the low-rank and inverse schemes keep tables up to the largest size anyway and
+/// build from a count vector within the memory budget (`COAG_CAPACITY` past it).
+/// Errors leave the sim unchanged.
+///
+/// # Safety
+/// `sim` NULL or live; `sizes` and `counts` valid for `len` values.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_pairs(
+    sim: *mut coag_sim,
+    sizes: *const u64,
+    counts: *const u64,
+    len: usize,
+    volume: f64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live / readable by contract.
+        let s = unsafe { handle_mut(sim, "sim") }?;
+        let xs = unsafe { slice(sizes, len, "sizes") }?;
+        let cs = unsafe { slice(counts, len, "counts") }?;
+        if !matches!(s.config, Config::Counts(_)) {
+            return fail(
+                COAG_UNSUPPORTED,
+                "pairs: a mass-flow sim has sizes (use coag_sim_set_sizes)",
+            );
+        }
+        s.sim.set_pairs(xs, cs, volume)?;
+        if let Config::Counts(c) = &mut s.config {
+            c.volume = volume;
+        }
+        Ok(())
+    })
 }
 
 /// Copies the particle sizes of a mass-flow sim (sorted ascending) into `buf`, which
@@ -966,7 +1096,13 @@ pub unsafe extern "C" fn coag_sim_get_sizes(
     guard(|| {
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle(sim, "sim") }?;
-        let State::Sizes(x) = s.sim.state() else {
+        // (a size-count sim is refused before its dense counts are built)
+        let sizes = if particle_sizes_len(s).is_some() {
+            Some(s.sim.state())
+        } else {
+            None
+        };
+        let Some(State::Sizes(x)) = sizes else {
             return fail(
                 COAG_UNSUPPORTED,
                 "sizes: not a mass-flow sim (use coag_sim_get_counts)",
@@ -1021,25 +1157,29 @@ pub unsafe extern "C" fn coag_sim_get_counts(
     guard(|| {
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle(sim, "sim") }?;
-        let State::Counts(counts, v) = s.sim.state() else {
+        // the largest occupied size first (nothing allocated), then the counts straight
+        // into the caller's buffer
+        let mut largest = 0u64;
+        if s.sim.for_each_count(&mut |size, _| largest = size).is_err() {
             return fail(
                 COAG_UNSUPPORTED,
                 "counts: a mass-flow sim has sizes (use coag_sim_get_sizes)",
             );
-        };
-        if len < counts.len() {
+        }
+        if (len as u64) < largest {
             return fail(
                 crate::COAG_BUFFER_TOO_SMALL,
-                format!("counts: buffer of {len} for {} sizes", counts.len()),
+                format!("counts: buffer of {len} for sizes up to {largest}"),
             );
         }
         // SAFETY: NULL checked; `len` writable values by contract.
         let out = unsafe { slice_mut(buf, len, "buf") }?;
-        out[..counts.len()].copy_from_slice(&counts);
-        out[counts.len()..].iter_mut().for_each(|c| *c = 0);
+        out.iter_mut().for_each(|c| *c = 0);
+        s.sim
+            .for_each_count(&mut |size, c| out[size as usize - 1] = c)?;
         if !volume.is_null() {
             // SAFETY: non-null; writable by contract.
-            unsafe { write(volume, v) };
+            unsafe { write(volume, s.sim.volume()) };
         }
         Ok(())
     })
@@ -1539,8 +1679,13 @@ pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coa
         let s = unsafe { handle(sim, "sim") }?;
         non_null(out, "out")?;
         let id = s.sim.id();
-        let mut fresh = match (s.sim.state(), s.built) {
-            (State::Sizes(x), Config::MassFlow(c)) => {
+        let state = if particle_sizes_len(s).is_some() {
+            Some(s.sim.state())
+        } else {
+            None
+        };
+        let mut fresh = match (state, s.built) {
+            (Some(State::Sizes(x)), Config::MassFlow(c)) => {
                 let init = Init::Sizes {
                     sizes: x,
                     mass: c.mass,

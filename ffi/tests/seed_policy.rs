@@ -55,7 +55,8 @@ fn rust_counts(id: SchemeId, n0: u64, t: f64) -> Vec<u64> {
         Coagulation::brownian(),
         NoFragmentation,
         &init,
-        &Options::default(),
+        // the C ABI's default clock (kept between calls)
+        &Options::default().with_batched_clock(false),
     )
     .unwrap();
     let mut rng = generator(SEED, STREAM);
@@ -63,7 +64,11 @@ fn rust_counts(id: SchemeId, n0: u64, t: f64) -> Vec<u64> {
         s.advance_to(t * f64::from(h) / 4.0, &mut rng).unwrap();
     }
     match s.state() {
-        State::Counts(c, _) => c.into_owned(),
+        // up to the largest occupied size, as coag_sim_get_counts writes them
+        State::Counts(c, _) => {
+            let end = c.iter().rposition(|&n| n > 0).map_or(0, |i| i + 1);
+            c[..end].to_vec()
+        }
         State::Sizes(_) => unreachable!(),
     }
 }

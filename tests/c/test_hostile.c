@@ -456,6 +456,82 @@ static void coupling(coag_kernel *k) {
     }
 }
 
+/* Sparse state: a state whose sizes are huge and few is read as (size, count) pairs
+ * with nothing dense allocated; empty systems are valid and can be refilled. */
+static void sparse_and_empty(void) {
+    coag_kernel *k1;
+    OK(coag_kernel_new_constant(1.0, &k1));
+    /* the case: acceptance-rejection from 1000 monomers to t = 1e9 */
+    coag_counts_config c;
+    OK(coag_counts_default_config(&c, sizeof c));
+    c.method = COAG_METHOD_REJECTION;
+    coag_sim *s;
+    uint64_t n0[1] = {1000};
+    OK(coag_counts_new(&c, k1, n0, 1, &s));
+    OK(coag_sim_advance_to(s, 1e9, NULL));
+    size_t len = 0, occ = 0, written = 0;
+    OK(coag_sim_state_len(s, &len));
+    OK(coag_sim_occupied(s, &occ));
+    CHECK(len > 100000000 && occ > 0 && occ <= 1000, "state_len %zu, occupied %zu", len, occ);
+    uint64_t *sz = malloc(occ * sizeof *sz), *ct = malloc(occ * sizeof *ct);
+    double v = 0, m1 = 0;
+    EXPECT(coag_sim_get_pairs(s, sz, ct, occ - 1, &v, &written), COAG_BUFFER_TOO_SMALL);
+    OK(coag_sim_get_pairs(s, sz, ct, occ, &v, &written));
+    uint64_t particles = 0, np = 0;
+    double mass = 0;
+    for (size_t i = 0; i < written; i++) {
+        CHECK(i == 0 || sz[i] > sz[i - 1], "pairs ascending");
+        np += ct[i];
+        mass += (double)sz[i] * (double)ct[i];
+    }
+    OK(coag_sim_particle_count(s, &particles));
+    OK(coag_sim_moment(s, 1.0, &m1));
+    CHECK(written == occ && np == particles, "pairs: %zu of %zu, %llu particles", written, occ,
+          (unsigned long long)np);
+    CHECK(fabs(mass / v - m1) <= 1e-12 * m1, "mass from pairs %g vs M1 %g", mass / v, m1);
+    /* the pairs written back give the same state */
+    coag_sim *t2 = NULL;
+    OK(coag_sim_clone(s, &t2));
+    OK(coag_sim_set_pairs(t2, sz, ct, written, v));
+    double m1b = 0;
+    OK(coag_sim_moment(t2, 1.0, &m1b));
+    CHECK(fabs(m1b - m1) <= 1e-12 * m1, "set_pairs round trip: M1 %.17g vs %.17g", m1b, m1);
+    uint64_t dup_s[2] = {3, 3}, dup_c[2] = {1, 1};
+    EXPECT(coag_sim_set_pairs(t2, dup_s, dup_c, 2, 1.0), COAG_INVALID_ARGUMENT);
+    uint64_t far_s[1] = {1ULL << 40}, far_c[1] = {1};
+    EXPECT(coag_sim_set_pairs(t2, far_s, far_c, 1, 1.0), COAG_CAPACITY);
+    coag_sim_free(t2);
+    free(sz);
+    free(ct);
+    coag_sim_free(s);
+    /* empty systems, drained and refilled */
+    for (int m = 1; m < NMETHODS; m++) {
+        c.method = methods[m];
+        uint64_t none[3] = {0, 0, 0};
+        c.volume = 10.0;
+        OK(coag_counts_new(&c, k1, none, 3, &s));
+        OK(coag_sim_advance_to(s, 1.0, NULL));
+        OK(coag_sim_particle_count(s, &particles));
+        OK(coag_sim_occupied(s, &occ));
+        OK(coag_sim_state_len(s, &len));
+        double m0 = -1;
+        OK(coag_sim_moment(s, 0.0, &m0));
+        CHECK(particles == 0 && occ == 0 && len == 0 && m0 == 0.0, "method %d: empty", methods[m]);
+        uint64_t ps[2] = {1, 5}, pc[2] = {400, 3};
+        OK(coag_sim_set_pairs(s, ps, pc, 2, 403.0));
+        OK(coag_sim_advance_to(s, 2.0, NULL));
+        OK(coag_sim_particle_count(s, &particles));
+        CHECK(particles > 0 && particles < 403, "method %d: refilled, %llu", methods[m],
+              (unsigned long long)particles);
+        OK(coag_sim_set_counts(s, none, 3, 403.0)); /* drained */
+        OK(coag_sim_advance_to(s, 3.0, NULL));
+        OK(coag_sim_particle_count(s, &particles));
+        CHECK(particles == 0, "method %d: drained", methods[m]);
+        coag_sim_free(s);
+    }
+    coag_kernel_free(k1);
+}
+
 #include <time.h>
 #define TIMED(call)                                                                \
     do {                                                                           \
@@ -474,6 +550,7 @@ int main(void) {
     TIMED(bounded_and_split_calls(k));
     TIMED(reproducers(k));
     TIMED(coupling(k));
+    TIMED(sparse_and_empty());
     coag_kernel_free(k);
     return finish("test_hostile");
 }

@@ -262,12 +262,19 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
         budget: &mut Budget<'_>,
         rng: &mut G,
     ) -> Result<StepReport>;
-    /// The state (sizes or counts).
+    /// The state (sizes or counts; the counts as a dense vector up to the largest size:
+    /// see [`for_each_count`](Self::for_each_count) for the occupied sizes only).
     fn state(&self) -> State<'_>;
+    /// Calls `f(size, N)` for every occupied size, ascending, without a dense count
+    /// vector (size-count schemes; others: `Unsupported`).
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()>;
     /// Largest size the state can hold now (size-count schemes' M), if any.
     fn max_size(&self) -> Option<u64>;
     /// Replaces counts and volume (size-count schemes; others: `Unsupported`).
     fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>;
+    /// Replaces the state by `counts[i]` particles of size `sizes[i]` in `volume`
+    /// (size-count schemes; acceptance–rejection builds no count vector).
+    fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()>;
     /// Replaces the sizes (mass flow; others: `Unsupported`).
     fn set_sizes(&mut self, sizes: &[f64]) -> Result<()>;
     /// Replaces the coagulation kernel.
@@ -292,6 +299,12 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
 pub trait Facet<K, F> {
     /// The state.
     fn state(&self) -> State<'_>;
+    /// The occupied sizes and their counts, ascending.
+    fn for_each_count(&self, _f: &mut dyn FnMut(u64, u64)) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "counts: this scheme's state is particle sizes (use the sizes)",
+        })
+    }
     /// Largest size the state can hold now.
     fn max_size(&self) -> Option<u64> {
         None
@@ -300,6 +313,12 @@ pub trait Facet<K, F> {
     fn set_counts(&mut self, _counts: &[u64], _volume: f64) -> Result<()> {
         Err(Error::Unsupported {
             what: "counts: this scheme's state is particle sizes (use set_sizes)",
+        })
+    }
+    /// Replaces the state from `(size, count)` pairs.
+    fn set_pairs(&mut self, _sizes: &[u64], _counts: &[u64], _volume: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "pairs: this scheme's state is particle sizes (use set_sizes)",
         })
     }
     /// Replaces the sizes.
@@ -388,11 +407,17 @@ where
     fn state(&self) -> State<'_> {
         self.s.state()
     }
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()> {
+        self.s.for_each_count(f)
+    }
     fn max_size(&self) -> Option<u64> {
         self.s.max_size()
     }
     fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
         self.s.set_counts(counts, volume)
+    }
+    fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
+        self.s.set_pairs(sizes, counts, volume)
     }
     fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
         self.s.set_sizes(sizes)
@@ -665,8 +690,15 @@ macro_rules! counts_facet {
             fn max_size(&self) -> Option<u64> {
                 Some(self.max_size() as u64)
             }
+            fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()> {
+                <$ty>::for_each_count(self, f);
+                Ok(())
+            }
             fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
                 <$ty>::set_counts(self, counts, volume)
+            }
+            fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
+                <$ty>::set_pairs(self, sizes, counts, volume)
             }
             fn set_kernel(&mut self, kernel: K) -> Result<()> {
                 <$ty>::set_kernel(self, kernel)

@@ -197,6 +197,16 @@ impl<K: CoagulationKernel> Inverse<K> {
         c
     }
 
+    /// Calls `f(size, N)` for every occupied size, ascending (sorting the occupied
+    /// sizes: O(occupied) memory, no count vector).
+    pub fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        let mut order: Vec<u32> = (0..self.size.len() as u32).collect();
+        order.sort_unstable_by_key(|&a| self.size[a as usize]);
+        for a in order {
+            f(self.size[a as usize], self.count[a as usize]);
+        }
+    }
+
     /// Current number of simulation particles N.
     pub fn particles(&self) -> u64 {
         self.pop.n
@@ -498,11 +508,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
                 what: "counts do not add up",
             });
         }
-        if !(volume > 0.0
-            && volume.is_finite()
-            && time >= 0.0
-            && time.is_finite()
-            && (1..=n0).contains(&n))
+        if !(volume > 0.0 && volume.is_finite() && time >= 0.0 && time.is_finite() && n <= n0)
             || count.contains(&0)
         {
             return Err(Error::Checkpoint {
@@ -587,6 +593,21 @@ impl<K: CoagulationKernel> Inverse<K> {
         let fresh = Inverse::new(self.kernel.clone(), counts, volume)?;
         self.install(fresh);
         Ok(())
+    }
+
+    /// [`set_counts`](Self::set_counts) from `(size, count)` pairs (each size at most
+    /// once, within the size limit).
+    pub fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()>
+    where
+        K: Clone,
+    {
+        let dense = crate::scheme::population::dense_from_pairs(
+            sizes,
+            counts,
+            self.pop.size_limit,
+            self.pop.memory_budget,
+        )?;
+        self.set_counts(&dense, volume)
     }
 
     /// Sets the clock (finite, not negative): a host that keeps its own time origin.

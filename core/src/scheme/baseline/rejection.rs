@@ -136,6 +136,19 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         c
     }
 
+    /// Calls `f(size, N)` for every occupied size, ascending (a sorted copy of the
+    /// particle list: no count vector).
+    pub fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        let mut sizes = self.sizes.clone();
+        sizes.sort_unstable();
+        let mut i = 0;
+        while i < sizes.len() {
+            let j = i + sizes[i..].iter().take_while(|&&s| s == sizes[i]).count();
+            f(sizes[i], (j - i) as u64);
+            i = j;
+        }
+    }
+
     /// The particle sizes.
     pub fn sizes(&self) -> &[u64] {
         &self.sizes
@@ -296,7 +309,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         if sizes.iter().any(|&s| s == 0 || s > max_present)
             || max_present > size_limit
             || !(volume > 0.0 && volume.is_finite() && time >= 0.0 && time.is_finite())
-            || !(1..=n0).contains(&(sizes.len() as u64))
+            || sizes.len() as u64 > n0
         {
             return Err(Error::Checkpoint {
                 what: "inconsistent particle sizes, volume or time",
@@ -348,6 +361,48 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
                 Err(e)
             }
         }
+    }
+
+    /// Replaces the state by `counts[i]` particles of size `sizes[i]` (each size at most
+    /// once, within the size limit) in `volume`, straight into the particle list (no
+    /// count vector, however large the sizes). Errors leave the scheme unchanged.
+    pub fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
+        crate::error::positive("volume", volume)?;
+        let max = crate::scheme::population::check_pairs(sizes, counts, self.pop.size_limit)?;
+        let (mut n, mut mass) = (0u64, 0u64);
+        for (&s, &c) in sizes.iter().zip(counts) {
+            n = n.checked_add(c).ok_or(Error::Overflow {
+                name: "particle number",
+            })?;
+            mass = s
+                .checked_mul(c)
+                .and_then(|m| mass.checked_add(m))
+                .ok_or(Error::Overflow {
+                    name: "total mass (sum of i N_i)",
+                })?;
+        }
+        let cmax = self.sup(max.max(1))?;
+        let len = usize::try_from(n).map_err(|_| Error::Capacity {
+            name: "particles (address space)",
+            capacity: usize::MAX,
+        })?;
+        within_budget(
+            len.checked_mul(core::mem::size_of::<u64>()),
+            self.pop.memory_budget,
+        )?;
+        let mut list = Vec::new();
+        try_reserve(&mut list, len)?;
+        for (&s, &c) in sizes.iter().zip(counts) {
+            list.extend(core::iter::repeat_n(s, c as usize));
+        }
+        self.sizes = list;
+        self.pop.n = n;
+        self.pop.n0 = n;
+        self.pop.volume = volume;
+        self.pending = None;
+        self.max_present = max.max(1);
+        self.cmax = cmax;
+        Ok(())
     }
 
     /// Sets the clock (finite, not negative): a host that keeps its own time origin.

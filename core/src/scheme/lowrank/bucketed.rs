@@ -516,7 +516,12 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
         }
         self.rates_changed = false;
         self.over_rate = rates.over;
-        self.over_p = (rates.over / rates.total).clamp(0.0, 1.0);
+        // (an empty system has no rate at all: no overflow proposal either)
+        self.over_p = if rates.total > 0.0 {
+            (rates.over / rates.total).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
         self.countdown = geometric(self.over_p, rng);
         Ok(rates.total)
     }
@@ -1070,14 +1075,59 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         Cow::Owned(self.count_vec())
     }
 
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        let mut offsets: Vec<u32> = Vec::new();
+        for (b, bk) in self.buckets.iter().enumerate() {
+            if bk.n == 0 {
+                continue;
+            }
+            let (lo, hi) = bucket_range(b);
+            let hi = hi.min(self.m);
+            let list = b
+                .checked_sub(SINGLE as usize)
+                .and_then(|l| self.lists.get(l))
+                .filter(|_| !bk.grid);
+            match list {
+                Some(list) => {
+                    // a list bucket: its particles' offsets, sorted and counted
+                    offsets.clear();
+                    offsets.extend_from_slice(list);
+                    offsets.sort_unstable();
+                    let mut i = 0;
+                    while i < offsets.len() {
+                        let j = i + offsets[i..]
+                            .iter()
+                            .take_while(|&&o| o == offsets[i])
+                            .count();
+                        f(lo + u64::from(offsets[i]), (j - i) as u64);
+                        i = j;
+                    }
+                }
+                None => {
+                    for s in lo..=hi {
+                        let c = self.counts[s as usize];
+                        if c > 0 {
+                            f(s, u64::from(c));
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     fn rate_now(&self) -> Option<f64> {
         if self.stale() {
             return None;
         }
         let r = self.rates();
         let consistent = r.over.to_bits() == self.over_rate.to_bits()
-            && (r.total == 0.0
-                || (r.over / r.total).clamp(0.0, 1.0).to_bits() == self.over_p.to_bits());
+            && (if r.total > 0.0 {
+                (r.over / r.total).clamp(0.0, 1.0)
+            } else {
+                0.0
+            })
+            .to_bits()
+                == self.over_p.to_bits();
         consistent.then_some(r.total)
     }
 
@@ -1155,7 +1205,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         let bad = |what| Error::Checkpoint { what };
         let n = pop.n;
         // doubling keeps n below n0 (it doubles when n < n0/2); a fresh start has n = n0
-        if !(1..=MAX_PARTICLES).contains(&pop.n0) || !(1..=pop.n0).contains(&n) {
+        if pop.n0 > MAX_PARTICLES || n > pop.n0 {
             return Err(bad("invalid particle number or reference"));
         }
         within_budget(

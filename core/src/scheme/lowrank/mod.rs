@@ -259,9 +259,15 @@ where
         self.engine.max_size() as usize
     }
 
-    /// The moment `Σ_i i^m N_i / V`.
+    /// The moment `Σ_i i^m N_i / V` (from the occupied sizes: no count vector).
     pub fn moment(&self, m: f64) -> f64 {
-        crate::observe::moment_of_counts(&self.counts(), self.pop.volume, m)
+        crate::observe::moment_of_pairs(|f| self.engine.for_each_count(f), self.pop.volume, m)
+    }
+
+    /// Calls `f(size, N)` for every occupied size, ascending, without building the
+    /// count vector.
+    pub fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        self.engine.for_each_count(f)
     }
 
     /// Totals over the whole run.
@@ -311,6 +317,18 @@ where
         self.time = super::check_time(t)?;
         self.clock = Clock::Stale;
         Ok(())
+    }
+
+    /// [`set_counts`](Self::set_counts) from `(size, count)` pairs (each size at most
+    /// once, within the size limit).
+    pub fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
+        let dense = super::population::dense_from_pairs(
+            sizes,
+            counts,
+            self.pop.size_limit,
+            self.pop.memory_budget,
+        )?;
+        self.set_counts(&dense, volume)
     }
 
     /// The mean waiting time between proposals and whether proposals happen at all,
@@ -539,11 +557,7 @@ where
         }
         let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
-        if !(volume > 0.0
-            && volume.is_finite()
-            && time >= 0.0
-            && time.is_finite()
-            && (1..=n0).contains(&n))
+        if !(volume > 0.0 && volume.is_finite() && time >= 0.0 && time.is_finite() && n <= n0)
             || size_limit == 0
         {
             return Err(bad(
@@ -606,10 +620,10 @@ macro_rules! observe_counts {
                 <$ty>::moment(self, order)
             }
             fn concentration(&self, a: f64, b: f64) -> f64 {
-                crate::observe::concentration_of_counts(&self.counts(), <$ty>::volume(self), a, b)
+                crate::observe::concentration_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self), a, b)
             }
             fn gel_mass(&self) -> Option<f64> {
-                Some(crate::observe::largest_of_counts(&self.counts(), <$ty>::volume(self)))
+                Some(crate::observe::largest_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self)))
             }
             fn totals(&self) -> StepReport {
                 <$ty>::totals(self)

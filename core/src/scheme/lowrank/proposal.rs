@@ -92,6 +92,10 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// Housekeeping after an event (resyncs, drift control).
     fn settle(&mut self, pop: &Population);
 
+    /// Calls `f(size, N)` for every occupied size, ascending, allocating no more than
+    /// the particles of one bucket (no dense count vector).
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64));
+
     /// The counts, `N_i` at index `i − 1`, for `i = 1..=max_size()`.
     fn counts(&self) -> Cow<'_, [u64]>;
 

@@ -279,6 +279,14 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         Cow::Borrowed(&self.counts)
     }
 
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        for (i, &c) in self.counts.iter().enumerate() {
+            if c > 0 {
+                f(i as u64 + 1, c);
+            }
+        }
+    }
+
     fn max_size(&self) -> u64 {
         self.m as u64
     }

@@ -149,9 +149,70 @@ pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
     })
 }
 
+/// Checks `(size, count)` pairs (sizes ≥ 1, within `size_limit`, each at most once)
+/// and returns the largest size.
+pub(crate) fn check_pairs(sizes: &[u64], counts: &[u64], size_limit: u64) -> Result<u64> {
+    if sizes.len() != counts.len() {
+        return Err(Error::BufferLength {
+            name: "counts (one per size)",
+            expected: sizes.len(),
+            got: counts.len(),
+        });
+    }
+    let mut sorted: Vec<u64> = Vec::new();
+    try_reserve(&mut sorted, sizes.len())?;
+    sorted.extend_from_slice(sizes);
+    sorted.sort_unstable();
+    if sorted.first() == Some(&0) {
+        return Err(Error::OutOfRange {
+            name: "size",
+            value: 0.0,
+            range: "1 or more",
+        });
+    }
+    if sorted.windows(2).any(|w| w[0] == w[1]) {
+        return Err(Error::OutOfRange {
+            name: "size (given twice)",
+            value: sorted
+                .windows(2)
+                .find(|w| w[0] == w[1])
+                .map_or(0.0, |w| w[0] as f64),
+            range: "each size at most once",
+        });
+    }
+    let largest = sorted.last().copied().unwrap_or(0);
+    if largest > size_limit {
+        return Err(Error::Capacity {
+            name: "maximum particle size",
+            capacity: usize::try_from(size_limit).unwrap_or(usize::MAX),
+        });
+    }
+    Ok(largest)
+}
+
+/// The dense count vector of `(size, count)` pairs (for the schemes whose own tables
+/// run up to the largest size), within the memory budget.
+pub(crate) fn dense_from_pairs(
+    sizes: &[u64],
+    counts: &[u64],
+    size_limit: u64,
+    budget: usize,
+) -> Result<Vec<u64>> {
+    let largest = check_pairs(sizes, counts, size_limit)?;
+    let len = usize::try_from(largest).unwrap_or(usize::MAX);
+    within_budget(len.checked_mul(core::mem::size_of::<u64>()), budget)?;
+    let mut dense = Vec::new();
+    try_resize(&mut dense, len, 0u64)?;
+    for (&s, &c) in sizes.iter().zip(counts) {
+        dense[s as usize - 1] = c;
+    }
+    Ok(dense)
+}
+
 /// Validates an initial count vector and returns its particle number: the number and
 /// the total mass `Σ i N_i` must fit 64 bits (sizes are 64-bit integers, so a larger
-/// mass could only fail later, at a merge).
+/// mass could only fail later, at a merge). An empty system (no particle) is valid: it
+/// stays as it is until a host puts particles in (`set_counts`).
 pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
     let mut n: u64 = 0;
     let mut mass: u64 = 0;
@@ -165,9 +226,6 @@ pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
             .ok_or(Error::Overflow {
                 name: "total mass (sum of i N_i)",
             })?;
-    }
-    if n == 0 {
-        return Err(Error::Empty);
     }
     Ok(n)
 }
@@ -187,7 +245,8 @@ mod tests {
 
     #[test]
     fn population_rules() {
-        assert!(Population::new(&[0, 0], 1.0).is_err());
+        // an empty system is valid (a host drains a cell and refills it later)
+        assert_eq!(Population::new(&[0, 0], 1.0).unwrap().n, 0);
         assert!(Population::new(&[u64::MAX, 1], 1.0).is_err());
         assert!(Population::new(&[3], 0.0).is_err());
         assert!(Population::new(&[3], f64::INFINITY).is_err());
