@@ -13,7 +13,7 @@ module coagula
   integer(c_int32_t), parameter :: COAG_OK = 0, COAG_NULL_PARAMETER = 1, &
        COAG_INVALID_ARGUMENT = 2, COAG_BUFFER_TOO_SMALL = 3, COAG_CAPACITY = 4, &
        COAG_INVALID_RATE = 5, COAG_UNSUPPORTED = 6, COAG_TIME_BACKWARDS = 7, &
-       COAG_BAD_CHECKPOINT = 8, COAG_PANIC = 9
+       COAG_BAD_CHECKPOINT = 8, COAG_PANIC = 9, COAG_INTERRUPTED = 10, COAG_RNG_FAILURE = 11
   integer(c_int32_t), parameter :: COAG_POINTS_NIEDERREITER = 0, COAG_POINTS_SOBOL = 1, &
        COAG_POINTS_MONTE_CARLO = 2
   integer(c_int32_t), parameter :: COAG_RANDOMIZATION_NONE = 0, COAG_RANDOMIZATION_SHIFT = 1, &
@@ -42,7 +42,24 @@ module coagula
      integer(c_int64_t) :: memory_budget
      integer(c_int64_t) :: seed
      integer(c_int64_t) :: stream
+     integer(c_int32_t) :: batched_clock
   end type coag_counts_config
+
+  ! user kernels: procedures with bind(c) interfaces, passed with c_funloc
+  type, bind(c) :: coag_user_kernel
+     type(c_funptr) :: rate, majorant
+     integer(c_int32_t) :: rank
+     type(c_funptr) :: factors
+     integer(c_int32_t) :: low_rank_exact
+     type(c_funptr) :: sup
+     type(c_ptr) :: user_data
+  end type coag_user_kernel
+
+  type, bind(c) :: coag_user_fragmentation
+     type(c_funptr) :: rate, inverse_piece
+     real(c_double) :: sup_rate
+     type(c_ptr) :: user_data
+  end type coag_user_fragmentation
 
   ! set struct_size = c_sizeof(report) before passing a report (or call
   ! coag_step_report_init)
@@ -238,6 +255,200 @@ module coagula
        integer(c_size_t), value :: n
        integer(c_size_t), intent(out) :: out_len
        integer(c_int32_t) :: coag_last_error_message
+     end function
+     function coag_version() bind(c, name="coag_version")
+       import :: c_ptr
+       type(c_ptr) :: coag_version
+     end function
+     function coag_status_name(status) bind(c, name="coag_status_name")
+       import :: c_ptr, c_int32_t
+       integer(c_int32_t), value :: status
+       type(c_ptr) :: coag_status_name
+     end function
+     function coag_exact_density(solution, k, t, out) bind(c, name="coag_exact_density")
+       import :: c_int32_t, c_int64_t, c_double
+       integer(c_int32_t), value :: solution
+       integer(c_int64_t), value :: k
+       real(c_double), value :: t
+       real(c_double), intent(out) :: out
+       integer(c_int32_t) :: coag_exact_density
+     end function
+     function coag_kernel_new_product(a, out) bind(c, name="coag_kernel_new_product")
+       import :: c_double, c_ptr, c_int32_t
+       real(c_double), value :: a
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_kernel_new_product
+     end function
+     function coag_kernel_new_homogeneous(gamma, out) bind(c, name="coag_kernel_new_homogeneous")
+       import :: c_double, c_ptr, c_int32_t
+       real(c_double), value :: gamma
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_kernel_new_homogeneous
+     end function
+     function coag_kernel_new_user(desc, out) bind(c, name="coag_kernel_new_user")
+       import :: coag_user_kernel, c_ptr, c_int32_t
+       type(coag_user_kernel), intent(in) :: desc
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_kernel_new_user
+     end function
+     function coag_kernel_rate(kernel, x, y, out) bind(c, name="coag_kernel_rate")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: kernel
+       real(c_double), value :: x, y
+       real(c_double), intent(out) :: out
+       integer(c_int32_t) :: coag_kernel_rate
+     end function
+     function coag_fragmentation_new_user(desc, out) bind(c, name="coag_fragmentation_new_user")
+       import :: coag_user_fragmentation, c_ptr, c_int32_t
+       type(coag_user_fragmentation), intent(in) :: desc
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_fragmentation_new_user
+     end function
+     function coag_sim_set_work_limit(sim, units) bind(c, name="coag_sim_set_work_limit")
+       import :: c_ptr, c_int64_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int64_t), value :: units
+       integer(c_int32_t) :: coag_sim_set_work_limit
+     end function
+     ! cancel: c_funloc of an integer(c_int32_t) function(user_data) bind(c), or
+     ! c_null_funptr
+     function coag_sim_set_cancel_callback(sim, cancel, user_data) bind(c, name="coag_sim_set_cancel_callback")
+       import :: c_ptr, c_funptr, c_int32_t
+       type(c_ptr), value :: sim
+       type(c_funptr), value :: cancel
+       type(c_ptr), value :: user_data
+       integer(c_int32_t) :: coag_sim_set_cancel_callback
+     end function
+     function coag_sim_totals(sim, out) bind(c, name="coag_sim_totals")
+       import :: c_ptr, coag_step_report, c_int32_t
+       type(c_ptr), value :: sim
+       type(coag_step_report), intent(inout) :: out
+       integer(c_int32_t) :: coag_sim_totals
+     end function
+     function coag_sim_concentration(sim, a, b, out) bind(c, name="coag_sim_concentration")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       real(c_double), value :: a, b
+       real(c_double), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_concentration
+     end function
+     function coag_sim_gel_mass(sim, out) bind(c, name="coag_sim_gel_mass")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       real(c_double), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_gel_mass
+     end function
+     function coag_sim_occupied(sim, out) bind(c, name="coag_sim_occupied")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_occupied
+     end function
+     function coag_sim_get_pairs(sim, sizes, counts, n, volume, written) bind(c, name="coag_sim_get_pairs")
+       import :: c_ptr, c_int64_t, c_size_t, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int64_t), intent(out) :: sizes(*), counts(*)
+       integer(c_size_t), value :: n
+       real(c_double), intent(out) :: volume
+       integer(c_size_t), intent(out) :: written
+       integer(c_int32_t) :: coag_sim_get_pairs
+     end function
+     function coag_sim_set_pairs(sim, sizes, counts, n, volume) bind(c, name="coag_sim_set_pairs")
+       import :: c_ptr, c_int64_t, c_size_t, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int64_t), intent(in) :: sizes(*), counts(*)
+       integer(c_size_t), value :: n
+       real(c_double), value :: volume
+       integer(c_int32_t) :: coag_sim_set_pairs
+     end function
+     function coag_sim_set_counts(sim, counts, n, volume) bind(c, name="coag_sim_set_counts")
+       import :: c_ptr, c_int64_t, c_size_t, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int64_t), intent(in) :: counts(*)
+       integer(c_size_t), value :: n
+       real(c_double), value :: volume
+       integer(c_int32_t) :: coag_sim_set_counts
+     end function
+     function coag_sim_set_fragmentation(sim, frag) bind(c, name="coag_sim_set_fragmentation")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: sim, frag
+       integer(c_int32_t) :: coag_sim_set_fragmentation
+     end function
+     function coag_sim_set_dt(sim, dt) bind(c, name="coag_sim_set_dt")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       real(c_double), value :: dt
+       integer(c_int32_t) :: coag_sim_set_dt
+     end function
+     function coag_sim_set_time(sim, t) bind(c, name="coag_sim_set_time")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       real(c_double), value :: t
+       integer(c_int32_t) :: coag_sim_set_time
+     end function
+     function coag_sim_set_mass(sim, mass) bind(c, name="coag_sim_set_mass")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: sim
+       real(c_double), value :: mass
+       integer(c_int32_t) :: coag_sim_set_mass
+     end function
+     ! size: c_sizeof(out)
+     function coag_sim_massflow_config(sim, out, size) bind(c, name="coag_sim_massflow_config")
+       import :: c_ptr, coag_massflow_config, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       type(coag_massflow_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_sim_massflow_config
+     end function
+     ! size: c_sizeof(out)
+     function coag_sim_counts_config(sim, out, size) bind(c, name="coag_sim_counts_config")
+       import :: c_ptr, coag_counts_config, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       type(coag_counts_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_sim_counts_config
+     end function
+     ! next: c_funloc of an integer(c_int64_t) function(user_data) bind(c), or
+     ! c_null_funptr
+     function coag_sim_set_rng_callback(sim, next, user_data) bind(c, name="coag_sim_set_rng_callback")
+       import :: c_ptr, c_funptr, c_int32_t
+       type(c_ptr), value :: sim
+       type(c_funptr), value :: next
+       type(c_ptr), value :: user_data
+       integer(c_int32_t) :: coag_sim_set_rng_callback
+     end function
+     function coag_sim_reseed(sim, seed, stream) bind(c, name="coag_sim_reseed")
+       import :: c_ptr, c_int64_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int64_t), value :: seed, stream
+       integer(c_int32_t) :: coag_sim_reseed
+     end function
+     function coag_sim_checkpoint_size(sim, out) bind(c, name="coag_sim_checkpoint_size")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_checkpoint_size
+     end function
+     function coag_sim_checkpoint(sim, buf, n, written) bind(c, name="coag_sim_checkpoint")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int8_t), intent(out) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: written
+       integer(c_int32_t) :: coag_sim_checkpoint
+     end function
+     function coag_sim_restore(sim, buf, n) bind(c, name="coag_sim_restore")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int8_t), intent(in) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_int32_t) :: coag_sim_restore
+     end function
+     function coag_sim_clone(sim, out) bind(c, name="coag_sim_clone")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: sim
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_clone
      end function
   end interface
 

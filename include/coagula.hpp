@@ -113,6 +113,44 @@ class Fragmentation {
     std::unique_ptr<coag_fragmentation, detail::FragFree> f_;
 };
 
+/// The library version.
+inline std::string version() { return coag_version(); }
+/// The name of a status code.
+inline std::string status_name(std::int32_t status) { return coag_status_name(status); }
+/// The message of the last failed call on this thread.
+inline std::string last_error_message() {
+    size_t len = 0;
+    coag_last_error_message(nullptr, 0, &len);
+    std::string msg(len + 1, '\0');
+    coag_last_error_message(&msg[0], msg.size(), nullptr);
+    msg.resize(len);
+    return msg;
+}
+/// Exact moment M_m(t) of a COAG_EXACT_* solution.
+inline double exact_moment(std::int32_t solution, std::uint32_t m, double t) {
+    double v;
+    check(coag_exact_moment(solution, m, t, &v));
+    return v;
+}
+/// Exact concentration n_k(t) of a COAG_EXACT_* solution.
+inline double exact_density(std::int32_t solution, std::uint64_t k, double t) {
+    double v;
+    check(coag_exact_density(solution, k, t, &v));
+    return v;
+}
+/// Bytes of workspace a mass-flow sim of n particles needs (Sim::massflow_in).
+inline std::size_t massflow_workspace_size(std::size_t n) {
+    size_t b;
+    check(coag_massflow_workspace_size(n, &b));
+    return b;
+}
+/// A zeroed step report with its struct_size set.
+inline coag_step_report step_report() {
+    coag_step_report r;
+    check(coag_step_report_init(&r, sizeof r));
+    return r;
+}
+
 inline coag_massflow_config massflow_default_config() {
     coag_massflow_config c;
     check(coag_massflow_default_config(&c, sizeof c));
@@ -135,18 +173,97 @@ class Sim {
         check(coag_massflow_new(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), &s));
         return Sim(s);
     }
+    /// The mass-flow scheme in caller-owned memory (`bytes` ≥ massflow_workspace_size,
+    /// aligned for double), which must outlive the Sim.
+    static Sim massflow_in(const coag_massflow_config &c, const Kernel &k, const Fragmentation *f,
+                           const std::vector<double> &sizes, void *workspace, std::size_t bytes) {
+        coag_sim *s = nullptr;
+        check(coag_massflow_new_in(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), workspace,
+                                   bytes, &s));
+        return Sim(s);
+    }
     /// A size-count scheme: counts[i] particles of size i + 1.
     static Sim counts(const coag_counts_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
         coag_sim *s = nullptr;
         check(coag_counts_new(&c, k.get(), counts.data(), counts.size(), &s));
         return Sim(s);
     }
+    /// An exact, independent copy (coag_sim_clone).
+    Sim clone() const {
+        coag_sim *s = nullptr;
+        check(coag_sim_clone(s_.get(), &s));
+        return Sim(s);
+    }
 
+    /// Runs to t; a call stopped by its work limit or cancellation throws coagula::Error
+    /// with code COAG_INTERRUPTED (see advance_within to continue instead).
     coag_step_report advance_to(double t) {
-        coag_step_report r;
-        check(coag_step_report_init(&r, sizeof r));
+        coag_step_report r = step_report();
         check(coag_sim_advance_to(s_.get(), t, &r));
         return r;
+    }
+    /// Runs towards t; returns false when the work limit or the cancellation callback
+    /// stopped the call (the sim is consistent at report->time; call again), true when t
+    /// was reached. Errors throw.
+    bool advance_within(double t, coag_step_report *report = nullptr) {
+        coag_step_report r = step_report();
+        std::int32_t st = coag_sim_advance_to(s_.get(), t, &r);
+        if (report) *report = r;
+        if (st == COAG_INTERRUPTED) return false;
+        check(st);
+        return true;
+    }
+    /// Totals of every advance so far.
+    coag_step_report totals() const {
+        coag_step_report r = step_report();
+        check(coag_sim_totals(s_.get(), &r));
+        return r;
+    }
+    void set_work_limit(std::uint64_t units) { check(coag_sim_set_work_limit(s_.get(), units)); }
+    void set_cancel_callback(coag_cancel_callback cb, void *user_data) {
+        check(coag_sim_set_cancel_callback(s_.get(), cb, user_data));
+    }
+    void set_rng_callback(coag_rng_callback cb, void *user_data) {
+        check(coag_sim_set_rng_callback(s_.get(), cb, user_data));
+    }
+    void reseed(std::uint64_t seed, std::uint64_t stream) { check(coag_sim_reseed(s_.get(), seed, stream)); }
+    void set_dt(double dt) { check(coag_sim_set_dt(s_.get(), dt)); }
+    void set_time(double t) { check(coag_sim_set_time(s_.get(), t)); }
+    void set_mass(double mass) { check(coag_sim_set_mass(s_.get(), mass)); }
+    void set_fragmentation(const Fragmentation *f) {
+        check(coag_sim_set_fragmentation(s_.get(), f ? f->get() : nullptr));
+    }
+    coag_massflow_config massflow_config() const {
+        coag_massflow_config c;
+        check(coag_sim_massflow_config(s_.get(), &c, sizeof c));
+        return c;
+    }
+    coag_counts_config counts_config() const {
+        coag_counts_config c;
+        check(coag_sim_counts_config(s_.get(), &c, sizeof c));
+        return c;
+    }
+    /// Occupied sizes (size-count sims) or particles (mass flow).
+    std::size_t occupied() const {
+        size_t n;
+        check(coag_sim_occupied(s_.get(), &n));
+        return n;
+    }
+    /// The occupied sizes and their counts, ascending (no dense vector).
+    void pairs(std::vector<std::uint64_t> &sizes, std::vector<std::uint64_t> &counts,
+               double *volume = nullptr) const {
+        std::size_t n = occupied();
+        sizes.resize(n);
+        counts.resize(n);
+        size_t written = 0;
+        check(coag_sim_get_pairs(s_.get(), sizes.data(), counts.data(), n, volume, &written));
+        sizes.resize(written);
+        counts.resize(written);
+    }
+    void set_pairs(const std::vector<std::uint64_t> &sizes, const std::vector<std::uint64_t> &counts,
+                   double volume) {
+        if (sizes.size() != counts.size()) throw Error(COAG_INVALID_ARGUMENT, "pairs: sizes and counts differ in length");
+        check(coag_sim_set_pairs(s_.get(), sizes.data(), counts.data(), sizes.size(), volume));
     }
     double time() const { return get(coag_sim_time); }
     /// The `COAG_METHOD_*` of a size-count sim (throws for a mass-flow sim).
@@ -196,14 +313,14 @@ class Sim {
     }
     void restore(const std::vector<std::uint8_t> &buf) { check(coag_sim_restore(s_.get(), buf.data(), buf.size())); }
     coag_sim *get() noexcept { return s_.get(); }
-
-  private:
-    explicit Sim(coag_sim *s) : s_(s) {}
     std::size_t state_len() const {
         size_t n;
         check(coag_sim_state_len(s_.get(), &n));
         return n;
     }
+
+  private:
+    explicit Sim(coag_sim *s) : s_(s) {}
     double get(std::int32_t (*f)(const coag_sim *, double *)) const {
         double v;
         check(f(s_.get(), &v));

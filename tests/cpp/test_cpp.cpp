@@ -68,6 +68,69 @@ int main() {
         thrown = e.code() == COAG_TIME_BACKWARDS;
     }
     CHECK(thrown, "time backwards throws");
+
+    // every other function of the C ABI through the wrapper
+    CHECK(!coagula::version().empty() && coagula::status_name(COAG_INTERRUPTED) == "COAG_INTERRUPTED", "names");
+    CHECK(coagula::exact_moment(COAG_EXACT_CONSTANT, 0, 2.0) == 0.5, "exact moment");
+    CHECK(std::fabs(coagula::exact_density(COAG_EXACT_CONSTANT, 1, 2.0) - 0.25) < 1e-15, "exact density");
+    CHECK(coagula::massflow_workspace_size(1024) == 6 * 1024 * sizeof(double), "workspace size");
+    std::vector<double> ws(6 * 1024);
+    {
+        auto in = coagula::Sim::massflow_in(mc, k, nullptr, std::vector<double>(1024, 1.0), ws.data(),
+                                            ws.size() * sizeof(double));
+        in.set_dt(0.05);
+        in.set_fragmentation(&f);
+        in.set_mass(2.0);
+        in.advance_to(0.5);
+        auto cfg = in.massflow_config();
+        CHECK(cfg.dt == 0.05 && cfg.mass == 2.0, "config read back");
+        CHECK(std::fabs(in.moment(1.0) - 2.0) < 1e-9, "M1 = mass %g", in.moment(1.0));
+        in.set_time(3.0);
+        CHECK(in.time() == 3.0, "set_time");
+        CHECK(in.totals().events > 0 && in.occupied() == 1024, "totals, occupied");
+        in.set_fragmentation(nullptr);
+        in.set_sizes(std::vector<double>(1024, 2.0));
+        CHECK(in.sizes()[0] == 2.0, "set_sizes");
+    }
+    auto cc = coagula::counts_default_config();
+    cc.method = COAG_METHOD_INVERSE;
+    auto a = coagula::Sim::counts(cc, k, {2000, 10});
+    a.reseed(5, 1);
+    a.set_work_limit(300);
+    coag_step_report rep;
+    int stops = 0;
+    while (!a.advance_within(1.0, &rep)) ++stops;
+    CHECK(stops > 0 && a.time() == 1.0, "work limit: %d stops", stops);
+    a.set_work_limit(0);
+    auto b = a.clone();
+    a.advance_to(2.0);
+    b.advance_to(2.0);
+    CHECK(a.counts() == b.counts() && a.counts_config().method == COAG_METHOD_INVERSE, "clone");
+    std::vector<std::uint64_t> ps, pc;
+    double v = 0;
+    a.pairs(ps, pc, &v);
+    CHECK(!ps.empty() && ps.size() == a.occupied() && v > 0, "pairs");
+    b.set_pairs(ps, pc, v);
+    CHECK(b.counts() == a.counts(), "set_pairs");
+    b.set_counts({}, 1.0);
+    CHECK(b.particle_count() == 0 && b.state_len() == 0, "an empty system");
+    b.set_kernel(coagula::Kernel::additive());
+    struct Ctx { std::uint64_t x = 1; } ctx;
+    a.set_rng_callback(
+        [](void *p) -> std::uint64_t {
+            auto *c = static_cast<Ctx *>(p);
+            c->x ^= c->x << 13;
+            c->x ^= c->x >> 7;
+            c->x ^= c->x << 17;
+            return c->x;
+        },
+        &ctx);
+    a.advance_to(2.5);
+    a.set_rng_callback(nullptr, nullptr);
+    int polls = 0;
+    a.set_cancel_callback([](void *p) -> std::int32_t { return ++*static_cast<int *>(p) >= 1; }, &polls);
+    a.set_kernel(coagula::Kernel::constant(1.0));
+    CHECK(a.gel_mass() > 0 && a.concentration(1.0, 1.0) >= 0, "observables");
     std::printf("test_cpp: %d passed, %d failed\n", checks - failures, failures);
     return failures ? 1 : 0;
 }

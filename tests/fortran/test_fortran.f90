@@ -1,10 +1,73 @@
 ! Fortran client of libcoagula through the ISO_C_BINDING module include/coagula.f90:
 ! the constant-kernel exact solution from 32 low-rank replicas (6.07 standard errors: Student t_31 at 1e-6), and
 ! Lécot's coagulation-fragmentation test with the mass-flow scheme.
+! callbacks for the user kernels and the host hooks (bind(c) module procedures)
+module test_callbacks
+  use, intrinsic :: iso_c_binding
+  implicit none
+  integer(c_int64_t) :: rng_state = 88172645463325252_c_int64_t
+contains
+  function one_rate(x, y, ud) bind(c) result(r)
+    real(c_double), value :: x, y
+    type(c_ptr), value :: ud
+    real(c_double) :: r
+    r = 1.0_c_double + 0.0_c_double * (x + y)
+    if (c_associated(ud)) r = 2.0_c_double
+  end function
+  function one_sup(lo, hi, ud) bind(c) result(r)
+    real(c_double), value :: lo, hi
+    type(c_ptr), value :: ud
+    real(c_double) :: r
+    r = 1.0_c_double + 0.0_c_double * (lo + hi)
+    if (c_associated(ud)) r = 2.0_c_double
+  end function
+  function frag_rate(x, ud) bind(c) result(r)
+    real(c_double), value :: x
+    type(c_ptr), value :: ud
+    real(c_double) :: r
+    r = 1.0_c_double + 0.0_c_double * x
+    if (c_associated(ud)) r = 2.0_c_double
+  end function
+  function frag_piece(x, u, ud) bind(c) result(r)
+    real(c_double), value :: x, u
+    type(c_ptr), value :: ud
+    real(c_double) :: r
+    r = x * sqrt(u)
+    if (c_associated(ud)) r = x
+  end function
+  function cancel_now(ud) bind(c) result(r)
+    type(c_ptr), value :: ud
+    integer(c_int32_t) :: r
+    r = 1
+    if (c_associated(ud)) r = 0
+  end function
+  function rng_next(ud) bind(c) result(r)
+    type(c_ptr), value :: ud
+    integer(c_int64_t) :: r
+    rng_state = ieor(rng_state, ishft(rng_state, 13))
+    rng_state = ieor(rng_state, ishft(rng_state, -7))
+    rng_state = ieor(rng_state, ishft(rng_state, 17))
+    r = rng_state
+    if (c_associated(ud)) r = 0
+  end function
+end module test_callbacks
+
 program test_fortran
   use, intrinsic :: iso_c_binding
   use coagula
+  use test_callbacks
   implicit none
+  type(c_ptr) :: k2, ku, fu, sa, sb, sm
+  type(coag_user_kernel) :: uk
+  type(coag_user_fragmentation) :: uf
+  type(coag_massflow_config) :: mc2
+  integer(c_int64_t) :: c2(2), np
+  integer(c_int64_t), allocatable :: ps(:), pc(:)
+  integer(c_int8_t), allocatable :: ck(:)
+  integer(c_size_t) :: nocc, nw, nck
+  real(c_double) :: d, vol
+  integer(c_int32_t) :: st
+  character(kind=c_char) :: msgbuf(256)
   type(c_ptr) :: k, f, sim, sim2
   real(c_double), allocatable, target :: ws(:)
   integer(c_size_t) :: wbytes
@@ -70,6 +133,113 @@ program test_fortran
   call check(transfer(m2b, 0_c_int64_t) == transfer(m2, 0_c_int64_t), "caller workspace: the same M2 bit for bit")
   call coag_sim_free(sim2)
   deallocate(ws)
+  ! every other binding
+  call check(c_associated(coag_version()), "version")
+  call check(c_associated(coag_status_name(COAG_INTERRUPTED)), "status names")
+  call ok(coag_exact_density(COAG_EXACT_CONSTANT, 1_c_int64_t, 2.0_c_double, d))
+  call check(abs(d - 0.25_c_double) < 1e-15_c_double, "exact density")
+  call ok(coag_kernel_new_product(0.5_c_double, k2))
+  call ok(coag_kernel_rate(k2, 4.0_c_double, 1.0_c_double, d))
+  call check(abs(d - 2.0_c_double) < 1e-15_c_double, "product kernel rate")
+  call coag_kernel_free(k2)
+  call ok(coag_kernel_new_homogeneous(2.0_c_double, k2))
+  call coag_kernel_free(k2)
+  uk%rate = c_funloc(one_rate)
+  uk%majorant = c_null_funptr
+  uk%rank = 0
+  uk%factors = c_null_funptr
+  uk%low_rank_exact = 0
+  uk%sup = c_funloc(one_sup)
+  uk%user_data = c_null_ptr
+  call ok(coag_kernel_new_user(uk, ku))
+  uf%rate = c_funloc(frag_rate)
+  uf%inverse_piece = c_funloc(frag_piece)
+  uf%sup_rate = 1.0_c_double
+  uf%user_data = c_null_ptr
+  call ok(coag_fragmentation_new_user(uf, fu))
+  ! acceptance-rejection under the user kernel: limits, pairs, clone, checkpoints
+  call ok(coag_counts_default_config(lc, c_sizeof(lc)))
+  lc%method = COAG_METHOD_REJECTION
+  c2 = [2000_c_int64_t, 10_c_int64_t]
+  call ok(coag_counts_new(lc, ku, c2, 2_c_size_t, sa))
+  call ok(coag_sim_set_work_limit(sa, 100_c_int64_t))
+  st = coag_sim_advance_to(sa, 1.0_c_double, rep)
+  call check(st == COAG_INTERRUPTED, "work limit interrupts")
+  call ok(coag_sim_set_work_limit(sa, 0_c_int64_t))
+  call ok(coag_sim_advance_to(sa, 1.0_c_double, rep))
+  call ok(coag_sim_totals(sa, rep))
+  call check(rep%events > 0, "totals")
+  call ok(coag_sim_occupied(sa, nocc))
+  allocate(ps(nocc), pc(nocc))
+  call ok(coag_sim_get_pairs(sa, ps, pc, nocc, vol, nw))
+  call ok(coag_sim_particle_count(sa, np))
+  call check(nw == nocc .and. sum(pc) == np .and. vol > 0, "pairs")
+  call ok(coag_sim_clone(sa, sb))
+  call ok(coag_sim_set_pairs(sb, ps, pc, nocc, vol))
+  call ok(coag_sim_concentration(sa, 1.0_c_double, 1.0_c_double, d))
+  call check(d > 0, "concentration")
+  call ok(coag_sim_gel_mass(sa, d))
+  call check(d > 0, "gel mass")
+  call ok(coag_sim_checkpoint_size(sa, nck))
+  allocate(ck(nck))
+  call ok(coag_sim_checkpoint(sa, ck, nck, nw))
+  call ok(coag_sim_restore(sb, ck, nw))
+  ck(nw / 2) = ieor(ck(nw / 2), 1_c_int8_t)
+  call check(coag_sim_restore(sb, ck, nw) == COAG_BAD_CHECKPOINT, "a corrupted checkpoint is refused")
+  call ok(coag_sim_counts_config(sa, lc, c_sizeof(lc)))
+  call check(lc%method == COAG_METHOD_REJECTION .and. abs(lc%volume - 2010.0_c_double) < 1e-12_c_double, &
+       "counts config")
+  call ok(coag_sim_set_time(sa, 5.0_c_double))
+  call ok(coag_sim_reseed(sa, 3_c_int64_t, 0_c_int64_t))
+  call ok(coag_sim_set_rng_callback(sa, c_funloc(rng_next), c_null_ptr))
+  call ok(coag_sim_advance_to(sa, 5.5_c_double, rep))
+  call ok(coag_sim_set_rng_callback(sa, c_null_funptr, c_null_ptr))
+  call ok(coag_sim_set_counts(sa, c2, 2_c_size_t, 2010.0_c_double))
+  call ok(coag_sim_time(sa, d))
+  call check(abs(d - 5.5_c_double) < 1e-15_c_double, "time")
+  call ok(coag_kernel_new_additive(1.0_c_double, k2))
+  call ok(coag_sim_set_kernel(sa, k2))
+  call coag_kernel_free(k2)
+  call ok(coag_sim_state_len(sa, nw))
+  deallocate(pc)
+  allocate(pc(nw))
+  call ok(coag_sim_get_counts(sa, pc, nw, vol))
+  call check(sum(pc) == 2010, "dense counts")
+  do st = 0, 3
+     select case (st)
+     case (0)
+        call ok(coag_kernel_new_multiplicative(k2))
+     case (1)
+        call ok(coag_kernel_new_brownian(k2))
+     case (2)
+        call ok(coag_kernel_new_free_molecular(1.0_c_double, k2))
+     case default
+        call ok(coag_kernel_new_additive(0.0_c_double, k2))
+     end select
+     call ok(coag_kernel_rate(k2, 1.0_c_double, 2.0_c_double, d))
+     call check(d > 0, "kernel rates")
+     call coag_kernel_free(k2)
+  end do
+  call check(coag_kernel_new_constant(-1.0_c_double, k2) == COAG_INVALID_ARGUMENT, "a negative k0 is refused")
+  call ok(coag_last_error_message(msgbuf, size(msgbuf, kind=c_size_t), nw))
+  call check(nw > 0 .and. nw < size(msgbuf), "the message and its length")
+  call coag_sim_free(sb)
+  call coag_sim_free(sa)
+  ! mass flow under the user fragmentation: setters, configuration, cancellation
+  call ok(coag_massflow_new(mc, k, fu, sizes(1:64), 64_c_size_t, sm))
+  call ok(coag_sim_set_dt(sm, 0.05_c_double))
+  call ok(coag_sim_set_mass(sm, 2.0_c_double))
+  call ok(coag_sim_set_fragmentation(sm, c_null_ptr))
+  call ok(coag_sim_set_sizes(sm, sizes(1:64), 64_c_size_t))
+  call ok(coag_sim_massflow_config(sm, mc2, c_sizeof(mc2)))
+  call check(abs(mc2%dt - 0.05_c_double) < 1e-15_c_double .and. abs(mc2%mass - 2.0_c_double) < 1e-15_c_double, &
+       "massflow config")
+  call ok(coag_sim_set_cancel_callback(sm, c_funloc(cancel_now), c_null_ptr))
+  call check(coag_sim_advance_to(sm, 10.0_c_double, rep) == COAG_INTERRUPTED, "cancelled")
+  call ok(coag_sim_set_cancel_callback(sm, c_null_funptr, c_null_ptr))
+  call coag_sim_free(sm)
+  call coag_fragmentation_free(fu)
+  call coag_kernel_free(ku)
   ! errors: a step back in time fails and names the problem
   call check(coag_sim_advance_to(sim, 0.5_c_double, rep) == COAG_TIME_BACKWARDS, "time backwards refused")
   call check(index(coag_error_message(), "before the current time") > 0, "error message")
