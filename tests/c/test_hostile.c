@@ -504,6 +504,21 @@ static void sparse_and_empty(void) {
     free(sz);
     free(ct);
     coag_sim_free(s);
+    /* the issue's other case: low-rank from 1000 monomers to t = 1e7 (about 800
+     * particles, sizes up to ~1e7): observables without a count vector */
+    c.method = COAG_METHOD_LOWRANK;
+    OK(coag_counts_new(&c, k1, n0, 1, &s));
+    OK(coag_sim_advance_to(s, 1e7, NULL));
+    OK(coag_sim_state_len(s, &len));
+    OK(coag_sim_occupied(s, &occ));
+    OK(coag_sim_moment(s, 1.0, &m1));
+    OK(coag_sim_particle_count(s, &particles));
+    double gel = 0;
+    OK(coag_sim_gel_mass(s, &gel));
+    CHECK(len > 1000000 && occ <= particles && particles <= 1000 && fabs(m1 - 1.0) < 1e-12 && gel > 0,
+          "low-rank at 1e7: len %zu occupied %zu particles %llu M1 %g", len, occ,
+          (unsigned long long)particles, m1);
+    coag_sim_free(s);
     /* empty systems, drained and refilled */
     for (int m = 1; m < NMETHODS; m++) {
         c.method = methods[m];

@@ -165,7 +165,7 @@ impl<W: Word> Niederreiter2<W> {
 
 impl Niederreiter2<u64> {
     /// The sequence in dimension 3 from a precomputed table (what
-    /// [`PointSource::niederreiter`](crate::qmc::PointSource::niederreiter) uses): equal to
+    /// [`PointSource::niederreiter`](crate::qmc::points::PointSource::niederreiter) uses): equal to
     /// `new(3)`, without its ~2 ms of polynomial arithmetic.
     pub fn dim3() -> Self {
         Niederreiter2 {
