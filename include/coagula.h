@@ -371,7 +371,7 @@ typedef struct {
   int32_t method;
   /*
    Simulation volume V (> 0); 0 means "the number of particles" (so that the
-   initial counts per volume are concentrations).
+   initial counts per volume are concentrations; 1 for an empty system).
    */
   double volume;
   /*
@@ -686,6 +686,7 @@ int32_t coag_sim_set_work_limit(coag_sim *sim, uint64_t units);
  Installs a callback polled during `coag_sim_advance_to` (every 16384 proposals, and
  before every mass-flow step): a non-zero return stops the call with
  `COAG_INTERRUPTED`, the sim consistent at the time reached. `cancel` NULL removes it.
+ The callback must not call into this sim (it is being changed) nor free it.
 
  # Safety
  `sim` NULL or live; `cancel` and `user_data` valid while installed.
@@ -765,7 +766,8 @@ int32_t coag_sim_state_len(const coag_sim *sim, size_t *out);
 int32_t coag_sim_occupied(const coag_sim *sim, size_t *out);
 
 /*
- The occupied sizes of a size-count sim and their counts, ascending: `sizes[i]` has
+ The occupied sizes of a size-count sim and their counts, ascending (`sizes` and
+ `counts` must not overlap: `COAG_INVALID_ARGUMENT`): `sizes[i]` has
  `counts[i]` particles, for `i < *written` (= `coag_sim_occupied`); both buffers hold
  `len` values (`COAG_BUFFER_TOO_SMALL` below the occupied count, nothing written).
  No dense vector is built: O(occupied sizes) however large the sizes are. The volume
@@ -901,7 +903,9 @@ int32_t coag_sim_counts_config(const coag_sim *sim, coag_counts_config *out, siz
  Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
  call) instead of its own stream; `next` NULL switches back to the own stream, which
  resumes where it stopped. Randomness drawn from a callback is not part of a
- checkpoint.
+ checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
+ to undo the call if the stream turns out stuck. The callback must not call into
+ this sim nor free it.
 
  # Safety
  `sim` NULL or live; `next` and `user_data` valid while installed.

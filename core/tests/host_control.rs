@@ -344,3 +344,38 @@ fn an_empty_system_is_valid_and_can_be_refilled() {
         assert_eq!(s.particles(), 0, "{}", info.name);
     }
 }
+
+/// Review of issue 14: a tree layout updated by differences (Brownian and
+/// free-molecular factors are irrational) may hold weights a rounding away from a
+/// rebuild, some below 0; restore must accept the checkpoints a long run leaves.
+#[test]
+fn long_runs_restore_from_their_own_checkpoints() {
+    for k in [
+        Coagulation::brownian(),
+        Coagulation::free_molecular().with_min_size(1.0).unwrap(),
+    ] {
+        for info in common::count_schemes() {
+            let Some(mut a) = counts_sim(info.id, k) else {
+                continue;
+            };
+            let mut rng = Pcg64Mcg::new(8);
+            let mut b = counts_sim(info.id, k).unwrap();
+            for t in [5.0, 50.0, 400.0, 4000.0] {
+                a.advance_to(t, &mut rng).unwrap();
+                let mut w = coagula_core::checkpoint::Writer::new(&mut []);
+                a.save(&mut w);
+                let mut buf = vec![0u8; w.needed()];
+                a.save(&mut coagula_core::checkpoint::Writer::new(&mut buf));
+                b.restore(&mut coagula_core::checkpoint::Reader::new(&buf))
+                    .unwrap_or_else(|e| panic!("{} {k:?} t = {t}: {e}", info.name));
+                assert_eq!(snapshot(&*a), snapshot(&*b), "{}", info.name);
+            }
+            assert!(
+                a.totals().events > 15_000,
+                "{}: {}",
+                info.name,
+                a.totals().events
+            );
+        }
+    }
+}

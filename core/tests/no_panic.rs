@@ -82,13 +82,19 @@ fn digital_sequences_refuse_bad_dimensions_and_indices() {
     assert!(s.block(0, 70, &mut block).is_err(), "m beyond the word");
 }
 
-/// Every size-count constructor refuses empty, all-zero and overflowing counts and a
-/// bad volume; a target time that is NaN, infinite or in the past is refused and
-/// changes nothing.
+/// Every size-count constructor refuses overflowing counts (in number or in mass) and a
+/// bad volume, and accepts an empty system (issue 14); a target time that is NaN,
+/// infinite or in the past is refused and changes nothing.
 #[test]
 fn size_count_schemes_refuse_bad_input() {
     let k = Coagulation::constant(1.0).unwrap();
-    let bad_counts: [&[u64]; 3] = [&[], &[0, 0, 0], &[u64::MAX, 1]];
+    for c in [&[][..], &[0, 0, 0]] {
+        assert_eq!(LowRank::<_, 1>::new(k, c, 1.0).unwrap().particles(), 0);
+        assert_eq!(Bucketed::<_, 1, 2>::new(k, c, 1.0).unwrap().particles(), 0);
+        assert_eq!(Inverse::new(k, c, 1.0).unwrap().particles(), 0);
+        assert_eq!(AcceptanceRejection::new(k, c, 1.0).unwrap().particles(), 0);
+    }
+    let bad_counts: [&[u64]; 2] = [&[u64::MAX, 1], &[1, 0, u64::MAX / 2]];
     for c in bad_counts {
         assert!(LowRank::<_, 1>::new(k, c, 1.0).is_err(), "{c:?}");
         assert!(Bucketed::<_, 1, 2>::new(k, c, 1.0).is_err(), "{c:?}");
@@ -141,7 +147,11 @@ fn size_count_schemes_refuse_bad_input() {
         assert_eq!(lr.time(), 1.0);
     }
     // setters: an error changes nothing
-    for (c, v) in [(&[][..], 1.0), (&[0u64][..], 1.0), (&[5u64][..], f64::NAN)] {
+    for (c, v) in [
+        (&[][..], 0.0),
+        (&[u64::MAX, 2][..], 1.0),
+        (&[5u64][..], f64::NAN),
+    ] {
         let before = (lr.counts().to_vec(), lr.volume());
         assert!(lr.set_counts(c, v).is_err());
         assert_eq!(before, (lr.counts().to_vec(), lr.volume()));

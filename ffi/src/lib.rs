@@ -15,7 +15,9 @@
 //!   before the failing event), and the handle stays usable.
 //! * No Rust panic crosses the boundary: it is caught and reported as `COAG_PANIC`.
 //! * Threading: a handle may be used by one thread at a time; different handles are
-//!   independent. User callbacks are called on the calling thread, during the call.
+//!   independent. User callbacks are called on the calling thread, during the call,
+//!   and must not call into the handle whose call invoked them (not even to read it:
+//!   that handle is being changed) nor free it.
 //! * `user_data` pointers are stored, never dereferenced by coagula; they must stay
 //!   valid as long as a handle that uses them (including sims made from a user kernel).
 

@@ -82,7 +82,7 @@ pub struct coag_counts_config {
     /// `COAG_METHOD_*`.
     pub method: i32,
     /// Simulation volume V (> 0); 0 means "the number of particles" (so that the
-    /// initial counts per volume are concentrations).
+    /// initial counts per volume are concentrations; 1 for an empty system).
     pub volume: f64,
     /// Largest particle size allowed (0: the default, 2^32).
     pub size_limit: u64,
@@ -602,10 +602,15 @@ pub unsafe extern "C" fn coag_counts_new(
             );
         };
         let total: u64 = n.iter().fold(0u64, |a, &b| a.saturating_add(b));
+        // the configuration as given is what a checkpoint must match (a host rebuilding
+        // a sim to restore into may pass placeholder counts); resolved, what runs
+        let given = c;
         let mut c = c;
         if c.volume == 0.0 {
-            c.volume = total as f64;
+            // (an empty system: volume 1)
+            c.volume = total.max(1) as f64;
         }
+        c.batched_clock = i32::from(c.batched_clock != 0);
         if c.size_limit == 0 {
             c.size_limit = Options::default().size_limit;
         }
@@ -614,8 +619,13 @@ pub unsafe extern "C" fn coag_counts_new(
             volume: c.volume,
         };
         let sim = registry::build(id, k, Fragmentation::None, &init, &counts_options(&c))?;
+        let mut given = given;
+        given.batched_clock = c.batched_clock;
         // SAFETY: `out` checked non-null; writable (contract).
-        unsafe { new_sim(sim, Config::Counts(c), k, Fragmentation::None, out) }
+        unsafe { new_sim(sim, Config::Counts(c), k, Fragmentation::None, out) }.map(|()| {
+            // SAFETY: just written, a live handle.
+            unsafe { (**out).built = Config::Counts(given) };
+        })
     })
 }
 
@@ -731,13 +741,25 @@ pub unsafe extern "C" fn coag_sim_advance_to(
         let before = if s.callback.is_some() {
             let mut w = Writer::new(&mut []);
             s.sim.save(&mut w);
-            let mut buf = vec![0u8; w.needed()];
+            let mut buf = Vec::new();
+            if buf.try_reserve_exact(w.needed()).is_err() {
+                return fail(
+                    crate::COAG_CAPACITY,
+                    format!(
+                        "a host random callback needs a snapshot of the sim ({} bytes) the allocator refused",
+                        w.needed()
+                    ),
+                );
+            }
+            buf.resize(w.needed(), 0);
             s.sim.save(&mut Writer::new(&mut buf));
             Some(buf)
         } else {
             None
         };
-        DEGENERATE.with(|c| c.set(false));
+        // (a nested call on this thread — a callback advancing another sim — keeps
+        // the outer call's flag)
+        let outer_flag = DEGENERATE.with(|c| c.replace(false));
         let host_cancel = s.cancel;
         let mut cancel = || {
             DEGENERATE.with(|c| c.get())
@@ -754,7 +776,8 @@ pub unsafe extern "C" fn coag_sim_advance_to(
         };
         let mut budget = Budget::work(units).with_cancel(&mut cancel);
         let r = s.sim.advance_within(t, &mut budget, &mut rng);
-        if DEGENERATE.with(|c| c.get()) {
+        let degenerate = DEGENERATE.with(|c| c.replace(outer_flag));
+        if degenerate {
             if let Some(buf) = before {
                 s.sim.restore(&mut Reader::new(&buf))?;
             }
@@ -807,6 +830,7 @@ pub unsafe extern "C" fn coag_sim_set_work_limit(sim: *mut coag_sim, units: u64)
 /// Installs a callback polled during `coag_sim_advance_to` (every 16384 proposals, and
 /// before every mass-flow step): a non-zero return stops the call with
 /// `COAG_INTERRUPTED`, the sim consistent at the time reached. `cancel` NULL removes it.
+/// The callback must not call into this sim (it is being changed) nor free it.
 ///
 /// # Safety
 /// `sim` NULL or live; `cancel` and `user_data` valid while installed.
@@ -993,7 +1017,8 @@ pub unsafe extern "C" fn coag_sim_occupied(sim: *const coag_sim, out: *mut usize
     }
 }
 
-/// The occupied sizes of a size-count sim and their counts, ascending: `sizes[i]` has
+/// The occupied sizes of a size-count sim and their counts, ascending (`sizes` and
+/// `counts` must not overlap: `COAG_INVALID_ARGUMENT`): `sizes[i]` has
 /// `counts[i]` particles, for `i < *written` (= `coag_sim_occupied`); both buffers hold
 /// `len` values (`COAG_BUFFER_TOO_SMALL` below the occupied count, nothing written).
 /// No dense vector is built: O(occupied sizes) however large the sizes are. The volume
@@ -1022,7 +1047,12 @@ pub unsafe extern "C" fn coag_sim_get_pairs(
                 format!("pairs: buffers of {len} for {n} occupied sizes"),
             );
         }
-        // SAFETY: NULL checked; `len` writable values by contract.
+        let (a, b) = (sizes as usize, counts as usize);
+        let bytes = len.saturating_mul(8);
+        if len > 0 && a < b.saturating_add(bytes) && b < a.saturating_add(bytes) {
+            return fail(COAG_INVALID_ARGUMENT, "pairs: sizes and counts overlap");
+        }
+        // SAFETY: NULL checked; `len` writable values by contract; not overlapping.
         let out_s = unsafe { slice_mut(sizes, len, "sizes") }?;
         let out_c = unsafe { slice_mut(counts, len, "counts") }?;
         let mut i = 0;
@@ -1363,7 +1393,9 @@ pub unsafe extern "C" fn coag_sim_counts_config(
 /// Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
 /// call) instead of its own stream; `next` NULL switches back to the own stream, which
 /// resumes where it stopped. Randomness drawn from a callback is not part of a
-/// checkpoint.
+/// checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
+/// to undo the call if the stream turns out stuck. The callback must not call into
+/// this sim nor free it.
 ///
 /// # Safety
 /// `sim` NULL or live; `next` and `user_data` valid while installed.
@@ -1421,7 +1453,7 @@ fn config_words(c: &Config) -> Vec<(&'static str, u64, bool)> {
             ("method", c.method as u64, true),
             ("volume", c.volume.to_bits(), true),
             ("size_limit", c.size_limit, true),
-            ("batched_clock", c.batched_clock as u64, true),
+            ("batched_clock", u64::from(c.batched_clock != 0), true),
             ("memory_budget", c.memory_budget, false),
             ("seed", c.seed, false),
             ("stream", c.stream, false),
@@ -1684,7 +1716,8 @@ pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coa
         } else {
             None
         };
-        let mut fresh = match (state, s.built) {
+        // (the current configuration: its volume and size limit are resolved)
+        let mut fresh = match (state, s.config) {
             (Some(State::Sizes(x)), Config::MassFlow(c)) => {
                 let init = Init::Sizes {
                     sizes: x,

@@ -79,8 +79,12 @@ int main(void) {
     coag_counts_config lc;
     OK(coag_counts_default_config(&lc, sizeof lc));
     uint64_t counts[2] = {0, 0};
-    EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT); /* no particles */
-    EXPECT(coag_counts_new(&lc, k, counts, 0, &s), COAG_INVALID_ARGUMENT);
+    /* no particles: a valid, empty system (issue 14) */
+    OK(coag_counts_new(&lc, k, counts, 2, &s));
+    coag_sim_free(s);
+    OK(coag_counts_new(&lc, k, counts, 0, &s));
+    coag_sim_free(s);
+    s = NULL;
     lc.method = 42;
     counts[0] = 100;
     EXPECT(coag_counts_new(&lc, k, counts, 2, &s), COAG_INVALID_ARGUMENT);

@@ -536,7 +536,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         if row
             .iter()
             .zip(&fresh)
-            .any(|(&g, &w)| !(g >= 0.0 && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
+            .any(|(&g, &w)| !(g.is_finite() && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
         {
             return Err(Error::Checkpoint {
                 what: "row sums do not match the counts and the kernel",
@@ -557,6 +557,18 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
                 });
             }
             slot[s as usize - 1] = a as u32;
+        }
+        // a kept event needs events to come, at the rate it was drawn from
+        if let Some(p) = pending {
+            let total: f64 = (0..k)
+                .map(|a| count[a] as f64 * (row[a] - diag[a]).max(0.0))
+                .sum();
+            let live = n >= 2 && total > 0.0;
+            if !live || (2.0 * volume / total).to_bits() != p.mean_dt.to_bits() {
+                return Err(Error::Checkpoint {
+                    what: "the pending event does not match the state's rate",
+                });
+            }
         }
         self.pop.size_limit = size_limit;
         self.pop.n = n;

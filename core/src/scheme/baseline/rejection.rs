@@ -322,6 +322,19 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
                 what: "the rate supremum does not match the kernel",
             });
         }
+        // a kept proposal needs proposals to come, at the rate it was drawn from
+        if let Some(p) = pending {
+            let n = sizes.len() as u64;
+            let rate = cmax * (n.saturating_mul(n.saturating_sub(1))) as f64 / (2.0 * volume);
+            if n < 2
+                || !(rate > 0.0 && rate.is_finite())
+                || (1.0 / rate).to_bits() != p.mean_dt.to_bits()
+            {
+                return Err(Error::Checkpoint {
+                    what: "the pending proposal does not match the state's rate",
+                });
+            }
+        }
         // room for the doublings to come (the list never passes N0)
         within_budget(
             usize::try_from(n0)

@@ -1330,7 +1330,12 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         s.counts = counts;
         s.over = over;
         s.m = m;
-        s.slots_total = s.buckets.iter().map(|bk| bk.slots).sum();
+        s.slots_total = s
+            .buckets
+            .iter()
+            .try_fold(0u64, |a, bk| a.checked_add(bk.slots))
+            .filter(|&t| t <= 1 << 60)
+            .ok_or(bad("slot count overflows"))?;
         s.planned = planned;
         s.since_resync = since_resync;
         s.base_slack = base_slack;

@@ -576,12 +576,11 @@ where
         let engine = E::load(&self.kernel, m, &pop, r)?;
         r.finish()?;
         // no particle past the size limit (the constructors' check)
-        let counts = engine.counts();
-        if counts.len() as u64 > size_limit && counts[size_limit as usize..].iter().any(|&c| c != 0)
-        {
+        let mut largest = 0;
+        engine.for_each_count(&mut |s, _| largest = s);
+        if largest > size_limit {
             return Err(bad("a particle is larger than the size limit"));
         }
-        drop(counts);
         // a clock that resumes without a refresh needs an engine that can
         let rate = engine.rate_now();
         let fits = |mean_dt: f64| {
@@ -589,7 +588,8 @@ where
         };
         let consistent = match clock {
             Clock::Stale => true,
-            Clock::Idle => pop.n < 2 || rate == Some(0.0),
+            // (a zero rate leaves bucketed tables stale: no rate to compare then)
+            Clock::Idle => pop.n < 2 || rate.is_none_or(|r| r == 0.0),
             Clock::Rate(m) => fits(m),
             Clock::Next(p) => fits(p.mean_dt),
         };

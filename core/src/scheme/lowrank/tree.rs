@@ -316,8 +316,9 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         within_budget(Self::bytes_for(m), pop.memory_budget)?;
         let tree = T::load(m, r)?;
         // the tree as the counts and the kernel make it: the restored one may differ
-        // by the rounding of its incremental updates (relative to each component's
-        // total), never by more — a corrupted weight (NaN, negative, off) is refused
+        // by the rounding of its incremental updates (relative to the largest weight;
+        // a weight emptied by differences may sit a rounding below 0), never by more —
+        // a corrupted weight (NaN, infinite, off) is refused
         let fresh = Self::build(kernel, &counts, pop)?;
         let (got, want) = (tree.values(), fresh.tree.values());
         let scale = want.iter().fold(0.0f64, |a, &b| a.max(b));
@@ -325,7 +326,7 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
             || got
                 .iter()
                 .zip(&want)
-                .any(|(&g, &w)| !(g >= 0.0 && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
+                .any(|(&g, &w)| !(g.is_finite() && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
         {
             return Err(Error::Checkpoint {
                 what: "tree weights do not match the counts and the kernel",

@@ -445,6 +445,10 @@ impl<const R: usize> ProposalTree<R> for WideTree<R> {
                 t.total[p][k] = tot[p * R + k];
             }
         }
+        // a saved tree is rebuilt at REBUILD updates: more is not a state a run leaves
+        if updates > REBUILD {
+            return Err(bad_tree());
+        }
         t.updates = updates;
         Ok(t)
     }
