@@ -307,7 +307,8 @@ pub fn run(data: &[u8]) {
                         continue;
                     }
                     let mut c = null_mut();
-                    assert_eq!(coag_sim_clone(s, &mut c), COAG_OK);
+                    let st = coag_sim_clone(s, &mut c);
+                    assert_eq!(st, COAG_OK, "clone: {}", last_error());
                     assert_eq!(checkpoint(c), checkpoint(s), "clone differs");
                     let j = (slot(i) + 1) % SLOTS;
                     coag_sim_free(sims[j].0);
