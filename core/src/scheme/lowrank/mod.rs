@@ -336,7 +336,9 @@ where
     #[inline]
     fn refresh<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Result<(bool, f64)> {
         let sa = self.engine.refresh(&self.pop, rng)?;
-        Ok((sa > 0.0 && self.pop.n >= 2, self.pop.volume / sa))
+        // a rate so small that V / S_A overflows: no proposal before any finite time
+        let mean_dt = self.pop.volume / sa;
+        Ok((sa > 0.0 && self.pop.n >= 2 && mean_dt.is_finite(), mean_dt))
     }
 
     /// Books a failed call's report (the state and time are already those before the
@@ -414,7 +416,11 @@ where
                     break;
                 }
                 Clock::Rate(mean_dt) => {
-                    Pending::check(self.time, mean_dt).map_err(|e| self.fail(e, &mut rep))?;
+                    if let Err(e) = Pending::check(self.time, mean_dt) {
+                        // (a state a checkpoint can hold: refreshed again next call)
+                        self.clock = Clock::Stale;
+                        return Err(self.fail(e, &mut rep));
+                    }
                     if self.batched
                         && self.engine.batches(&self.pop)
                         && let Some(batch) = Batch::plan(self.time, mean_dt, t, rng)
@@ -461,7 +467,7 @@ where
                     }
                 }
                 if at + mean_dt <= at {
-                    self.clock = Clock::Rate(mean_dt);
+                    self.clock = Clock::Stale;
                     let e = Pending::check(at, mean_dt).err().unwrap_or(Error::Empty);
                     return Err(self.fail(e, &mut rep));
                 }
@@ -589,7 +595,9 @@ where
         let consistent = match clock {
             Clock::Stale => true,
             // (a zero rate leaves bucketed tables stale: no rate to compare then)
-            Clock::Idle => pop.n < 2 || rate.is_none_or(|r| r == 0.0),
+            Clock::Idle => {
+                pop.n < 2 || rate.is_none_or(|r| r == 0.0 || !(pop.volume / r).is_finite())
+            }
             Clock::Rate(m) => fits(m),
             Clock::Next(p) => fits(p.mean_dt),
         };
