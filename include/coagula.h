@@ -720,7 +720,8 @@ int32_t coag_sim_moment(const coag_sim *sim, double m, double *out);
 
 /*
  The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b));
- `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`.
+ `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`, a sum that overflows a double
+ (counts in a tiny volume) `COAG_CAPACITY`.
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.

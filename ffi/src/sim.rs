@@ -886,24 +886,16 @@ pub unsafe extern "C" fn coag_sim_moment(sim: *const coag_sim, m: f64, out: *mut
             if !m.is_finite() {
                 return fail(COAG_INVALID_ARGUMENT, "moment order must be finite");
             }
-            let v = s.sim.moment(m);
-            if !v.is_finite() {
-                // e.g. M_{1e6}, or large sizes: not a number the host can use
-                return fail(
-                    crate::COAG_CAPACITY,
-                    format!(
-                        "moment of order {} overflows a double ({v})",
-                        coagula_core::error::Short(m)
-                    ),
-                );
-            }
-            Ok(v)
+            finite_result(s.sim.moment(m), || {
+                format!("moment of order {}", coagula_core::error::Short(m))
+            })
         })
     }
 }
 
 /// The number concentration of sizes in `[a, b]` (the sum concentration C(t, a, b));
-/// `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`.
+/// `a > b` or a NaN bound is `COAG_INVALID_ARGUMENT`, a sum that overflows a double
+/// (counts in a tiny volume) `COAG_CAPACITY`.
 ///
 /// # Safety
 /// `sim` must be NULL or live; `out` NULL or writable.
@@ -931,7 +923,9 @@ pub unsafe extern "C" fn coag_sim_concentration(
                 );
             }
             // + 0.0 turns an empty sum's −0.0 into 0
-            Ok(s.sim.concentration(a, b) + 0.0)
+            finite_result(s.sim.concentration(a, b) + 0.0, || {
+                "concentration (counts over a tiny volume)".into()
+            })
         })
     }
 }
@@ -944,7 +938,25 @@ pub unsafe extern "C" fn coag_sim_concentration(
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn coag_sim_gel_mass(sim: *const coag_sim, out: *mut f64) -> i32 {
     // SAFETY: forwarded contract.
-    unsafe { read(sim, out, |s| Ok(s.sim.gel_mass().unwrap_or(0.0))) }
+    unsafe {
+        read(sim, out, |s| {
+            finite_result(s.sim.gel_mass().unwrap_or(0.0), || "gel mass".into())
+        })
+    }
+}
+
+/// `v` when finite; else `COAG_CAPACITY` naming `what` (an observable that overflows a
+/// double — e.g. M_{1e6}, large sizes, counts in a tiny volume — is not a number the
+/// host can use).
+fn finite_result(v: f64, what: impl FnOnce() -> String) -> Result<f64, Fail> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        fail(
+            crate::COAG_CAPACITY,
+            format!("{} overflows a double ({v})", what()),
+        )
+    }
 }
 
 /// Number of simulation particles.

@@ -32,6 +32,24 @@ fn checkpoint_restore_corpus_and_regressions() {
     }
 }
 
+/// The committed seeds are checkpoints of today's format: were they stale, every
+/// count-scheme seed would be refused at its configuration record and a campaign would
+/// never reach the state's own validation (as happened once, unnoticed, for 5 · 10^6
+/// executions at half the coverage).
+#[test]
+fn checkpoint_restore_seeds_are_current() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/checkpoint_restore");
+    let seeds = fuzz::seeds();
+    assert_eq!(seeds.len(), 30);
+    for (name, data) in seeds {
+        let committed = std::fs::read(dir.join(&name)).unwrap_or_default();
+        assert!(
+            committed == data,
+            "{name} is stale: regenerate with `cargo run --bin seed_corpus corpus/checkpoint_restore` in fuzz/"
+        );
+    }
+}
+
 #[test]
 fn call_sequence_corpus_and_regressions() {
     let files = inputs("call_sequence");

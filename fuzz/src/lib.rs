@@ -19,6 +19,15 @@ pub fn is_status(st: i32) -> bool {
 /// # Safety
 /// Returns a live handle, freed by the caller with `coag_sim_free`.
 pub unsafe fn small_sim(kind: usize) -> *mut coag_sim {
+    unsafe { sim_of(kind, 300, 16 << 20) }
+}
+
+/// As [`small_sim`] with `monomers` monomers (and 20 dimers, 3 of size 4) in a count
+/// scheme and its tables capped at `budget` bytes.
+///
+/// # Safety
+/// Returns a live handle, freed by the caller with `coag_sim_free`.
+pub unsafe fn sim_of(kind: usize, monomers: u64, budget: u64) -> *mut coag_sim {
     unsafe {
         let mut k = null_mut();
         assert_eq!(coag_kernel_new_additive(0.0, &mut k), COAG_OK);
@@ -44,8 +53,8 @@ pub unsafe fn small_sim(kind: usize) -> *mut coag_sim {
                 COAG_METHOD_INVERSE,
                 COAG_METHOD_REJECTION,
             ][kind % KINDS - 1];
-            c.memory_budget = 16 << 20;
-            let n = [300u64, 20, 0, 3];
+            c.memory_budget = budget;
+            let n = [monomers, 20, 0, 3];
             assert_eq!(coag_counts_new(&c, k, n.as_ptr(), n.len(), &mut s), COAG_OK);
         }
         coag_kernel_free(k);
@@ -146,6 +155,32 @@ pub fn checkpoint_restore(data: &[u8]) {
         }
         coag_sim_free(s);
     }
+}
+
+/// The seed inputs of `checkpoint_restore`, by file name: a checkpoint of every
+/// scheme, fresh and advanced to t = 0.3 and 1, under both modes (as written, and
+/// resealed after the mode byte). `cargo test` checks that the committed seeds are
+/// these (a format change must regenerate them with `seed_corpus`, or the campaign
+/// starts from checkpoints that are all refused at the configuration record).
+pub fn seeds() -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for kind in 0..KINDS {
+        unsafe {
+            let s = small_sim(kind);
+            for (step, t) in [0.0, 0.3, 1.0].into_iter().enumerate() {
+                let st = coag_sim_advance_to(s, t, std::ptr::null_mut());
+                assert_eq!(st, COAG_OK, "seed advance: {}", last_error());
+                let ck = checkpoint(s);
+                for reseal in 0..2u8 {
+                    let mut data = vec![(kind as u8) << 1 | reseal];
+                    data.extend_from_slice(&ck);
+                    out.push((format!("seed-{kind}-{step}-{reseal}"), data));
+                }
+            }
+            coag_sim_free(s);
+        }
+    }
+    out
 }
 
 #[path = "call_sequence.rs"]

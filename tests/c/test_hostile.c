@@ -337,6 +337,11 @@ static void reproducers(coag_kernel *k) {
         double vols[2] = {5e-324, 2.2250738585072014e-308};
         for (int v = 0; v < 2; v++) {
             s = make(methods[m], k, vols[v]);
+            /* observables that overflow a double are COAG_CAPACITY, never inf */
+            double obs;
+            EXPECT(coag_sim_moment(s, 0.0, &obs), COAG_CAPACITY);
+            EXPECT(coag_sim_concentration(s, -1.0, INFINITY, &obs), COAG_CAPACITY);
+            EXPECT(coag_sim_gel_mass(s, &obs), COAG_CAPACITY);
             st = coag_sim_advance_to(s, 1.0, NULL);
             CHECK(st == COAG_INVALID_RATE || st == COAG_CAPACITY, "method %d volume %g: %s",
                   methods[m], vols[v], coag_status_name(st));
