@@ -46,7 +46,7 @@ enum Op {
     Free(u8),
     Advance(u8, Num),
     AdvanceBy(u8, u8),
-    SetCounts(u8, Vec<u16>, Num),
+    SetCounts(u8, Vec<u8>, Num),
     SetSizes(u8, Vec<u16>),
     SetKernel(u8, u8, Num),
     SetDt(u8, Num),
@@ -102,7 +102,7 @@ pub fn run(data: &[u8]) {
     };
     let mut sims: [(*mut coag_sim, usize); SLOTS] = [(null_mut(), 0); SLOTS];
     unsafe {
-        for op in ops.into_iter().take(48) {
+        for op in ops.into_iter().take(32) {
             macro_rules! live {
                 ($i:expr) => {
                     sims[slot($i)].0
@@ -113,12 +113,12 @@ pub fn run(data: &[u8]) {
                     let i = slot(kind);
                     coag_sim_free(sims[i].0);
                     let kind = usize::from(kind >> 2) % KINDS;
-                    // 60 monomers and 1 MiB of tables: most of an execution's time
-                    // went into growing size tables (set_counts makes sizes up to
-                    // millions), which the memory budget caps
-                    let s = sim_of(kind, 60, 1 << 20);
+                    // 60 monomers and 128 KiB of tables: most of an execution's time
+                    // went into growing, checkpointing and cloning size tables
+                    // (set_counts made sizes up to millions), which the budget caps
+                    let s = sim_of(kind, 60, 128 << 10);
                     // short calls: many operations per execution
-                    assert_eq!(coag_sim_set_work_limit(s, 2000), COAG_OK);
+                    assert_eq!(coag_sim_set_work_limit(s, 500), COAG_OK);
                     sims[i] = (s, kind);
                 }
                 Op::Free(i) => {
@@ -135,8 +135,9 @@ pub fn run(data: &[u8]) {
                     let before = m01(s);
                     let mut t0 = 0.0;
                     coag_sim_time(s, &mut t0);
-                    let ck = checkpoint(s);
                     let target = t.value().min(t0 + 50.0);
+                    // the state is compared only where the call must refuse
+                    let ck = (!(target >= t0)).then(|| checkpoint(s));
                     let st = coag_sim_advance_to(s, target, null_mut());
                     assert!(is_status(st), "advance: {st}: {}", last_error());
                     let mut t1 = -1.0;
@@ -152,7 +153,7 @@ pub fn run(data: &[u8]) {
                     } else if st == COAG_TIME_BACKWARDS
                         || st == COAG_INVALID_ARGUMENT && !target.is_finite()
                     {
-                        assert_eq!(checkpoint(s), ck, "refused advance changed the sim");
+                        assert_eq!(Some(checkpoint(s)), ck, "refused advance changed the sim");
                     } else if st == COAG_INTERRUPTED {
                         assert!(t1 >= t0 && t1 <= target);
                     }
@@ -171,7 +172,7 @@ pub fn run(data: &[u8]) {
                 }
                 Op::SetCounts(i, counts, v) => {
                     let s = live!(i);
-                    let c: Vec<u64> = counts.iter().take(64).map(|&c| u64::from(c)).collect();
+                    let c: Vec<u64> = counts.iter().take(24).map(|&c| u64::from(c)).collect();
                     let ck = checkpoint(s);
                     let st = coag_sim_set_counts(s, c.as_ptr(), c.len(), v.value());
                     assert!(is_status(st));
@@ -234,7 +235,7 @@ pub fn run(data: &[u8]) {
                     if !live!(i).is_null() {
                         assert_eq!(
                             // never 0 (unlimited): a tiny Δt would then run for hours
-                            coag_sim_set_work_limit(live!(i), 1 + u64::from(units % 4096) * 16),
+                            coag_sim_set_work_limit(live!(i), 1 + u64::from(units % 1024) * 2),
                             COAG_OK
                         );
                     }

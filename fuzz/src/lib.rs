@@ -141,6 +141,9 @@ pub fn checkpoint_restore(data: &[u8]) {
         let st = coag_sim_restore(s, buf.as_ptr(), buf.len());
         match st {
             COAG_OK => {
+                // a short advance shows the restored state runs (1000 proposals keep
+                // an execution under a millisecond)
+                assert_eq!(coag_sim_set_work_limit(s, 1000), COAG_OK);
                 check_observables(s);
                 let mut t = 0.0;
                 assert_eq!(coag_sim_time(s, &mut t), COAG_OK);

@@ -1,0 +1,125 @@
+//! The situations of the C-ABI fuzzing campaigns' findings 2–4 (docs/results/fuzzing.md),
+//! rebuilt on every size-count scheme through the facade. The byte-level reproducers of
+//! findings 1–4 were lost to a `crash-*` ignore pattern that also matched
+//! `fuzz/regressions/`; these tests are not those inputs: the ones for findings 3 and 4
+//! pass on the code before their fixes too (the fuzzer's paths went through
+//! `set_counts` and clones of states these simple runs do not reach), so they guard
+//! the properties, not the exact defects.
+
+mod common;
+
+use coagula_core::checkpoint::{Reader, Writer};
+use coagula_core::kernel::Coagulation;
+use coagula_core::scheme::registry::State;
+use common::{Sim, build, count_schemes};
+use rand_pcg::Pcg64Mcg;
+
+fn save(s: &Sim) -> Vec<u8> {
+    let mut w = Writer::new(&mut []);
+    s.save(&mut w);
+    let mut buf = vec![0u8; w.needed()];
+    let mut w = Writer::new(&mut buf);
+    s.save(&mut w);
+    w.finish().unwrap();
+    buf
+}
+
+fn counts(s: &Sim) -> Vec<u64> {
+    match s.state() {
+        State::Counts(c, _) => c.into_owned(),
+        State::Sizes(_) => unreachable!("a size-count scheme"),
+    }
+}
+
+/// Finding 3: a sim that has doubled its particles restores from its own checkpoint
+/// (the bucketed layout refused it: a bucket's remembered particle count was bounded by
+/// N0, but doublings double it).
+#[test]
+fn a_doubled_sim_restores_from_its_own_checkpoint() {
+    let k = Coagulation::constant(1.0).unwrap();
+    for info in count_schemes() {
+        let Some(mut a) = build(info.id, k, &[64], 64.0) else {
+            continue;
+        };
+        let mut rng = Pcg64Mcg::new(3);
+        for h in 1..=40 {
+            a.advance_to(f64::from(h), &mut rng).unwrap();
+            let buf = save(&*a);
+            let mut b = build(info.id, k, &[64], 64.0).unwrap();
+            b.restore(&mut Reader::new(&buf))
+                .unwrap_or_else(|e| panic!("{} at t = {h}: {e}", info.name));
+            assert_eq!(counts(&*b), counts(&*a), "{}", info.name);
+        }
+        assert!(a.totals().doublings > 0, "{}: no doubling", info.name);
+    }
+}
+
+/// Finding 4: an advance refused because the rate is too large to move the clock leaves
+/// a state that restores (the low-rank clock was left at a mean wait of 0, and a clone
+/// refused it), and the sim runs again once the kernel is sane: K0 = 1e300, whose waits
+/// are below the resolution of the clock at t = 1.
+#[test]
+fn a_sim_refused_for_a_huge_rate_restores_and_runs_on() {
+    let huge = Coagulation::constant(1e300).unwrap();
+    let sane = Coagulation::constant(1.0).unwrap();
+    for (volume, t0) in [(1.0, 1.0)] {
+        for info in count_schemes() {
+            let Some(mut a) = build(info.id, huge, &[3000, 40], volume) else {
+                continue;
+            };
+            let mut rng = Pcg64Mcg::new(5);
+            a.set_time(t0).unwrap();
+            let r = a.advance_to(t0 + 1.0, &mut rng);
+            assert!(
+                matches!(r, Err(coagula_core::Error::InvalidRate { .. })),
+                "{} V = {volume}: {r:?}",
+                info.name
+            );
+            let buf = save(&*a);
+            let mut b = build(info.id, huge, &[3000, 40], volume).unwrap();
+            b.restore(&mut Reader::new(&buf))
+                .unwrap_or_else(|e| panic!("{} V = {volume}: {e}", info.name));
+            b.set_kernel(sane).unwrap();
+            b.set_time(0.0).unwrap();
+            let rep = b
+                .advance_within(1.0, &mut coagula_core::scheme::Budget::work(1000), &mut rng)
+                .unwrap();
+            assert!(rep.proposals > 0, "{}", info.name);
+        }
+    }
+}
+
+/// Finding 2: step counters restored near 2^64 saturate in the next advance instead of
+/// overflowing (the checkpoint is edited where it holds the event counter).
+#[test]
+fn counters_near_the_top_of_u64_saturate() {
+    let k = Coagulation::additive();
+    for info in count_schemes() {
+        let Some(mut a) = build(info.id, k, &[4096], 4096.0) else {
+            continue;
+        };
+        let mut rng = Pcg64Mcg::new(8);
+        a.advance_to(0.5, &mut rng).unwrap();
+        let events = a.totals().events;
+        let mut buf = save(&*a);
+        let at: Vec<usize> = (0..buf.len() - 7)
+            .filter(|&i| buf[i..i + 8] == events.to_le_bytes())
+            .collect();
+        // the event counter, and the proposal counter when every proposal was accepted
+        assert!(
+            matches!(at.len(), 1 | 2),
+            "{}: the event counter's place",
+            info.name
+        );
+        for i in at {
+            buf[i..i + 8].copy_from_slice(&(u64::MAX - 2).to_le_bytes());
+        }
+        // (the facade's save() writes no checksum: the edited bytes are read as they are)
+        let mut b = build(info.id, k, &[4096], 4096.0).unwrap();
+        b.restore(&mut Reader::new(&buf))
+            .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+        assert_eq!(b.totals().events, u64::MAX - 2);
+        b.advance_to(1.0, &mut rng).unwrap();
+        assert_eq!(b.totals().events, u64::MAX, "{}", info.name);
+    }
+}
