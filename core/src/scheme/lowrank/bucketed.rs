@@ -1284,7 +1284,9 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         for (b, bk) in s.buckets.iter().enumerate() {
             total = total.checked_add(bk.n).ok_or(bad("particle number"))?;
             if b == 0 {
-                if bk.n != 0 || bk.slots != 0 {
+                // (size 0 holds nobody: a count there, never observed, was doubled
+                // past 2^32 — found by fuzzing)
+                if bk.n != 0 || bk.slots != 0 || counts[0] != 0 {
                     return Err(bad("bucket 0 holds particles"));
                 }
                 continue;
