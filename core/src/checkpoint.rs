@@ -257,6 +257,8 @@ pub(crate) mod tag {
     pub const INVERSE: u64 = 3;
     pub const REJECTION: u64 = 4;
     pub const BUCKETED: u64 = 5;
+    pub const MFA: u64 = 6;
+    pub const DSA: u64 = 7;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

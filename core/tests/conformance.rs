@@ -67,8 +67,8 @@ fn the_registry_names_every_scheme_once() {
 
 /// K = 1 from monomers: `M2(t) = 1 + t` for every scheme (the mass-flow step is an
 /// explicit Euler step in expectation, `E[M2'] = M2 + Δt`, which is exact here), and
-/// `M0(t) = 1/(1 + t/2)` for the size-count schemes (the mass-flow scheme's M0 carries
-/// an O(Δt) bias, checked in its own tests). 32 replicas each, Student t on their own
+/// `M0(t) = 1/(1 + t/2)` for every event-driven scheme (the time-driven mass-flow
+/// scheme's M0 carries an O(Δt) bias, checked in its own tests). 32 replicas each, Student t on their own
 /// standard error at the suite's false-alarm rate (7.2 SE). A factor 2 in a rate moves
 /// M0(1) to 1/2 and M2(1) to 3: ~150 SE each (measured SEs: 1.0e-3 and 4e-3..7e-3).
 #[test]
@@ -93,7 +93,7 @@ fn every_scheme_matches_the_constant_kernel_solution() {
             m2.push(s.moment(2.0));
         }
         let mut checks = vec![("M2", &m2, e.moment(2, t).unwrap())];
-        if info.state == StateKind::Counts {
+        if info.id != SchemeId::MassFlow {
             checks.push(("M0", &m0, e.moment(0, t).unwrap()));
         }
         for (q, st, want) in checks {
@@ -204,7 +204,14 @@ fn observables_agree_with_the_state() {
             }
             State::Sizes(x) => {
                 assert_eq!(x.len() as u64, s.particles());
-                assert_eq!(s.gel_mass(), None);
+                let largest = x.iter().copied().fold(0.0, f64::max);
+                match info.id {
+                    SchemeId::MassFlow => assert_eq!(s.gel_mass(), None),
+                    // no truncation: nothing left the system
+                    SchemeId::Mfa => assert_eq!(s.gel_mass(), Some(0.0)),
+                    _ => assert_eq!(s.gel_mass(), Some(largest / s.volume()), "{}", info.name),
+                }
+                assert_eq!(s.concentration(largest * 1.5, 1e300), 0.0);
             }
         }
     }

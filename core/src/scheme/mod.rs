@@ -17,7 +17,9 @@
 //!   RQMC;
 //! * [`lowrank`] — Osinsky's low-rank Monte Carlo (Osinsky 2023), in the bucketed and
 //!   the per-size tree layouts;
-//! * [`baseline`] — the inverse method and acceptance–rejection, low-rank's baselines.
+//! * [`baseline`] — the inverse method and acceptance–rejection, low-rank's baselines;
+//! * [`eventflow`] — the event-driven mass flow algorithm and direct simulation of
+//!   Eibeck & Wagner (2000), with fragmentation events.
 //!
 //! Shared below them: [`population`] (the size-count population: validation, particle
 //! doubling, size limit, memory budget) and [`registry`] (the object-safe facade over
@@ -27,6 +29,7 @@ pub(crate) mod clock;
 
 pub(crate) use crate::random::{Ziggurat, exp1, open_unit};
 pub mod baseline;
+pub mod eventflow;
 pub mod lowrank;
 pub mod massflow;
 pub mod population;

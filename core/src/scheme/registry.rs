@@ -30,6 +30,7 @@
 //! ```
 
 use super::baseline::{AcceptanceRejection, Inverse};
+use super::eventflow::{Dsa, Mfa};
 use super::lowrank::{BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, ProposalEngine};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Budget, Scheme, StepReport};
@@ -58,6 +59,10 @@ pub enum SchemeId {
     Inverse,
     /// Acceptance–rejection with the kernel's supremum, low-rank's baseline.
     Rejection,
+    /// Eibeck & Wagner 2000: the event-driven mass flow algorithm.
+    Mfa,
+    /// Eibeck & Wagner 2000: direct simulation (Marcus–Lushnikov).
+    Dsa,
 }
 
 /// What a scheme's state is.
@@ -130,6 +135,18 @@ pub const SCHEMES: &[SchemeInfo] = &[
         state: StateKind::Counts,
         summary: "acceptance-rejection with the kernel's supremum, the low-rank baseline",
     },
+    SchemeInfo {
+        id: SchemeId::Mfa,
+        name: "mfa",
+        state: StateKind::Sizes,
+        summary: "Eibeck & Wagner 2000: event-driven mass flow algorithm, gel by truncation, fragmentation events",
+    },
+    SchemeInfo {
+        id: SchemeId::Dsa,
+        name: "dsa",
+        state: StateKind::Sizes,
+        summary: "Eibeck & Wagner 2000: direct simulation (Marcus-Lushnikov), fragmentation events",
+    },
 ];
 
 impl SchemeId {
@@ -159,7 +176,10 @@ pub enum Init<'a> {
         /// The volume V > 0.
         volume: f64,
     },
-    /// Particle sizes carrying the total mass `mass` (mass-flow schemes).
+    /// Particle sizes carrying the total mass `mass`: for the mass-flow schemes
+    /// (`massflow`, `mfa`) samples of the initial *mass* distribution `x c0(x) / M1`,
+    /// each particle carrying `mass / N`; for direct simulation (`dsa`) samples of the
+    /// *number* distribution, in the volume `Σ sizes / mass`.
     Sizes {
         /// The sizes (each finite and > 0).
         sizes: &'a [f64],
@@ -186,6 +206,14 @@ pub struct Options {
     /// then depends on where it is stopped — see
     /// [`LowRankMc::with_batched_clock`](super::lowrank::LowRankMc::with_batched_clock)).
     pub batched_clock: bool,
+    /// Particle capacity of direct simulation (fragmentation adds particles); 0 means
+    /// the initial number without fragmentation and four times it with.
+    pub capacity: usize,
+    /// Truncation `b_N` of the mass flow algorithm (infinite: none).
+    pub truncation: f64,
+    /// Event-driven schemes: a kernel value above the product majorant is an error
+    /// instead of a counted violation.
+    pub strict_bound: bool,
 }
 
 impl Default for Options {
@@ -199,6 +227,9 @@ impl Default for Options {
             points: PointSource::niederreiter(),
             sorting: Sorting::Adaptive,
             batched_clock: true,
+            capacity: 0,
+            truncation: f64::INFINITY,
+            strict_bound: false,
         }
     }
 }
@@ -231,6 +262,24 @@ impl Options {
         self
     }
 
+    /// Sets the particle capacity of direct simulation (0: automatic).
+    pub fn with_capacity(mut self, particles: usize) -> Self {
+        self.capacity = particles;
+        self
+    }
+
+    /// Sets the truncation `b_N` of the mass flow algorithm.
+    pub fn with_truncation(mut self, b: f64) -> Self {
+        self.truncation = b;
+        self
+    }
+
+    /// Makes a kernel above its product majorant an error (event-driven schemes).
+    pub fn with_strict_bound(mut self, strict: bool) -> Self {
+        self.strict_bound = strict;
+        self
+    }
+
     /// Sets the mass-flow sorting strategy.
     pub fn with_sorting(mut self, sorting: Sorting) -> Self {
         self.sorting = sorting;
@@ -241,7 +290,8 @@ impl Options {
 /// A scheme's state, read through the facade.
 #[derive(Clone, Debug)]
 pub enum State<'a> {
-    /// Particle sizes, ascending.
+    /// Particle sizes (ascending for the time-driven mass flow; in storage order for
+    /// the event-driven schemes).
     Sizes(&'a [f64]),
     /// Counts, `N_i` at index `i − 1`, and the volume.
     Counts(Cow<'a, [u64]>, f64),
@@ -576,6 +626,18 @@ where
             .with_size_limit(opts.size_limit);
             Ok(boxed(s, id))
         }
+        (SchemeId::Mfa, Init::Sizes { sizes, mass }) => {
+            let s = Mfa::new(kernel, frag, sizes, mass)?
+                .with_truncation(opts.truncation)?
+                .with_strict_bound(opts.strict_bound);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::Dsa, Init::Sizes { sizes, mass }) => {
+            let cap = dsa_capacity(sizes.len(), &frag, opts);
+            let s = Dsa::new(kernel, frag, sizes, dsa_volume(sizes, mass)?, cap)?
+                .with_strict_bound(opts.strict_bound);
+            Ok(boxed(s, id))
+        }
         _ => Err(Error::Unsupported {
             what: "initial state of the other kind for this scheme",
         }),
@@ -586,12 +648,50 @@ where
 /// schemes that can run in it ([`build_in`]); `None` for the growing schemes (they take
 /// a memory budget instead, [`Options::memory_budget`]) or an overflowing size.
 pub fn workspace_len(id: SchemeId, init: &Init<'_>) -> Option<usize> {
+    workspace_len_with(id, init, &Options::default())
+}
+
+/// [`workspace_len`] under `opts` (direct simulation's capacity).
+pub fn workspace_len_with(id: SchemeId, init: &Init<'_>, opts: &Options) -> Option<usize> {
     match (id, init) {
         (SchemeId::MassFlow, Init::Sizes { sizes, .. }) => {
             super::massflow::workspace_len(sizes.len())
         }
+        (SchemeId::Mfa, Init::Sizes { sizes, .. }) => super::eventflow::workspace_len(sizes.len()),
+        (SchemeId::Dsa, Init::Sizes { sizes, .. }) => {
+            // the capacity with fragmentation when it is automatic (the kernel is not
+            // known here): a workspace for the larger case
+            let cap = if opts.capacity == 0 {
+                sizes.len().checked_mul(4)?
+            } else {
+                opts.capacity
+            };
+            super::eventflow::workspace_len(cap)
+        }
         _ => None,
     }
+}
+
+/// Direct simulation's capacity under `opts`.
+fn dsa_capacity<F: FragmentationKernel>(n: usize, frag: &F, opts: &Options) -> usize {
+    match opts.capacity {
+        0 if frag.is_none() => n.max(1),
+        0 => n.saturating_mul(4).max(1),
+        c => c,
+    }
+}
+
+/// Direct simulation's volume: the one in which `sizes` carry `mass`.
+fn dsa_volume(sizes: &[f64], mass: f64) -> Result<f64> {
+    crate::error::positive("mass", mass)?;
+    let total: f64 = sizes.iter().sum();
+    if !(total > 0.0 && total.is_finite()) {
+        return Err(Error::InvalidRate {
+            name: "total size of the initial particles (finite and positive)",
+            value: total,
+        });
+    }
+    crate::error::positive("volume (total size / mass)", total / mass)
 }
 
 /// [`build`] in storage the caller owns: `workspace` holds at least
@@ -642,7 +742,20 @@ where
             .with_sorting(opts.sorting);
             Ok(boxed(s, id))
         }
-        (SchemeId::MassFlow, _) => Err(Error::Unsupported {
+        (SchemeId::Mfa, Init::Sizes { sizes, mass }) => {
+            let s = Mfa::new_in(kernel, frag, sizes, mass, workspace)?
+                .with_truncation(opts.truncation)?
+                .with_strict_bound(opts.strict_bound);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::Dsa, Init::Sizes { sizes, mass }) => {
+            let cap = dsa_capacity(sizes.len(), &frag, opts);
+            let v = dsa_volume(sizes, mass)?;
+            let s = Dsa::new_in(kernel, frag, sizes, v, cap, workspace)?
+                .with_strict_bound(opts.strict_bound);
+            Ok(boxed(s, id))
+        }
+        (SchemeId::MassFlow | SchemeId::Mfa | SchemeId::Dsa, _) => Err(Error::Unsupported {
             what: "initial state of the other kind (counts vs sizes) for this scheme",
         }),
         _ => Err(Error::Unsupported {
@@ -676,6 +789,54 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
     fn set_mass(&mut self, mass: f64) -> Result<()> {
         MassFlow::set_mass(self, mass)
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>> Facet<K, F>
+    for Mfa<K, F, B>
+{
+    fn state(&self) -> State<'_> {
+        State::Sizes(self.sizes())
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        Mfa::set_sizes(self, sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        Mfa::set_kernel(self, kernel)
+    }
+    fn set_fragmentation(&mut self, frag: F) -> Result<()> {
+        Mfa::set_fragmentation(self, frag)
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        Mfa::set_time(self, t)
+    }
+    fn set_mass(&mut self, mass: f64) -> Result<()> {
+        Mfa::set_mass(self, mass)
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>> Facet<K, F>
+    for Dsa<K, F, B>
+{
+    fn state(&self) -> State<'_> {
+        State::Sizes(self.sizes())
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        Dsa::set_sizes(self, sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        Dsa::set_kernel(self, kernel)
+    }
+    fn set_fragmentation(&mut self, frag: F) -> Result<()> {
+        Dsa::set_fragmentation(self, frag)
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        Dsa::set_time(self, t)
+    }
+    fn set_mass(&mut self, _mass: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "mass: direct simulation's mass is its sizes over its volume (use set_sizes)",
+        })
     }
 }
 
