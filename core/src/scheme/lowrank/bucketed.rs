@@ -478,8 +478,11 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     /// resync they would pile up doubling after doubling).
     #[cold]
     fn double_particles(&mut self) {
+        // (saturating: the entries of list-mode buckets are stale, restored at the
+        // resync below, and may hold any value — a stale count doubled over many
+        // doublings passed 2^32, found by fuzzing; grid counts are at most n < 2^31)
         for c in &mut self.counts {
-            *c *= 2;
+            *c = c.saturating_mul(2);
         }
         for bk in &mut self.buckets {
             bk.n *= 2;
