@@ -286,7 +286,8 @@ pub(crate) fn read_report(r: &mut Reader) -> Result<crate::scheme::StepReport> {
         bound_violations: r.u64()?,
         clipped: r.u64()?,
         doublings: r.u64()?,
-        // no scheme of this checkpoint version removes particles or bounces
+        // (removals are written after the report by the schemes that remove
+        // particles; no scheme bounces yet)
         ..Default::default()
     })
 }

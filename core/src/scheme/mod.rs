@@ -51,9 +51,11 @@ pub struct StepReport {
     pub proposals: u64,
     /// Proposals rejected by thinning (including same-particle rejections).
     pub rejections: u64,
-    /// Proposals where the kernel exceeded its declared bound. Always 0 since a
-    /// violated bound became an error (`Error::BoundExceeded`, the state as before the
-    /// event); kept for the C ABI's step report.
+    /// Proposals where the kernel exceeded its declared bound. The size-count schemes
+    /// make a violated bound an error (`Error::BoundExceeded`, the state as before the
+    /// event), so for them it is 0; the event-driven particle schemes (`eventflow`)
+    /// count a kernel above its product majorant here and accept the proposal, unless
+    /// built with a strict bound.
     pub bound_violations: u64,
     /// Time steps whose probabilities exceeded 1 and were clipped (time-driven schemes).
     pub clipped: u64,

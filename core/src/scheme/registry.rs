@@ -695,7 +695,8 @@ fn dsa_volume(sizes: &[f64], mass: f64) -> Result<f64> {
 }
 
 /// [`build`] in storage the caller owns: `workspace` holds at least
-/// [`workspace_len`] doubles and is borrowed for the sim's life; no step allocates
+/// [`workspace_len_with`] doubles (for the same `opts`; [`workspace_len`] for the
+/// default options) and is borrowed for the sim's life; no step allocates
 /// (the facade's box is the only allocation, made here).
 ///
 /// Errors: as for `build`; a growing scheme (`Unsupported`: give it a memory budget);

@@ -197,7 +197,13 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     #[inline]
     fn rates(&self) -> (f64, f64) {
         let a = self.store.total(H);
-        (a * a / (2.0 * self.volume), self.store.total(FR))
+        // fewer than two particles cannot coagulate (every proposal would be i = j)
+        let c = if self.store.len() < 2 {
+            0.0
+        } else {
+            a * (a / (2.0 * self.volume))
+        };
+        (c, self.store.total(FR))
     }
 
     /// One proposal; `Ok(true)` when the state changed.
@@ -280,6 +286,13 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let out = loop {
             let (coag, frag) = self.rates();
             let total = coag + frag;
+            if !total.is_finite() {
+                // an overflowing rate must not read as "nothing can happen"
+                break Err(Error::InvalidRate {
+                    name: "total event rate (overflows a double)",
+                    value: total,
+                });
+            }
             let p = match self.pending {
                 Some(p) => p,
                 None => {
@@ -369,9 +382,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         use crate::checkpoint::{check_header, read_report, tag};
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::DSA)?;
-        if r.u64()? != self.store.capacity() as u64 {
-            return Err(bad("a different particle capacity"));
-        }
+        // (the capacity it was written with: any state that fits restores, so a run
+        // that filled its workspace can move to a larger one)
+        let _ = r.u64()?;
         let (volume, strict, time) = (r.f64()?, r.u64()?, r.f64()?);
         if !(volume > 0.0 && volume.is_finite()) || strict > 1 || !(time >= 0.0 && time.is_finite())
         {
@@ -391,7 +404,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             a += w[0];
             f += w[1];
         }
-        check_pending(&pending, a * a / (2.0 * volume) + f)?;
+        let coag = if ys.len() < 2 {
+            0.0
+        } else {
+            a * (a / (2.0 * volume))
+        };
+        check_pending(&pending, coag + f)?;
         self.replace(&ys)?;
         self.volume = volume;
         self.strict = strict == 1;

@@ -135,7 +135,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     #[inline]
     fn weights(&self, x: f64) -> Result<[f64; 3]> {
         let h = majorant(&self.kernel, x)?;
-        Ok([h, h / x, break_rate(&self.frag, x)?])
+        let hx = crate::error::finite("h(x)/x (a size too small for its majorant)", h / x)?;
+        Ok([h, hx, break_rate(&self.frag, x)?])
     }
 
     /// Replaces the particles (validated first; nothing changes on error).
@@ -237,6 +238,20 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         (c, self.store.total(FR))
     }
 
+    /// The rates' total, or an error when it is not finite (a rate that overflows
+    /// must not read as "nothing can happen").
+    fn total(coag: f64, frag: f64) -> Result<f64> {
+        let t = coag + frag;
+        if t.is_finite() {
+            Ok(t)
+        } else {
+            Err(Error::InvalidRate {
+                name: "total event rate (overflows a double)",
+                value: t,
+            })
+        }
+    }
+
     /// One proposal; `Ok(true)` when the state changed.
     #[inline]
     fn event<R: Rng + ?Sized>(
@@ -257,15 +272,16 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 return Ok(false);
             }
             let s = xi + xj;
-            if !s.is_finite() {
-                return Err(Error::Overflow {
-                    name: "particle size (a coagulation passed the largest f64)",
-                });
-            }
             if s > self.truncation {
                 self.store.swap_remove(i);
                 rep.removed += 1;
             } else {
+                if !s.is_finite() {
+                    // (no truncation: past b_N the particle would have left)
+                    return Err(Error::Overflow {
+                        name: "particle size (a coagulation passed the largest f64)",
+                    });
+                }
                 let w = self.weights(s)?;
                 self.store.set(i, s, w);
             }
@@ -273,9 +289,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             let i = self.store.sample(FR, rng);
             let x = self.store.size(i);
             let piece = self.frag.inverse_piece(x, unit_f64(rng.next_u64()));
-            if !(piece > 0.0 && piece.is_finite()) {
+            if !(piece > 0.0 && piece <= x) {
                 return Err(Error::InvalidRate {
-                    name: "fragment size",
+                    name: "fragment size (must lie in (0, x])",
                     value: piece,
                 });
             }
@@ -303,7 +319,10 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let mut rep = StepReport::default();
         let out = loop {
             let (coag, frag) = self.rates();
-            let total = coag + frag;
+            let total = match Self::total(coag, frag) {
+                Ok(t) => t,
+                Err(e) => break Err(e),
+            };
             let p = match self.pending {
                 Some(p) => p,
                 None => {

@@ -79,9 +79,11 @@ pub fn sample_sizes<R: Rng + ?Sized>(
         capacity: n,
     })?;
     for _ in 0..n {
+        // u in (0, 1), never 0 or 1, where inverse CDFs of unbounded laws diverge
+        let u = ((rng.next_u64() >> 11) as f64 + 0.5) * (1.0 / (1u64 << 53) as f64);
         out.push(crate::error::positive(
             "initial size (inverse CDF)",
-            inverse_cdf(unit_f64(rng.next_u64())),
+            inverse_cdf(u),
         )?);
     }
     Ok(out)
@@ -269,6 +271,14 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
 /// majorant is `Unsupported`.
 #[inline]
 pub(crate) fn majorant<K: crate::kernel::CoagulationKernel>(k: &K, x: f64) -> Result<f64> {
+    if x < k.min_size() {
+        // the kernel guarantees its majorant only from min_size on
+        return Err(Error::OutOfRange {
+            name: "particle size (below the kernel's min_size, where its majorant is not guaranteed)",
+            value: x,
+            range: "[kernel min_size, inf)",
+        });
+    }
     match k.majorant(x) {
         Some(h) if h >= 0.0 && h.is_finite() => Ok(h),
         Some(h) => Err(Error::InvalidRate {

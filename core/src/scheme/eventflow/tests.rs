@@ -188,27 +188,15 @@ fn refused_input_and_capacity() {
         Dsa::new(no_h, NoFragmentation, &[1.0; 4], 4.0, 4),
         Err(Error::Unsupported { .. })
     ));
-    // fragmentation fills a workspace of capacity 8 from 8 particles at once
+    // fragmentation fills a workspace of capacity 8 from 8 particles: the call that
+    // fails (one proposal per call) leaves sizes, time and totals as they were
     let f = BinaryUniform::new(1.0).unwrap();
     let mut s = Dsa::new(k, f, &[1.0; 8], 8.0, 8).unwrap();
-    let before: Vec<f64> = s.sizes().to_vec();
     let mut rng = Pcg64Mcg::new(4);
-    let mut hit = false;
-    for _ in 0..100 {
-        let t = s.time() + 0.1;
-        match s.advance_to(t, &mut rng) {
-            Ok(_) => {}
-            Err(Error::Capacity { .. }) => {
-                hit = true;
-                break;
-            }
-            Err(e) => panic!("{e}"),
-        }
-    }
-    assert!(hit, "a full workspace");
-    assert!(s.sizes().len() <= 8);
-    let _ = before;
-    // a kernel above its declared majorant: counted, or an error when strict
+    let failed = one_proposal_at_a_time(&mut s, &mut rng, |s| s.sizes().to_vec());
+    assert!(matches!(failed, Error::Capacity { .. }), "{failed:?}");
+    // a kernel above its declared majorant: counted, or an error when strict (the
+    // state then as before the failing proposal)
     let liar = crate::kernel::UserKernel::new(|_: f64, _: f64| 2.0).with_majorant(|_: f64| 1.0);
     let mut s = Dsa::new(liar.clone(), NoFragmentation, &[1.0; 64], 64.0, 64).unwrap();
     let rep = s.advance_to(1.0, &mut rng).unwrap();
@@ -216,18 +204,56 @@ fn refused_input_and_capacity() {
     let mut s = Dsa::new(liar, NoFragmentation, &[1.0; 64], 64.0, 64)
         .unwrap()
         .with_strict_bound(true);
-    let sizes = s.sizes().to_vec();
-    assert!(matches!(
-        s.advance_to(1.0, &mut rng),
-        Err(Error::BoundExceeded { .. })
-    ));
-    let mut now = s.sizes().to_vec();
-    let mut was = sizes;
-    now.sort_by(f64::total_cmp);
-    was.sort_by(f64::total_cmp);
-    assert_ne!(now.len(), 0);
-    // the refused event changed nothing: every particle still sums to the mass
-    assert_eq!(now.iter().sum::<f64>(), was.iter().sum::<f64>());
+    let failed = one_proposal_at_a_time(&mut s, &mut rng, |s| s.sizes().to_vec());
+    assert!(matches!(failed, Error::BoundExceeded { .. }), "{failed:?}");
+    // sizes below the kernel's min_size (where its majorant is not guaranteed): refused
+    // at the start, and a fragment there fails its event with the state as before
+    let k1 = Coagulation::additive().with_min_size(1.0).unwrap();
+    assert!(Mfa::new(k1, NoFragmentation, &[0.1, 100.0], 1.0).is_err());
+    let mut s = Dsa::new(k1, f, &[1.0; 16], 16.0, 64).unwrap();
+    let failed = one_proposal_at_a_time(&mut s, &mut rng, |s| s.sizes().to_vec());
+    assert!(matches!(failed, Error::OutOfRange { .. }), "{failed:?}");
+    // a fragmentation kernel returning a piece larger than the particle (mass from
+    // nothing): an error in both schemes
+    let grow = crate::kernel::UserFragmentation::new(|_: f64| 1.0, |x: f64, _: f64| 2.0 * x, None)
+        .unwrap();
+    let mut m = Mfa::new(k, grow, &[1.0; 4], 1.0).unwrap();
+    let failed = one_proposal_at_a_time(&mut m, &mut rng, |s| s.sizes().to_vec());
+    assert!(matches!(failed, Error::InvalidRate { .. }), "{failed:?}");
+    // one particle cannot coagulate: the DSA idles instead of proposing i = j
+    let mut one = Dsa::new(k, NoFragmentation, &[1.0], 1.0, 1).unwrap();
+    let rep = one.advance_to(10.0, &mut rng).unwrap();
+    assert_eq!((rep.proposals, one.time()), (0, 10.0));
+    // a truncation the sum passes removes the particle, even past the largest double
+    let mut m = Mfa::new(k, NoFragmentation, &[1.5e308, 1.5e308], 1.5e308)
+        .unwrap()
+        .with_truncation(1.6e308)
+        .unwrap();
+    m.advance_to(100.0, &mut rng).unwrap();
+    assert!(m.totals().removed > 0);
+}
+
+/// Steps `s` one proposal per call until a call fails; checks that the failing call
+/// left `state`, the time and the totals as they were, and returns its error.
+fn one_proposal_at_a_time<S: Scheme + Observe, T: PartialEq + core::fmt::Debug>(
+    s: &mut S,
+    rng: &mut Pcg64Mcg,
+    state: impl Fn(&S) -> T,
+) -> Error {
+    for _ in 0..1_000_000 {
+        let before = (state(s), s.time().to_bits(), s.totals());
+        match s.advance_within(1e6, &mut Budget::work(1), rng) {
+            Ok(_) => {}
+            Err(e) => {
+                assert_eq!(
+                    (state(s), s.time().to_bits(), s.totals().events),
+                    (before.0, before.1, before.2.events)
+                );
+                return e;
+            }
+        }
+    }
+    panic!("no call failed");
 }
 
 /// Stopping anywhere — by target times or by a work budget — is the run that went
