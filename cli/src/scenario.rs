@@ -183,7 +183,7 @@ pub enum Points {
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct SchemeSpec {
     /// A registry name: massflow, lowrank, lowrank-tree, lowrank-binary-tree, inverse,
-    /// rejection.
+    /// rejection, mfa, dsa.
     pub name: String,
     /// Time step (mass flow).
     pub dt: Option<f64>,
@@ -191,6 +191,14 @@ pub struct SchemeSpec {
     pub points: Option<Points>,
     /// Largest particle size (size-count schemes; default 2^32).
     pub size_limit: Option<u64>,
+    /// Particle capacity (dsa; default the initial number, four times it with
+    /// fragmentation).
+    pub capacity: Option<u64>,
+    /// Truncation b_N (mfa; default none): a coagulation past it removes the particle.
+    pub truncation: Option<f64>,
+    /// A kernel above its product majorant is an error instead of a counted violation
+    /// (mfa, dsa; default false).
+    pub strict_bound: Option<bool>,
 }
 
 /// Spacing of generated output times.
@@ -980,18 +988,12 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             ),
         )
     })?;
-    if matches!(scheme, SchemeId::Mfa | SchemeId::Dsa) {
-        // their initial states (number vs mass samples), capacity and truncation are
-        // not scenario keys yet: refused rather than run as the time-driven mass flow
-        return Err(src.at(
-            "scheme.name",
-            format!(
-                "{}: the event-driven particle schemes are in the library (coagula_core::scheme::eventflow) but not in scenarios yet",
-                s.scheme.name
-            ),
-        ));
-    }
     let counts_scheme = scheme.info().state == StateKind::Counts;
+    // the time-driven mass flow (Δt, point sets, N a power of two) against the
+    // event-driven particle schemes; direct simulation starts from samples of the
+    // number distribution, the mass-flow schemes from samples of the mass distribution
+    let mass_flow = scheme == SchemeId::MassFlow;
+    let direct = scheme == SchemeId::Dsa;
     let kernel = kernel_of(&s.kernel, src)?;
 
     // fragmentation
@@ -1002,7 +1004,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                 return Err(src.at(
                     "fragmentation",
                     format!(
-                        "scheme {} is pure coagulation: only massflow breaks particles",
+                        "scheme {} is pure coagulation: massflow, mfa and dsa break particles",
                         s.scheme.name
                     ),
                 ));
@@ -1027,7 +1029,31 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             format!("{size_limit} must be at least 2"),
         ));
     }
-    if counts_scheme {
+    if scheme != SchemeId::Dsa {
+        refuse(
+            src,
+            "scheme.capacity",
+            &s.scheme.capacity,
+            "only dsa adds particles",
+        )?;
+    }
+    if scheme != SchemeId::Mfa {
+        refuse(
+            src,
+            "scheme.truncation",
+            &s.scheme.truncation,
+            "only mfa truncates",
+        )?;
+    }
+    if counts_scheme || mass_flow {
+        refuse(
+            src,
+            "scheme.strict-bound",
+            &s.scheme.strict_bound,
+            "only mfa and dsa count violations of the product majorant (the other schemes refuse them)",
+        )?;
+    }
+    if !mass_flow {
         refuse(
             src,
             "scheme.dt",
@@ -1040,12 +1066,13 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             &s.scheme.points,
             "point sets drive the mass-flow scheme only",
         )?;
-    } else {
+    }
+    if !counts_scheme {
         refuse(
             src,
             "scheme.size-limit",
             &s.scheme.size_limit,
-            "the mass-flow scheme has continuous sizes",
+            "particle schemes have continuous sizes",
         )?;
     }
     let points = s.scheme.points.unwrap_or(Points::Qmc);
@@ -1126,7 +1153,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     }
     let t_end = *times.last().expect("non-empty");
 
-    let dt = if counts_scheme {
+    let dt = if !mass_flow {
         0.01
     } else {
         let dt = positive(
@@ -1164,7 +1191,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     let mut observables = Vec::new();
     for name in &o.observables {
         let ob = Observable::parse(name).map_err(|m| src.at("output.observables", m))?;
-        if ob == Observable::Gel && !counts_scheme {
+        if ob == Observable::Gel && mass_flow {
             return Err(src.at(
                 "output.observables",
                 "gel: the mass-flow scheme has no gel estimate (use M1)",
@@ -1198,7 +1225,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     if r.threads > 1024 {
         return Err(src.at("run.threads", format!("{} must be in 0..=1024", r.threads)));
     }
-    if !counts_scheme && matches!(points, Points::Qmc | Points::Sobol) && r.replicas > 1 {
+    if mass_flow && matches!(points, Points::Qmc | Points::Sobol) && r.replicas > 1 {
         return Err(src.at(
             "run.replicas",
             "deterministic QMC points give identical replicas: use points = \"rqmc\" (or \"mc\") for replicas",
@@ -1227,13 +1254,13 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
         if !(2..=1u64 << 40).contains(&n) {
             return Err(src.at("initial.particles", format!("{n} must be in 2..=2^40")));
         }
-        if !counts_scheme && !n.is_power_of_two() {
+        if mass_flow && !n.is_power_of_two() {
             return Err(src.at(
                 "initial.particles",
                 format!("{n}: the mass-flow scheme needs a power of two (its (0,m,2)-nets)"),
             ));
         }
-        if !counts_scheme && n > 1 << 30 {
+        if mass_flow && n > 1 << 30 {
             return Err(src.at(
                 "initial.particles",
                 format!("{n}: the mass-flow scheme takes at most 2^30"),
@@ -1332,6 +1359,14 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                     limit,
                     scale: n as f64 / c0,
                 }
+            } else if direct {
+                Start::Quantiles {
+                    n: n as usize,
+                    dist: Dist::Exponential(mean),
+                    unit: None,
+                    limit,
+                    scale: c0 * mean,
+                }
             } else {
                 Start::Quantiles {
                     n: n as usize,
@@ -1368,6 +1403,14 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                     unit: Some(unit),
                     limit,
                     scale: n as f64 / c0,
+                }
+            } else if direct {
+                Start::Quantiles {
+                    n: n as usize,
+                    dist: Dist::Lognormal(median, sigma),
+                    unit: None,
+                    limit,
+                    scale: c0 * mean,
                 }
             } else {
                 // the mass distribution of a log-normal is log-normal with ln-median
@@ -1578,7 +1621,22 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     // the centred state, which also checks that the sizes fit the grid and the limit
     let init = start.data(0.5).map_err(|m| src.at("initial", m))?;
     let per = match &init {
-        InitData::Sizes { sizes, .. } => 8 * 7 * sizes.len() as u64,
+        InitData::Sizes { sizes, .. } => {
+            let n = sizes.len() as u64;
+            match scheme {
+                // sizes and three sum trees (at most 7 words a particle of capacity)
+                SchemeId::Mfa => 8 * 7 * n,
+                SchemeId::Dsa => {
+                    let cap = s.scheme.capacity.unwrap_or(if s.fragmentation.is_none() {
+                        n
+                    } else {
+                        4 * n
+                    });
+                    8 * 7 * cap.max(n)
+                }
+                _ => 8 * 7 * n,
+            }
+        }
         InitData::Counts { counts, .. } => {
             let n: u64 = counts.iter().sum();
             let dense = 64 * counts.len() as u64;
@@ -1601,10 +1659,21 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             ),
         ));
     }
-    let options = Options::default()
+    let mut options = Options::default()
         .with_size_limit(size_limit)
         .with_dt(dt)
-        .with_memory_budget(coagula_core::scheme::population::machine_memory_budget());
+        .with_memory_budget(coagula_core::scheme::population::machine_memory_budget())
+        .with_strict_bound(s.scheme.strict_bound.unwrap_or(false));
+    if let Some(c) = s.scheme.capacity {
+        let c = usize::try_from(c).map_err(|_| src.at("scheme.capacity", "too large"))?;
+        options = options.with_capacity(c);
+    }
+    if let Some(b) = s.scheme.truncation {
+        if b.is_nan() || b <= 0.0 {
+            return Err(src.at("scheme.truncation", format!("{b} must be > 0")));
+        }
+        options = options.with_truncation(b);
+    }
     Ok(Plan {
         title: s.title.clone().unwrap_or_else(|| "scenario".into()),
         scheme,
