@@ -436,23 +436,43 @@ mod tests {
                 if !spec.modes.iter().any(|m| m == mode) {
                     continue;
                 }
-                let ov: Vec<(String, toml::Value)> = spec
-                    .set
-                    .iter()
-                    .chain(if quick { &spec.quick } else { &spec.full })
-                    .map(|(k, v)| (k.clone(), v.clone()))
-                    .collect();
-                let plan = plan_of(spec, &ov).unwrap_or_else(|e| panic!("{}: {e}", spec.name));
-                for c in &spec.check {
-                    let o = Observable::parse(&c.observable).unwrap();
-                    assert!(
-                        plan.observables.contains(&o),
-                        "{}: {}",
-                        spec.name,
-                        c.observable
-                    );
-                    if c.metric == Metric::Mean {
-                        time_index(&plan, c, &spec.name).unwrap();
+                // each listed scheme as the run sets it ("all-counts": one of them)
+                let schemes: Vec<Option<String>> = if spec.schemes.is_empty() {
+                    vec![None]
+                } else {
+                    spec.schemes
+                        .iter()
+                        .map(|s| {
+                            Some(if s == "all-counts" {
+                                "lowrank".into()
+                            } else {
+                                s.clone()
+                            })
+                        })
+                        .collect()
+                };
+                for scheme in schemes {
+                    let mut ov: Vec<(String, toml::Value)> = spec
+                        .set
+                        .iter()
+                        .chain(if quick { &spec.quick } else { &spec.full })
+                        .map(|(k, v)| (k.clone(), v.clone()))
+                        .collect();
+                    if let Some(s) = scheme {
+                        ov.push(("scheme.name".into(), toml::Value::String(s)));
+                    }
+                    let plan = plan_of(spec, &ov).unwrap_or_else(|e| panic!("{}: {e}", spec.name));
+                    for c in &spec.check {
+                        let o = Observable::parse(&c.observable).unwrap();
+                        assert!(
+                            plan.observables.contains(&o),
+                            "{}: {}",
+                            spec.name,
+                            c.observable
+                        );
+                        if c.metric == Metric::Mean {
+                            time_index(&plan, c, &spec.name).unwrap();
+                        }
                     }
                 }
             }
