@@ -199,6 +199,17 @@ pub struct SchemeSpec {
     /// A kernel above its product majorant is an error instead of a counted violation
     /// (mfa, dsa; default false).
     pub strict_bound: Option<bool>,
+    /// How particles are drawn by weight (mfa, dsa): `tree` (sum trees; dsa's default)
+    /// or `groups` (the paper's group acceptance–rejection; mfa's default).
+    pub sampler: Option<SamplerName>,
+}
+
+/// `scheme.sampler`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum SamplerName {
+    Tree,
+    Groups,
 }
 
 /// Spacing of generated output times.
@@ -1052,6 +1063,12 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             &s.scheme.strict_bound,
             "only mfa and dsa count violations of the product majorant (the other schemes refuse them)",
         )?;
+        refuse(
+            src,
+            "scheme.sampler",
+            &s.scheme.sampler,
+            "only mfa and dsa draw particles by weight",
+        )?;
     }
     if !mass_flow {
         refuse(
@@ -1664,6 +1681,12 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
         .with_dt(dt)
         .with_memory_budget(coagula_core::scheme::population::machine_memory_budget())
         .with_strict_bound(s.scheme.strict_bound.unwrap_or(false));
+    if let Some(name) = s.scheme.sampler {
+        options = options.with_sampler(match name {
+            SamplerName::Groups => coagula_core::scheme::eventflow::Sampler::Groups,
+            SamplerName::Tree => coagula_core::scheme::eventflow::Sampler::SumTree,
+        });
+    }
     if let Some(c) = s.scheme.capacity {
         let c = usize::try_from(c).map_err(|_| src.at("scheme.capacity", "too large"))?;
         options = options.with_capacity(c);

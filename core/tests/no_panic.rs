@@ -10,6 +10,7 @@ use coagula_core::kernel::{BinaryUniform, Coagulation, NoFragmentation, UserKern
 use coagula_core::qmc::{DigitalSequence, Niederreiter2, Sobol};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
+use coagula_core::scheme::eventflow::{Dsa, Mfa, Sampler};
 use coagula_core::scheme::lowrank::{Bucketed, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use proptest::prelude::*;
@@ -329,6 +330,97 @@ proptest! {
             let _ = inv.restore_from(buf);
             let _ = ar.restore_from(buf);
             let _ = mf.restore_from(buf);
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    /// The event-driven schemes (both samplers, with fragmentation events) under
+    /// arbitrary sizes, masses, volumes, capacities, truncations and times: a
+    /// constructor fails or gives a scheme that runs a short step; a failing setter
+    /// changes nothing.
+    #[test]
+    fn event_driven_schemes_never_panic(
+        sizes in proptest::collection::vec(any_real(), 0..17),
+        other in proptest::collection::vec(any_real(), 0..17),
+        x in any_real(),
+        cap in 0usize..40,
+        groups in any::<bool>(),
+    ) {
+        let k = Coagulation::additive();
+        let f = BinaryUniform::new(0.5).unwrap();
+        let sampler = if groups { Sampler::Groups } else { Sampler::SumTree };
+        let mut rng = Pcg64Mcg::new(8);
+        if let Ok(s) = Mfa::new(k, f, &sizes, x) {
+            let mut s = s.with_sampler(sampler).unwrap();
+            let before = s.sizes().to_vec();
+            if s.set_sizes(&other).is_err() {
+                prop_assert_eq!(&before, &s.sizes().to_vec());
+            }
+            let _ = s.set_truncation(x);
+            let _ = s.set_mass(x);
+            let _ = s.set_time(x);
+            let t = s.time();
+            let _ = s.advance_to(t + 0.05, &mut rng);
+        }
+        if let Ok(s) = Dsa::new(k, f, &sizes, x, cap) {
+            let mut s = s.with_sampler(sampler).unwrap();
+            let before = s.sizes().to_vec();
+            if s.set_sizes(&other).is_err() {
+                prop_assert_eq!(&before, &s.sizes().to_vec());
+            }
+            let _ = s.set_time(x);
+            let t = s.time();
+            let _ = s.advance_to(t + 0.05, &mut rng);
+        }
+    }
+
+    /// Arbitrary bytes, and a checkpoint of each event-driven scheme and sampler with
+    /// one byte changed, are refused (the sim unchanged) or restored into a sim that
+    /// runs.
+    #[test]
+    fn event_driven_restore_never_panics(
+        bytes in proptest::collection::vec(any::<u8>(), 0..400),
+        flip in any::<usize>(),
+        value in any::<u8>(),
+        groups in any::<bool>(),
+    ) {
+        let k = Coagulation::additive();
+        let f = BinaryUniform::new(0.5).unwrap();
+        let sampler = if groups { Sampler::Groups } else { Sampler::SumTree };
+        let mut rng = Pcg64Mcg::new(9);
+        let mut mfa = Mfa::new(k, f, &[1.0; 12], 1.0).unwrap().with_sampler(sampler).unwrap();
+        let mut dsa = Dsa::new(k, f, &[1.0; 12], 12.0, 48).unwrap().with_sampler(sampler).unwrap();
+        mfa.advance_to(0.5, &mut rng).unwrap();
+        dsa.advance_to(0.5, &mut rng).unwrap();
+        let save = |s: &dyn Fn(&mut [u8]) -> usize| {
+            let mut b = vec![0u8; 1 << 12];
+            let n = s(&mut b);
+            b.truncate(n);
+            b
+        };
+        let bent = |mut b: Vec<u8>| {
+            let i = flip % b.len();
+            b[i] = value;
+            b
+        };
+        let m = save(&|b| { mfa.save_to(b).unwrap() });
+        let d = save(&|b| { dsa.save_to(b).unwrap() });
+        for buf in [&bytes, &bent(m), &bent(d)] {
+            let before = mfa.sizes().to_vec();
+            if mfa.restore_from(buf).is_err() {
+                prop_assert_eq!(&before, &mfa.sizes().to_vec());
+            } else {
+                let _ = mfa.advance_to(mfa.time() + 0.05, &mut rng);
+            }
+            let before = dsa.sizes().to_vec();
+            if dsa.restore_from(buf).is_err() {
+                prop_assert_eq!(&before, &dsa.sizes().to_vec());
+            } else {
+                let _ = dsa.advance_to(dsa.time() + 0.05, &mut rng);
+            }
         }
     }
 }

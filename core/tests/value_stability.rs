@@ -181,3 +181,43 @@ fn mass_flow_is_value_stable() {
     }
     assert!(failures.is_empty(), "{failures}");
 }
+
+#[test]
+fn event_driven_schemes_are_value_stable() {
+    use coagula_core::scheme::eventflow::{Dsa, Mfa, Sampler};
+    let mut failures = String::new();
+    // (continuous sizes: the fragments go below 1)
+    let k = Coagulation::free_molecular();
+    let f = BinaryUniform::new(0.2).unwrap();
+    let pins = [
+        ("mfa tree", (9781, 15183, 5402, 0, 15960648532339689940)),
+        ("mfa groups", (9016, 14471, 5455, 0, 9920413287302331544)),
+        ("dsa tree", (2114, 2548, 434, 0, 16073726880514846355)),
+        ("dsa groups", (2122, 2526, 404, 0, 9752990068727846254)),
+    ];
+    for (i, (name, want)) in pins.into_iter().enumerate() {
+        let sampler = if i % 2 == 0 {
+            Sampler::SumTree
+        } else {
+            Sampler::Groups
+        };
+        let mut rng = Pcg64Mcg::seed_from_u64(42);
+        // 2000 monomers with fragmentation events to t = 1.5
+        let (rep, sizes) = if i < 2 {
+            let mut s = Mfa::new(k, f, &[1.0; 2000], 1.0)
+                .unwrap()
+                .with_sampler(sampler)
+                .unwrap();
+            (s.advance_to(1.5, &mut rng).unwrap(), s.sizes().to_vec())
+        } else {
+            let mut s = Dsa::new(k, f, &[1.0; 2000], 2000.0, 8000)
+                .unwrap()
+                .with_sampler(sampler)
+                .unwrap();
+            (s.advance_to(1.5, &mut rng).unwrap(), s.sizes().to_vec())
+        };
+        let got = pin(rep, fnv(sizes.iter().map(|x| x.to_bits())));
+        check(name, got, want, &mut failures);
+    }
+    assert!(failures.is_empty(), "{failures}");
+}

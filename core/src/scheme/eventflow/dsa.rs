@@ -24,7 +24,7 @@
 //! largest cluster's mass over V (E–W 6.15).
 
 use super::super::{Budget, Pending, Scheme, StepReport, check_target};
-use super::{Store, accept, break_rate, check_pending, majorant, read_sizes};
+use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::random::{exp1, unit_f64};
@@ -34,6 +34,15 @@ use rand_core::Rng;
 /// Trees: h(y), Ḟ(y).
 const H: usize = 0;
 const FR: usize = 1;
+
+/// The weights `[h, Ḟ]` of a size already validated.
+#[inline]
+fn raw_weights<K: CoagulationKernel, F: FragmentationKernel>(k: &K, f: &F, y: f64) -> [f64; 2] {
+    [
+        k.majorant(y).unwrap_or(0.0),
+        if f.is_none() { 0.0 } else { f.total_rate(y) },
+    ]
+}
 
 /// Direct simulation. See the module docs; `B` is the workspace (an owned `Vec<f64>`,
 /// or the caller's storage with [`Dsa::new_in`]).
@@ -117,6 +126,23 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         self
     }
 
+    /// Draws particles with `sampler` (the default is [`Sampler::SumTree`]).
+    pub fn with_sampler(mut self, sampler: Sampler) -> Result<Self> {
+        self.set_sampler(sampler)?;
+        Ok(self)
+    }
+
+    /// Changes the sampler; the state and the next proposal stay (nothing changes on
+    /// error).
+    pub fn set_sampler(&mut self, sampler: Sampler) -> Result<()> {
+        self.store.set_sampler(sampler)
+    }
+
+    /// The sampler in use.
+    pub fn sampler(&self) -> Sampler {
+        self.store.sampler()
+    }
+
     /// The weights of a particle of size y: `[h, Ḟ]`, validated.
     #[inline]
     fn weights(&self, y: f64) -> Result<[f64; 2]> {
@@ -135,12 +161,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             self.weights(y)?;
         }
         let (k, f) = (&self.kernel, &self.frag);
-        self.store.fill(sizes, |y| {
-            [
-                k.majorant(y).unwrap_or(0.0),
-                if f.is_none() { 0.0 } else { f.total_rate(y) },
-            ]
-        });
+        self.store.fill(sizes, |y| raw_weights(k, f, y));
         self.pending = None;
         Ok(())
     }
@@ -376,6 +397,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         for &y in self.store.sizes() {
             w.f64(y);
         }
+        self.store.save_sampler(w);
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
@@ -394,6 +416,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let mut totals = read_report(r)?;
         totals.removed = r.u64()?;
         let ys = read_sizes(r, self.store.capacity())?;
+        let (k, f) = (&self.kernel, &self.frag);
+        let sampler = self.store.read_sampler(r, &ys, |y| raw_weights(k, f, y))?;
         r.finish()?;
         let mut a = 0.0;
         let mut f = 0.0;
@@ -411,6 +435,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         };
         check_pending(&pending, coag + f)?;
         self.replace(&ys)?;
+        self.store.install_sampler(sampler);
         self.volume = volume;
         self.strict = strict == 1;
         self.time = time;

@@ -15,7 +15,7 @@
 //! gel mass `M1 (1 − n/N)` (E–W 6.14).
 
 use super::super::{Budget, Pending, Scheme, StepReport, check_target};
-use super::{Store, accept, break_rate, check_pending, majorant, read_sizes};
+use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::random::{exp1, unit_f64};
@@ -26,6 +26,13 @@ use rand_core::Rng;
 const H: usize = 0;
 const HX: usize = 1;
 const FR: usize = 2;
+
+/// The weights `[h, h/x, Ḟ]` of a size already validated.
+#[inline]
+fn raw_weights<K: CoagulationKernel, F: FragmentationKernel>(k: &K, f: &F, x: f64) -> [f64; 3] {
+    let h = k.majorant(x).unwrap_or(0.0);
+    [h, h / x, if f.is_none() { 0.0 } else { f.total_rate(x) }]
+}
 
 /// The mass flow algorithm. See the module docs; `B` is the workspace (an owned
 /// `Vec<f64>`, or the caller's storage with [`Mfa::new_in`]).
@@ -100,6 +107,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             totals: StepReport::default(),
         };
         s.replace(sizes)?;
+        s.store.set_sampler(Sampler::Groups)?;
         Ok(s)
     }
 
@@ -131,6 +139,23 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         self
     }
 
+    /// Draws particles with `sampler` (the default is [`Sampler::Groups`]).
+    pub fn with_sampler(mut self, sampler: Sampler) -> Result<Self> {
+        self.set_sampler(sampler)?;
+        Ok(self)
+    }
+
+    /// Changes the sampler; the state and the next proposal stay (nothing changes on
+    /// error).
+    pub fn set_sampler(&mut self, sampler: Sampler) -> Result<()> {
+        self.store.set_sampler(sampler)
+    }
+
+    /// The sampler in use.
+    pub fn sampler(&self) -> Sampler {
+        self.store.sampler()
+    }
+
     /// The weights of a particle of size x: `[h, h/x, Ḟ]`, validated.
     #[inline]
     fn weights(&self, x: f64) -> Result<[f64; 3]> {
@@ -160,10 +185,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             self.weights(x)?;
         }
         let (k, f) = (&self.kernel, &self.frag);
-        self.store.fill(sizes, |x| {
-            let h = k.majorant(x).unwrap_or(0.0);
-            [h, h / x, if f.is_none() { 0.0 } else { f.total_rate(x) }]
-        });
+        self.store.fill(sizes, |x| raw_weights(k, f, x));
         self.pending = None;
         Ok(())
     }
@@ -409,6 +431,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         for &x in self.store.sizes() {
             w.f64(x);
         }
+        self.store.save_sampler(w);
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
@@ -432,6 +455,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let mut totals = read_report(r)?;
         totals.removed = r.u64()?;
         let xs = read_sizes(r, self.n0)?;
+        let (k, f) = (&self.kernel, &self.frag);
+        let sampler = self.store.read_sampler(r, &xs, |x| raw_weights(k, f, x))?;
         r.finish()?;
         let (old_mass, old_b) = (self.mass, self.truncation);
         self.mass = mass;
@@ -464,6 +489,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             });
         }
         self.replace(&xs)?;
+        self.store.install_sampler(sampler);
         self.strict = strict == 1;
         self.time = time;
         self.pending = pending;

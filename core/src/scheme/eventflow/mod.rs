@@ -40,6 +40,7 @@
 //! ```
 
 mod dsa;
+mod groups;
 mod mfa;
 
 pub use dsa::Dsa;
@@ -89,14 +90,31 @@ pub fn sample_sizes<R: Rng + ?Sized>(
     Ok(out)
 }
 
+/// How the event-driven schemes draw particles by weight. The defaults are the faster
+/// of the two on the free-molecular kernel from 10^6 particles (docs/results/
+/// eventflow-samplers.md): groups for the mass flow algorithm, whose time goes into
+/// draws, and the sum tree for direct simulation, whose time goes into updates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sampler {
+    /// Flat sum trees in the workspace: `O(log n)` per draw and per update.
+    SumTree,
+    /// The paper's group acceptance–rejection (E–W 2000 §5.1), with binades as the
+    /// groups: about two tries per draw, `O(1)` updates for a weight that stays in its
+    /// binade. Its index tables (four words per particle and weight) are allocated at
+    /// construction, outside the workspace.
+    Groups,
+}
+
 /// Particle sizes and `T` sum trees of weights over them, in one workspace:
 /// `[sizes: cap | tree 0: 2·tcap | tree 1 | ...]`. Tree nodes: 1 is the root, node i
 /// has children 2i and 2i + 1, leaf p sits at `tcap + p`; leaves from `n` on are 0.
+/// With [`Sampler::Groups`] the trees stay unused and `groups` draws instead.
 pub(crate) struct Store<B, const T: usize> {
     ws: B,
     cap: usize,
     tcap: usize,
     n: usize,
+    groups: Vec<groups::Groups>,
 }
 
 impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
@@ -125,7 +143,115 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
             cap: cap.max(1),
             tcap: cap.max(1).next_power_of_two(),
             n: 0,
+            groups: Vec::new(),
         })
+    }
+
+    /// The sampler in use.
+    pub(crate) fn sampler(&self) -> Sampler {
+        if self.groups.is_empty() {
+            Sampler::SumTree
+        } else {
+            Sampler::Groups
+        }
+    }
+
+    /// Switches to `sampler`, built from the current weights (nothing changes on error).
+    pub(crate) fn set_sampler(&mut self, sampler: Sampler) -> Result<()> {
+        match sampler {
+            Sampler::SumTree => {
+                if !self.groups.is_empty() {
+                    // the trees were left behind: build them from the weights
+                    let mut w: Vec<[f64; T]> = Vec::new();
+                    w.try_reserve_exact(self.n).map_err(|_| Error::Capacity {
+                        name: "sum trees (rebuilding them)",
+                        capacity: self.cap,
+                    })?;
+                    w.extend(
+                        (0..self.n).map(|i| core::array::from_fn(|t| self.group_weight(t, i))),
+                    );
+                    self.groups.clear();
+                    let n = self.n;
+                    for t in 0..T {
+                        let (cap, tcap) = (self.cap, self.tcap);
+                        let o = cap + t * 2 * tcap;
+                        let nodes = &mut self.ws.as_mut()[o..o + 2 * tcap];
+                        nodes.fill(0.0);
+                        for (i, wi) in w.iter().enumerate().take(n) {
+                            nodes[tcap + i] = wi[t];
+                        }
+                        for j in (1..tcap).rev() {
+                            nodes[j] = nodes[2 * j] + nodes[2 * j + 1];
+                        }
+                    }
+                }
+            }
+            Sampler::Groups => {
+                if self.groups.is_empty() {
+                    let mut gs = Vec::new();
+                    gs.try_reserve_exact(T).map_err(|_| Error::Capacity {
+                        name: "group sampler tables",
+                        capacity: self.cap,
+                    })?;
+                    for t in 0..T {
+                        let mut g = groups::Groups::new(self.cap)?;
+                        g.fill((0..self.n).map(|i| self.weight(t, i)));
+                        gs.push(g);
+                    }
+                    self.groups = gs;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn group_weight(&self, t: usize, i: usize) -> f64 {
+        self.groups[t].weight(i)
+    }
+
+    /// Writes the sampler's own state (the group sampler's order).
+    pub(crate) fn save_sampler(&self, w: &mut crate::checkpoint::Writer) {
+        w.u64(u64::from(!self.groups.is_empty()));
+        for g in &self.groups {
+            g.save(w);
+        }
+    }
+
+    /// Reads what [`save_sampler`](Self::save_sampler) wrote for particles of weights
+    /// `weights` (`weights(x)` for the restored sizes `xs`), into a value to install
+    /// with [`install_sampler`](Self::install_sampler) once everything is checked.
+    pub(crate) fn read_sampler(
+        &self,
+        r: &mut crate::checkpoint::Reader,
+        xs: &[f64],
+        weights: impl Fn(f64) -> [f64; T],
+    ) -> Result<Vec<groups::Groups>> {
+        let bad = |what| Error::Checkpoint { what };
+        match r.u64()? {
+            0 if self.groups.is_empty() => Ok(Vec::new()),
+            1 if !self.groups.is_empty() => {
+                let mut gs = Vec::new();
+                for t in 0..T {
+                    gs.push(groups::Groups::read(
+                        r,
+                        self.cap,
+                        xs.iter().map(|&x| weights(x)[t]),
+                    )?);
+                }
+                Ok(gs)
+            }
+            0 | 1 => Err(bad("written with the other particle sampler")),
+            _ => Err(bad("invalid particle sampler")),
+        }
+    }
+
+    /// Installs the group sampler's state read by [`read_sampler`](Self::read_sampler)
+    /// (after `fill` with the same sizes).
+    pub(crate) fn install_sampler(&mut self, gs: Vec<groups::Groups>) {
+        if !gs.is_empty() {
+            self.groups = gs;
+        }
     }
 
     pub(crate) fn len(&self) -> usize {
@@ -154,13 +280,21 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
     /// The weight of particle `i` in tree `t`.
     #[inline(always)]
     pub(crate) fn weight(&self, t: usize, i: usize) -> f64 {
-        self.tree(t)[self.tcap + i]
+        if self.groups.is_empty() {
+            self.tree(t)[self.tcap + i]
+        } else {
+            self.group_weight(t, i)
+        }
     }
 
     /// The total weight of tree `t`.
     #[inline(always)]
     pub(crate) fn total(&self, t: usize) -> f64 {
-        self.tree(t)[1]
+        if self.groups.is_empty() {
+            self.tree(t)[1]
+        } else {
+            self.groups[t].total()
+        }
     }
 
     /// A particle drawn with probability proportional to its weight in tree `t` (which
@@ -168,6 +302,9 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
     /// weight, so a rounding in `u` cannot land on an empty leaf.
     #[inline]
     pub(crate) fn sample<R: Rng + ?Sized>(&self, t: usize, rng: &mut R) -> usize {
+        if !self.groups.is_empty() {
+            return self.groups[t].sample(rng);
+        }
         let nodes = self.tree(t);
         let mut u = unit_f64(rng.next_u64()) * nodes[1];
         let mut j = 1;
@@ -200,6 +337,14 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
     #[inline]
     pub(crate) fn set(&mut self, i: usize, x: f64, w: [f64; T]) {
         self.ws.as_mut()[i] = x;
+        if !self.groups.is_empty() {
+            for (g, &wt) in self.groups.iter_mut().zip(&w) {
+                if g.weight(i) != wt {
+                    g.set(i, wt);
+                }
+            }
+            return;
+        }
         for (t, &wt) in w.iter().enumerate() {
             if self.weight(t, i) != wt {
                 self.set_leaf(t, i, wt);
@@ -212,6 +357,13 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
     pub(crate) fn push(&mut self, x: f64, w: [f64; T]) {
         let i = self.n;
         self.n += 1;
+        if !self.groups.is_empty() {
+            self.ws.as_mut()[i] = x;
+            for (g, &wt) in self.groups.iter_mut().zip(&w) {
+                g.push(wt);
+            }
+            return;
+        }
         self.set(i, x, w);
     }
 
@@ -219,6 +371,16 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
     #[inline]
     pub(crate) fn swap_remove(&mut self, i: usize) {
         let last = self.n - 1;
+        if !self.groups.is_empty() {
+            let ws = self.ws.as_mut();
+            ws[i] = ws[last];
+            ws[last] = 0.0;
+            for g in &mut self.groups {
+                g.swap_remove(i);
+            }
+            self.n = last;
+            return;
+        }
         if i != last {
             let x = self.size(last);
             let mut w = [0.0; T];
@@ -239,6 +401,13 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
         ws[..cap].fill(0.0);
         ws[..sizes.len()].copy_from_slice(sizes);
         let (xs, trees) = ws.split_at_mut(cap);
+        self.n = sizes.len();
+        if !self.groups.is_empty() {
+            for (t, g) in self.groups.iter_mut().enumerate() {
+                g.fill(xs[..sizes.len()].iter().map(|&x| weights(x)[t]));
+            }
+            return;
+        }
         for (t, nodes) in trees.chunks_exact_mut(2 * tcap).take(T).enumerate() {
             nodes.fill(0.0);
             for (i, &x) in xs[..sizes.len()].iter().enumerate() {
@@ -248,12 +417,16 @@ impl<B: AsRef<[f64]> + AsMut<[f64]>, const T: usize> Store<B, T> {
                 nodes[j] = nodes[2 * j] + nodes[2 * j + 1];
             }
         }
-        self.n = sizes.len();
     }
 
     /// Recomputes tree `t` from the sizes with `weight(x)`.
     pub(crate) fn refill_tree(&mut self, t: usize, weight: impl Fn(f64) -> f64) {
         let (cap, tcap, n) = (self.cap, self.tcap, self.n);
+        if !self.groups.is_empty() {
+            let xs = &self.ws.as_ref()[..n];
+            self.groups[t].fill(xs.iter().map(|&x| weight(x)));
+            return;
+        }
         let ws = self.ws.as_mut();
         let (xs, trees) = ws.split_at_mut(cap);
         let nodes = &mut trees[t * 2 * tcap..(t + 1) * 2 * tcap];

@@ -57,6 +57,77 @@ fn store_trees_match_a_rebuild_and_sample_by_weight() {
     }
 }
 
+/// The group sampler after any sequence of sets, pushes and removals — weights over
+/// 600 binades, zeros, subnormals, jumps above its window and falls far below it —
+/// keeps its invariants (every particle in its binade's group, group totals the exact
+/// sums), and draws by weight, the zero weights never.
+#[test]
+fn group_sampler_keeps_its_invariants_and_samples_by_weight() {
+    use super::groups::Groups;
+    let mut rng = Pcg64Mcg::new(3);
+    let cap = 300;
+    let mut g = Groups::new(cap).unwrap();
+    let pick = |rng: &mut Pcg64Mcg, step: u64| -> f64 {
+        match crate::random::below(rng, 8) {
+            0 => 0.0,
+            1 => 5e-324 * (1 + crate::random::below(rng, 1000)) as f64,
+            // the window follows a weight that climbs far above it, then sinks back
+            2 => {
+                let s = (step / 10) as i32;
+                let e = if s < 600 { s - 300 } else { 900 - s };
+                libm::ldexp(1.0 + unit_f64(rng.next_u64()), e)
+            }
+            _ => libm::ldexp(
+                1.0 + unit_f64(rng.next_u64()),
+                crate::random::below(rng, 40) as i32 - 20,
+            ),
+        }
+    };
+    g.fill((0..50).map(f64::from));
+    let mut w: Vec<f64> = (0..50).map(f64::from).collect();
+    for step in 0..12_000u64 {
+        let r = crate::random::below(&mut rng, 3);
+        let n = w.len();
+        if r == 0 && n < cap {
+            let q = pick(&mut rng, step);
+            g.push(q);
+            w.push(q);
+        } else if r == 1 && n > 1 {
+            let i = crate::random::below(&mut rng, n as u64) as usize;
+            g.swap_remove(i);
+            w.swap_remove(i);
+        } else if n > 0 {
+            let i = crate::random::below(&mut rng, n as u64) as usize;
+            let q = pick(&mut rng, step);
+            g.set(i, q);
+            w[i] = q;
+        }
+        g.check();
+        for (i, &q) in w.iter().enumerate() {
+            assert_eq!(g.weight(i).to_bits(), q.to_bits());
+        }
+        let exact: f64 = w.iter().sum();
+        approx::assert_relative_eq!(g.total(), exact, max_relative = 1e-12);
+    }
+    // frequencies: weights 1, 2, 3, 0, 6 (two binades share none), 5e-324
+    let w = [1.0, 2.0, 3.0, 0.0, 6.0, 5e-324];
+    g.fill(w.iter().copied());
+    let mut hits = [0u32; 6];
+    let draws = 120_000;
+    for _ in 0..draws {
+        hits[g.sample(&mut rng)] += 1;
+    }
+    assert_eq!(hits[3], 0, "a zero weight was drawn: {hits:?}");
+    for (i, &h) in hits.iter().enumerate() {
+        let p = w[i] / 12.0;
+        let sd = (draws as f64 * p * (1.0 - p)).sqrt().max(1.0);
+        assert!(
+            (f64::from(h) - draws as f64 * p).abs() < 5.0 * sd,
+            "{i}: {hits:?}"
+        );
+    }
+}
+
 /// Mean and standard error of `f` over `reps` replicas.
 fn replicas(reps: u64, mut f: impl FnMut(&mut Pcg64Mcg) -> f64) -> Replicas {
     let mut r = Replicas::new();
@@ -305,7 +376,8 @@ fn split_runs_and_checkpoints_are_the_unbroken_run() {
     assert_eq!(r.sizes(), &one[..]);
     // a corrupted size is refused and changes nothing
     let mut bad = buf.clone();
-    let at = bad.len() - 16;
+    // (the last size sits before the sampler's word and the checksum)
+    let at = bad.len() - 24;
     bad[at..at + 8].copy_from_slice(&f64::NAN.to_le_bytes());
     let body = bad.len() - 8;
     let sum = crate::checkpoint::checksum(&bad[..body]);
@@ -313,6 +385,111 @@ fn split_runs_and_checkpoints_are_the_unbroken_run() {
     let before = r.sizes().to_vec();
     assert!(r.restore_from(&bad).is_err());
     assert_eq!(r.sizes(), &before[..]);
+}
+
+/// Each scheme with the sampler that is not its default (DSA with groups, MFA with the
+/// sum tree; the other tests run the defaults): the additive kernel from monomers
+/// against its exact M0 and M2 at t = 1 (h = 1 + x spans several binades, h/x more),
+/// and a split run through a checkpoint equal to the unbroken one.
+#[test]
+fn other_samplers_match_the_additive_kernel_and_checkpoint() {
+    let k = Coagulation::additive();
+    let e = Exact::additive();
+    let n = 2048;
+    let t = 1.0;
+    let mut stats = [
+        Replicas::new(),
+        Replicas::new(),
+        Replicas::new(),
+        Replicas::new(),
+    ];
+    for r in 0..REPS {
+        let mut rng = Pcg64Mcg::seed_from_u64(0x96 ^ r.wrapping_mul(0x9e37_79b9));
+        let mut s = Dsa::new(k, NoFragmentation, &vec![1.0; n], n as f64, n)
+            .unwrap()
+            .with_sampler(Sampler::Groups)
+            .unwrap();
+        s.advance_to(t, &mut rng).unwrap();
+        stats[0].push(s.moment(0.0));
+        stats[1].push(s.moment(2.0));
+        let mut s = Mfa::new(k, NoFragmentation, &vec![1.0; n], 1.0)
+            .unwrap()
+            .with_sampler(Sampler::SumTree)
+            .unwrap();
+        s.advance_to(t, &mut rng).unwrap();
+        stats[2].push(s.moment(0.0));
+        stats[3].push(s.moment(2.0));
+    }
+    for (name, st, m) in [
+        ("dsa M0", &stats[0], 0),
+        ("dsa M2", &stats[1], 2),
+        ("mfa M0", &stats[2], 0),
+        ("mfa M2", &stats[3], 2),
+    ] {
+        let want = e.moment(m, t).unwrap();
+        let zz = z(st, want);
+        std::println!(
+            "{name}: {} ± {} vs {want} ({zz:+.2} SE)",
+            st.mean(),
+            st.std_error()
+        );
+        assert!(zz.abs() < zmax(), "{name}: {st:?} vs {want}");
+    }
+    // split runs through a checkpoint, with fragmentation (pushes) in the DSA
+    let f = BinaryUniform::new(0.5).unwrap();
+    let dsa = || {
+        Dsa::new(k, f, &vec![1.0; 256], 256.0, 1024)
+            .unwrap()
+            .with_sampler(Sampler::Groups)
+            .unwrap()
+    };
+    let mut one = dsa();
+    one.advance_to(2.0, &mut Pcg64Mcg::new(4)).unwrap();
+    let mut s = dsa();
+    let mut rng = Pcg64Mcg::new(4);
+    s.advance_to(0.9, &mut rng).unwrap();
+    let mut buf = vec![0u8; s.checkpoint_len()];
+    s.save_to(&mut buf).unwrap();
+    let mut r = dsa();
+    r.restore_from(&buf).unwrap();
+    r.advance_to(2.0, &mut rng).unwrap();
+    assert_eq!(r.sizes(), one.sizes());
+    assert!(one.totals().events > 100);
+    // a group order that is not a permutation is refused, the sim unchanged
+    let mut bad = buf.clone();
+    let body = bad.len() - 8;
+    bad[body - 8..body].copy_from_slice(&u64::MAX.to_le_bytes());
+    let sum = crate::checkpoint::checksum(&bad[..body]);
+    bad[body..].copy_from_slice(&sum.to_le_bytes());
+    let mut r = dsa();
+    let before = r.sizes().to_vec();
+    assert!(matches!(
+        r.restore_from(&bad),
+        Err(Error::Checkpoint { what }) if what.contains("permutation")
+    ));
+    assert_eq!(r.sizes(), &before[..]);
+    // a tree-sampled sim refuses it, unchanged
+    let mut tree = Dsa::new(k, f, &vec![1.0; 256], 256.0, 1024).unwrap();
+    let before = tree.sizes().to_vec();
+    assert!(tree.restore_from(&buf).is_err());
+    assert_eq!(tree.sizes(), &before[..]);
+    let mfa = || {
+        Mfa::new(k, f, &vec![1.0; 256], 1.0)
+            .unwrap()
+            .with_sampler(Sampler::SumTree)
+            .unwrap()
+    };
+    let mut one = mfa();
+    one.advance_to(2.0, &mut Pcg64Mcg::new(5)).unwrap();
+    let mut s = mfa();
+    let mut rng = Pcg64Mcg::new(5);
+    s.advance_to(1.1, &mut rng).unwrap();
+    let mut buf = vec![0u8; s.checkpoint_len()];
+    s.save_to(&mut buf).unwrap();
+    let mut r = mfa();
+    r.restore_from(&buf).unwrap();
+    r.advance_to(2.0, &mut rng).unwrap();
+    assert_eq!(r.sizes(), one.sizes());
 }
 
 /// Caller-owned workspace: the same run as the owned one.
