@@ -1,4 +1,4 @@
-//! The situations of the C-ABI fuzzing campaigns' findings 2–4 (docs/results/fuzzing.md),
+//! The situations of the C-ABI fuzzing campaigns' findings 2–4 and 9 (docs/results/fuzzing.md),
 //! rebuilt on every size-count scheme through the facade. The byte-level reproducers of
 //! findings 1–4 were lost to a `crash-*` ignore pattern that also matched
 //! `fuzz/regressions/`; these tests are not those inputs: the ones for findings 3 and 4
@@ -87,6 +87,48 @@ fn a_sim_refused_for_a_huge_rate_restores_and_runs_on() {
             assert!(rep.proposals > 0, "{}", info.name);
         }
     }
+}
+
+/// Finding 9: rates that overflow to infinity in the per-size tree (K0 ≈ 7e305, counts up
+/// to 255, the fuzzer's case) make a state the scheme holds but refuses to advance; a
+/// clone of it (checkpoint and restore) failed because restore compared the tree's sums
+/// with a tolerance that infinity never meets. Every count scheme now either refuses to
+/// build it or holds it, restores it, refuses to advance it (the state unchanged) and
+/// runs on after a sane kernel.
+#[test]
+fn a_state_with_overflowed_rates_clones_and_recovers() {
+    let huge = Coagulation::constant(f64::from_bits(0x7f7f_7f7f_7f7f_7f7b)).unwrap();
+    let sane = Coagulation::constant(1.0).unwrap();
+    let start = [255, 115, 255, 115, 115, 115, 115, 141];
+    let mut held = 0;
+    for info in count_schemes() {
+        let Some(mut a) = build(info.id, sane, &[60], 60.0) else {
+            continue;
+        };
+        if a.set_kernel(huge).is_err() || a.set_counts(&start, 1.0).is_err() {
+            continue;
+        }
+        held += 1;
+        let buf = save(&*a);
+        let mut b = build(info.id, huge, &[60], 60.0).unwrap();
+        b.restore(&mut Reader::new(&buf))
+            .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+        assert_eq!(save(&*b), buf, "{}", info.name);
+        let mut rng = Pcg64Mcg::new(11);
+        assert!(b.advance_to(1.0, &mut rng).is_err(), "{}", info.name);
+        assert_eq!(
+            save(&*b),
+            buf,
+            "{}: a refused advance changed it",
+            info.name
+        );
+        b.set_kernel(sane).unwrap();
+        let rep = b
+            .advance_within(1.0, &mut coagula_core::scheme::Budget::work(1000), &mut rng)
+            .unwrap();
+        assert!(rep.proposals > 0, "{}", info.name);
+    }
+    assert!(held >= 2, "only {held} schemes held the state");
 }
 
 /// Finding 2: step counters restored near 2^64 saturate in the next advance instead of
