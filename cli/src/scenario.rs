@@ -1056,18 +1056,20 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             "only mfa truncates",
         )?;
     }
-    if counts_scheme || mass_flow {
+    if (counts_scheme && scheme != SchemeId::DsaCounts) || mass_flow {
         refuse(
             src,
             "scheme.strict-bound",
             &s.scheme.strict_bound,
-            "only mfa and dsa count violations of the product majorant (the other schemes refuse them)",
+            "only mfa, dsa and dsa-counts count violations of the product majorant (the other schemes refuse them)",
         )?;
+    }
+    if counts_scheme || mass_flow {
         refuse(
             src,
             "scheme.sampler",
             &s.scheme.sampler,
-            "only mfa and dsa draw particles by weight",
+            "only mfa and dsa draw particles by weight (dsa-counts draws sizes from one sum tree)",
         )?;
     }
     if !mass_flow {

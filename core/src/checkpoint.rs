@@ -259,6 +259,7 @@ pub(crate) mod tag {
     pub const BUCKETED: u64 = 5;
     pub const MFA: u64 = 6;
     pub const DSA: u64 = 7;
+    pub const DSA_COUNTS: u64 = 8;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

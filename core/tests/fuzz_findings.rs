@@ -50,7 +50,10 @@ fn a_doubled_sim_restores_from_its_own_checkpoint() {
                 .unwrap_or_else(|e| panic!("{} at t = {h}: {e}", info.name));
             assert_eq!(counts(&*b), counts(&*a), "{}", info.name);
         }
-        assert!(a.totals().doublings > 0, "{}: no doubling", info.name);
+        // (direct simulation over counts never doubles: it checks the restores only)
+        if info.id != coagula_core::scheme::registry::SchemeId::DsaCounts {
+            assert!(a.totals().doublings > 0, "{}: no doubling", info.name);
+        }
     }
 }
 

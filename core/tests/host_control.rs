@@ -192,6 +192,12 @@ fn waiting_times_that_cannot_move_the_clock_are_errors() {
         };
         let mut rng = Pcg64Mcg::new(2);
         let r = s.advance_to(1.0, &mut rng);
+        if info.id == SchemeId::DsaCounts {
+            // without doubling every particle merges within ~1e-300 (the waits stay
+            // resolvable near t = 0): one particle left, then nothing can happen
+            assert!(r.is_ok() && s.particles() == 1, "{}: {r:?}", info.name);
+            continue;
+        }
         assert!(
             matches!(r, Err(Error::InvalidRate { .. } | Error::Capacity { .. })),
             "{}: {r:?}",
@@ -370,8 +376,15 @@ fn long_runs_restore_from_their_own_checkpoints() {
                     .unwrap_or_else(|e| panic!("{} {k:?} t = {t}: {e}", info.name));
                 assert_eq!(snapshot(&*a), snapshot(&*b), "{}", info.name);
             }
+            // (direct simulation over counts does not double: it merges its ~3000
+            // particles down to a few hundred by t = 4000)
+            let least = if info.id == SchemeId::DsaCounts {
+                2_500
+            } else {
+                15_000
+            };
             assert!(
-                a.totals().events > 15_000,
+                a.totals().events > least,
                 "{}: {}",
                 info.name,
                 a.totals().events

@@ -66,7 +66,7 @@ fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
     for case in CASES {
         let runs = run_all(kernel, case, times);
         let (n0, _, reps) = case;
-        let expected = if n0 < 100_000 { 5 } else { 4 };
+        let expected = if n0 < 100_000 { 6 } else { 5 };
         assert!(runs.len() >= expected, "every size-count scheme ran");
         let z = z_max(reps);
         let tree = &runs
@@ -78,7 +78,12 @@ fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
             for (ti, &t) in times.iter().enumerate() {
                 for q in 0..3 {
                     let (a, b) = (&tree[ti][q], &stats[ti][q]);
-                    if *scheme != SchemeId::LowRankTree.name() {
+                    // (direct simulation over counts does not double: its small-N law
+                    // is the plain Marcus–Lushnikov process, checked against its exact
+                    // master equation in finite_n.rs, not the doubling tree's)
+                    if *scheme != SchemeId::LowRankTree.name()
+                        && *scheme != SchemeId::DsaCounts.name()
+                    {
                         let se = (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
                         let d = b.mean() - a.mean();
                         if d.abs() > z * se + 1e-15 {

@@ -30,7 +30,7 @@
 //! ```
 
 use super::baseline::{AcceptanceRejection, Inverse};
-use super::eventflow::{Dsa, Mfa};
+use super::eventflow::{Dsa, DsaCounts, Mfa};
 use super::lowrank::{BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, ProposalEngine};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Budget, Scheme, StepReport};
@@ -63,6 +63,8 @@ pub enum SchemeId {
     Mfa,
     /// Eibeck & Wagner 2000: direct simulation (Marcus–Lushnikov).
     Dsa,
+    /// Direct simulation over size counts (integer sizes).
+    DsaCounts,
 }
 
 /// What a scheme's state is.
@@ -146,6 +148,13 @@ pub const SCHEMES: &[SchemeInfo] = &[
         name: "dsa",
         state: StateKind::Sizes,
         summary: "Eibeck & Wagner 2000: direct simulation (Marcus-Lushnikov), fragmentation events",
+    },
+    // (appended: a scheme's place in this list is its code in C-ABI checkpoints)
+    SchemeInfo {
+        id: SchemeId::DsaCounts,
+        name: "dsa-counts",
+        state: StateKind::Counts,
+        summary: "Eibeck & Wagner 2000: direct simulation over size counts (integer sizes, no doubling)",
     },
 ];
 
@@ -636,6 +645,12 @@ where
             .with_size_limit(opts.size_limit);
             Ok(boxed(s, id))
         }
+        (SchemeId::DsaCounts, Init::Counts { counts, volume }) => {
+            let s = DsaCounts::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                .with_size_limit(opts.size_limit)
+                .with_strict_bound(opts.strict_bound);
+            Ok(boxed(s, id))
+        }
         (SchemeId::Mfa, Init::Sizes { sizes, mass }) => {
             let s = Mfa::new(kernel, frag, sizes, mass)?
                 .with_truncation(opts.truncation)?
@@ -901,3 +916,4 @@ macro_rules! counts_facet {
 counts_facet!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>, |s| s.counts());
 counts_facet!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));
+counts_facet!([K: CoagulationKernel] DsaCounts<K>, |s| s.counts());

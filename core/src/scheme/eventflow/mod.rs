@@ -40,10 +40,12 @@
 //! ```
 
 mod dsa;
+mod dsa_counts;
 mod groups;
 mod mfa;
 
 pub use dsa::Dsa;
+pub use dsa_counts::DsaCounts;
 pub use mfa::Mfa;
 
 use crate::error::{Error, Result};
