@@ -1,4 +1,4 @@
-//! The situations of the C-ABI fuzzing campaigns' findings 2–4 and 9 (docs/results/fuzzing.md),
+//! The situations of the C-ABI fuzzing campaigns' findings 2–4, 9 and 10 (docs/results/fuzzing.md),
 //! rebuilt on every size-count scheme through the facade. The byte-level reproducers of
 //! findings 1–4 were lost to a `crash-*` ignore pattern that also matched
 //! `fuzz/regressions/`; these tests are not those inputs: the ones for findings 3 and 4
@@ -132,6 +132,54 @@ fn a_state_with_overflowed_rates_clones_and_recovers() {
         assert!(rep.proposals > 0, "{}", info.name);
     }
     assert!(held >= 2, "only {held} schemes held the state");
+}
+
+/// Finding 10: a kernel constant near the largest double (0x7f7f…7f, ≈ 3.4e305) with 13
+/// monomers in a volume of 4.8e-4 made the bucketed layout's alias weights overflow a
+/// u64 (`ck · 2^61` went to infinity before the division by `S_A`): a panic in a build
+/// with overflow checks, a bucket silently never drawn without them. Every count scheme
+/// now returns from these calls (Ok or Err), never a panic.
+#[test]
+fn kernels_near_the_largest_double_do_not_overflow_the_tables() {
+    let huge = Coagulation::constant(f64::from_bits(0x7f7f_7f7f_7f7f_7f7f)).unwrap();
+    let sane = Coagulation::constant(1.0).unwrap();
+    let v = f64::from_bits(0x3f3f_3f3f_3f3f_3f3f);
+    let mut ran = 0;
+    for info in count_schemes() {
+        // (a 1 MiB budget, as the fuzzer's sims: the default 2 GiB lets the size table
+        // grow for seconds at this rate)
+        let init = coagula_core::scheme::registry::Init::Counts {
+            counts: &[60],
+            volume: 60.0,
+        };
+        let opts = coagula_core::scheme::registry::Options::default().with_memory_budget(1 << 20);
+        let Ok(mut a) = coagula_core::scheme::registry::build::<_, _, Pcg64Mcg>(
+            info.id,
+            sane,
+            coagula_core::kernel::NoFragmentation,
+            &init,
+            &opts,
+        ) else {
+            continue;
+        };
+        if a.set_kernel(huge).is_err() {
+            continue;
+        }
+        let mut rng = Pcg64Mcg::new(12);
+        if a.set_counts(&[13], v).is_err() {
+            continue;
+        }
+        ran += 1;
+        // (bounded calls: the waits at this rate are ~1e-300, the C ABI's work limit)
+        for h in [47.0, 47.0, 13.0] {
+            let _ = a.advance_within(
+                a.time() + h / 64.0,
+                &mut coagula_core::scheme::Budget::work(2000),
+                &mut rng,
+            );
+        }
+    }
+    assert!(ran >= 2, "only {ran} schemes took the state");
 }
 
 /// Finding 2: step counters restored near 2^64 saturate in the next advance instead of

@@ -167,7 +167,7 @@ pub fn run(data: &[u8]) {
                     let mut t0 = 0.0;
                     coag_sim_time(s, &mut t0);
                     let st = coag_sim_advance_to(s, t0 + f64::from(h) / 64.0, null_mut());
-                    assert!(is_status(st));
+                    assert!(is_status(st), "advance: {st}: {}", last_error());
                     check_observables(s);
                 }
                 Op::SetCounts(i, counts, v) => {

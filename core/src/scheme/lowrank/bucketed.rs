@@ -592,15 +592,19 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
                 // no pairs of component k (its v row is empty)
                 continue;
             }
-            let f = ck * (1u64 << 61) as f64 / sa;
+            // (ck / sa first: ck · 2^61 overflows for kernels near the largest double,
+            // fuzzing finding 10; ck ≤ sa / T_{u,k}, so f · q · slots stays ≤ 2^61)
+            let f = ck / sa * (1u64 << 61) as f64;
             for (b, bk) in self.buckets.iter().enumerate() {
                 // q · slots is exact in u64; rounded up once, so a bucket with
                 // slots is never left out (and one without never chosen)
                 // (≤ row_total < 2^63: the checked sums of `resync` and `grow` bound it)
                 let qs = bk.q[k] * bk.tab;
                 if qs > 0 {
-                    sc.weights
-                        .push(((qs as f64 * f) as u64 + 1, (k << 16 | b) as u32));
+                    sc.weights.push((
+                        ((qs as f64 * f) as u64).saturating_add(1),
+                        (k << 16 | b) as u32,
+                    ));
                 }
             }
         }
