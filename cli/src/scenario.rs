@@ -183,7 +183,7 @@ pub enum Points {
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct SchemeSpec {
     /// A registry name: massflow, lowrank, lowrank-tree, lowrank-binary-tree, inverse,
-    /// rejection, mfa, dsa.
+    /// rejection, mfa, dsa, dsa-counts.
     pub name: String,
     /// Time step (mass flow).
     pub dt: Option<f64>,
@@ -197,7 +197,7 @@ pub struct SchemeSpec {
     /// Truncation b_N (mfa; default none): a coagulation past it removes the particle.
     pub truncation: Option<f64>,
     /// A kernel above its product majorant is an error instead of a counted violation
-    /// (mfa, dsa; default false).
+    /// (mfa, dsa, dsa-counts; default false).
     pub strict_bound: Option<bool>,
     /// How particles are drawn by weight (mfa, dsa): `tree` (sum trees; dsa's default)
     /// or `groups` (the paper's group acceptance–rejection; mfa's default).

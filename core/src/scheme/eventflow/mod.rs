@@ -461,7 +461,7 @@ pub(crate) fn majorant<K: crate::kernel::CoagulationKernel>(k: &K, x: f64) -> Re
             value: h,
         }),
         None => Err(Error::Unsupported {
-            what: "event-driven schemes (mfa, dsa): the kernel needs a product majorant h(x) with K(x, y) <= h(x) h(y)",
+            what: "event-driven schemes (mfa, dsa, dsa-counts): the kernel needs a product majorant h(x) with K(x, y) <= h(x) h(y)",
         }),
     }
 }
