@@ -6,8 +6,9 @@
 //! joins every test here without a line changed (the finite-N reference and the regime
 //! sweep cover the size-count schemes the same way).
 
-mod common;
+use crate::common;
 
+use crate::common::{Sim, z_max};
 use coagula_core::Error;
 use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::exact::Exact;
@@ -15,7 +16,6 @@ use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::massflow::PointSource;
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, SchemeInfo, State, StateKind};
-use common::{Sim, z_max};
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 

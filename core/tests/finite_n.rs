@@ -20,7 +20,7 @@
 //! than N0/2 particles remain, every count and V double — depends only on N. With
 //! d doublings so far, V = M = 32 · 2^d.
 
-mod common;
+use crate::common;
 
 use coagula_core::kernel::Coagulation;
 use coagula_core::observe::Replicas;

@@ -6,12 +6,10 @@
 //! `set_counts` and clones of states these simple runs do not reach), so they guard
 //! the properties, not the exact defects.
 
-mod common;
-
+use crate::common::{Sim, build, count_schemes};
 use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::kernel::Coagulation;
 use coagula_core::scheme::registry::State;
-use common::{Sim, build, count_schemes};
 use rand_pcg::Pcg64Mcg;
 
 fn save(s: &Sim) -> Vec<u8> {

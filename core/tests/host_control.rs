@@ -8,7 +8,7 @@
 //!   resolution and a degenerate random stream are errors or bounded calls, never a
 //!   hang.
 
-mod common;
+use crate::common;
 
 use coagula_core::Error;
 use coagula_core::kernel::{Coagulation, NoFragmentation};

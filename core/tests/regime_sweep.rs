@@ -10,13 +10,13 @@
 //! invariants that hold for every run: mass conserved up to doubling, no particle lost,
 //! the same seed giving the same state.
 
-mod common;
+use crate::common;
 
+use crate::common::{LABELS, Sim, mass, z_max};
 use coagula_core::exact::Exact;
 use coagula_core::kernel::Coagulation;
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::registry::{SchemeId, State};
-use common::{LABELS, Sim, mass, z_max};
 use proptest::prelude::*;
 use rand_pcg::Pcg64Mcg;
 

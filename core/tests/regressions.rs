@@ -3,8 +3,7 @@
 //! tests in `scheme/lowrank/bucketed.rs` (they check internal invariants) and the
 //! finite-N reference in `tests/finite_n.rs`.
 
-mod common;
-
+use crate::common::mass;
 use coagula_core::checkpoint::Checkpoint;
 use coagula_core::error::Error;
 use coagula_core::kernel::{Coagulation, CoagulationKernel, NoFragmentation, UserKernel};
@@ -12,7 +11,6 @@ use coagula_core::scheme::Scheme;
 use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
 use coagula_core::scheme::lowrank::{Bucketed, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
-use common::mass;
 use rand_pcg::Pcg64Mcg;
 
 /// Advances in small steps until the first error; checks that the error is `expect`

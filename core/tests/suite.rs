@@ -1,0 +1,28 @@
+//! The integration tests of coagula-core, one module per file, in one test binary: the
+//! schemes' generic code is then compiled (at the test profile's opt-level) once
+//! instead of once per file — most of CI's test build when each file was its own
+//! binary. `no_alloc.rs` stays a binary of its own: it installs a counting global
+//! allocator.
+
+mod common;
+
+#[path = "checkpoint.rs"]
+mod checkpoint;
+#[path = "conformance.rs"]
+mod conformance;
+#[path = "finite_n.rs"]
+mod finite_n;
+#[path = "fuzz_findings.rs"]
+mod fuzz_findings;
+#[path = "host_control.rs"]
+mod host_control;
+#[path = "kernel_bounds.rs"]
+mod kernel_bounds;
+#[path = "no_panic.rs"]
+mod no_panic;
+#[path = "regime_sweep.rs"]
+mod regime_sweep;
+#[path = "regressions.rs"]
+mod regressions;
+#[path = "value_stability.rs"]
+mod value_stability;
