@@ -1,4 +1,4 @@
-//! The situations of the C-ABI fuzzing campaigns' findings 2–4, 9 and 10 (docs/results/fuzzing.md),
+//! The situations of the C-ABI fuzzing campaigns' findings 2–4 and 9–11 (docs/results/fuzzing.md),
 //! rebuilt on every size-count scheme through the facade. The byte-level reproducers of
 //! findings 1–4 were lost to a `crash-*` ignore pattern that also matched
 //! `fuzz/regressions/`; these tests are not those inputs: the ones for findings 3 and 4
@@ -178,6 +178,34 @@ fn kernels_near_the_largest_double_do_not_overflow_the_tables() {
         }
     }
     assert!(ran >= 2, "only {ran} schemes took the state");
+}
+
+/// Finding 11: a mean wait near the largest double (K0 = 1e-307, one pair in V = 10:
+/// 1e308) times an exponential variate above 1 puts the pending proposal at +inf; the
+/// sim holds it (the proposal never comes) but a clone refused it. Every count scheme
+/// now restores such a state, the proposal still pending.
+#[test]
+fn a_proposal_pending_at_infinity_restores() {
+    let tiny = Coagulation::constant(1e-307).unwrap();
+    let mut at_inf = 0;
+    for info in count_schemes() {
+        for seed in 0..16 {
+            let Some(mut a) = build(info.id, tiny, &[2], 10.0) else {
+                break;
+            };
+            let mut rng = Pcg64Mcg::new(seed);
+            if a.advance_to(1.0, &mut rng).is_err() {
+                continue;
+            }
+            let buf = save(&*a);
+            let mut b = build(info.id, tiny, &[2], 10.0).unwrap();
+            b.restore(&mut Reader::new(&buf))
+                .unwrap_or_else(|e| panic!("{} seed {seed}: {e}", info.name));
+            assert_eq!(save(&*b), buf, "{}", info.name);
+            at_inf += 1;
+        }
+    }
+    assert!(at_inf > 16, "{at_inf} restores");
 }
 
 /// Finding 2: step counters restored near 2^64 saturate in the next advance instead of
