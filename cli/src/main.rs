@@ -144,12 +144,22 @@ enum Command {
         /// Print a JSON array instead of the table.
         #[arg(long)]
         json: bool,
+        /// Only the cases whose name starts with this (e.g. `eibeck2000/`).
+        #[arg(long)]
+        only: Option<String>,
     },
-    /// Reproduce a paper's experiment: `lecot2019` (Figures 1-2).
+    /// Reproduce a paper's experiment: `lecot2019` (Figures 1-2) or `eibeck2000`
+    /// (Figures 1, 3, 5, 7 and the efficiency gain).
     Reproduce {
         /// Which experiment.
         #[arg(value_enum)]
         which: Experiment,
+        /// eibeck2000: the figures to run (fig1, fig3, fig5, fig7, kappa, or all).
+        #[arg(long, value_delimiter = ',', default_value = "all")]
+        figures: Vec<String>,
+        /// eibeck2000: a tenth of the particles or replicas.
+        #[arg(long)]
+        quick: bool,
         /// Largest log2 N, 7..=24 (the paper's N = 2^7 .. 2^20).
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(7..=24))]
         m_max: u32,
@@ -159,7 +169,8 @@ enum Command {
         /// RQMC randomisations per N (0 = none; otherwise at least 2, for an interval).
         #[arg(long, default_value_t = 20, value_parser = rqmc_count)]
         rqmc: u32,
-        /// Draw Figure 2 (an .svg file).
+        /// lecot2019: draw Figure 2 (an .svg file); eibeck2000: a directory for
+        /// `eibeck2000-<figure>.svg`.
         #[arg(long)]
         plot: Option<String>,
     },
@@ -308,6 +319,7 @@ enum BenchKind {
 #[derive(Clone, Copy, ValueEnum)]
 enum Experiment {
     Lecot2019,
+    Eibeck2000,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -455,8 +467,8 @@ fn main() -> ExitCode {
                 },
             };
         }
-        Command::Validate { quick, json } => {
-            return match validate::run(quick, json) {
+        Command::Validate { quick, json, only } => {
+            return match validate::run(quick, json, only.as_deref()) {
                 Ok(true) => ExitCode::SUCCESS,
                 Ok(false) => ExitCode::FAILURE,
                 Err(e) => {
@@ -466,13 +478,23 @@ fn main() -> ExitCode {
             };
         }
         Command::Reproduce {
-            which: Experiment::Lecot2019,
+            which,
             m_max,
             mc_seeds,
             rqmc,
             plot,
+            figures,
+            quick,
         } => {
-            return match reproduce::lecot2019::reproduce(m_max, mc_seeds, rqmc, plot.as_deref()) {
+            let done = match which {
+                Experiment::Lecot2019 => {
+                    reproduce::lecot2019::reproduce(m_max, mc_seeds, rqmc, plot.as_deref())
+                }
+                Experiment::Eibeck2000 => {
+                    reproduce::eibeck2000::reproduce(&figures, quick, plot.as_deref())
+                }
+            };
+            return match done {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");

@@ -1588,7 +1588,8 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
         kernel
     };
 
-    let exact = exact_of(&s, frag, c0, mu, counts_scheme);
+    // direct simulation (over counts or particles) is the Marcus–Lushnikov process
+    let exact = exact_of(&s, frag, c0, mu, counts_scheme || direct);
 
     // memory: per replica, times the replicas that run at once
     // a grid too coarse for the distribution would round a share of the particles up to
@@ -1719,8 +1720,16 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     })
 }
 
-/// The exact solution of a scenario, where the library has one.
-fn exact_of(s: &Scenario, frag: Frag, c0: f64, mu: f64, counts_scheme: bool) -> Option<ExactRef> {
+/// The exact solution of a scenario, where the library has one (`marcus_lushnikov`: the
+/// scheme simulates that process, whose multiplicative-kernel limit differs from Flory's
+/// after gelation).
+fn exact_of(
+    s: &Scenario,
+    frag: Frag,
+    c0: f64,
+    mu: f64,
+    marcus_lushnikov: bool,
+) -> Option<ExactRef> {
     if s.kernel.units != Units::Dimensionless {
         return None;
     }
@@ -1762,7 +1771,7 @@ fn exact_of(s: &Scenario, frag: Frag, c0: f64, mu: f64, counts_scheme: bool) -> 
             1.0,
             "Golovin's additive-kernel solution, exponential start",
         ),
-        (KernelKind::Multiplicative, _) if mono && counts_scheme => (
+        (KernelKind::Multiplicative, _) if mono && marcus_lushnikov => (
             Exact::marcus_lushnikov(),
             2.0,
             "multiplicative kernel, Marcus–Lushnikov limit (Eibeck & Wagner eq. 6.11)",
@@ -1930,6 +1939,34 @@ mod tests {
                 Err(e) => prop_assert!(!e.message.is_empty()),
             }
         }
+    }
+
+    /// Direct simulation, over counts or over particles, is the Marcus–Lushnikov process:
+    /// its gel reference for the multiplicative kernel is 1 − t*/t, the mass flow's
+    /// Flory's 1 − 1/t.
+    #[test]
+    fn multiplicative_reference_follows_the_process() {
+        let (name, text) = crate::examples::get("multiplicative-gelation").unwrap();
+        let gel_at_2 = |scheme: &str| {
+            let ov = vec![(
+                "scheme.name".to_string(),
+                toml::Value::String(scheme.into()),
+            )];
+            let plan = load(&Source {
+                name,
+                text,
+                overrides: &ov,
+                drops: &[],
+            })
+            .unwrap();
+            plan.exact.unwrap().value(&Observable::Gel, 2.0).unwrap()
+        };
+        let flory = 0.5;
+        let ml = 1.0 - coagula_core::exact::dual_time(2.0).unwrap() / 2.0;
+        for scheme in ["lowrank", "dsa", "dsa-counts"] {
+            approx::assert_relative_eq!(gel_at_2(scheme), ml, max_relative = 1e-12);
+        }
+        approx::assert_relative_eq!(gel_at_2("mfa"), flory, max_relative = 1e-12);
     }
 
     #[test]

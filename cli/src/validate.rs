@@ -92,11 +92,12 @@ enum Tolerance {
     Relative { relative: f64 },
 }
 
-/// Runs every case (a subset with `quick`), prints a table or JSON, and returns whether
-/// all passed; an error for a malformed cases file.
-pub fn run(quick: bool, json: bool) -> Result<bool, String> {
+/// Runs every case (a subset with `quick`; those whose name starts with `only`), prints
+/// a table or JSON, and returns whether all passed; an error for a malformed cases
+/// file or an `only` that selects nothing.
+pub fn run(quick: bool, json: bool, only: Option<&str>) -> Result<bool, String> {
     let start = std::time::Instant::now();
-    let cases = evaluate(CASES, quick)?;
+    let cases = evaluate(CASES, quick, only)?;
     let all = cases.iter().all(|c| c.pass);
     if json {
         println!(
@@ -131,12 +132,23 @@ pub fn run(quick: bool, json: bool) -> Result<bool, String> {
 }
 
 /// Runs the cases of a cases text.
-pub fn evaluate(text: &str, quick: bool) -> Result<Vec<Case>, String> {
+pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>, String> {
     let file: CasesFile = toml::from_str(text).map_err(|e| format!("validate cases: {e}"))?;
     let mode = if quick { "quick" } else { "full" };
     let mut out = Vec::new();
+    let selected = |name: &str| only.is_none_or(|p| name.starts_with(p));
+    if !file
+        .case
+        .iter()
+        .any(|c| selected(&c.name) && c.modes.iter().any(|m| m == mode))
+    {
+        return Err(format!(
+            "no {mode} case starts with {:?}",
+            only.unwrap_or_default()
+        ));
+    }
     for spec in &file.case {
-        if !spec.modes.iter().any(|m| m == mode) {
+        if !spec.modes.iter().any(|m| m == mode) || !selected(&spec.name) {
             continue;
         }
         let schemes: Vec<Option<String>> = if spec.schemes.is_empty() {
@@ -508,5 +520,16 @@ mod tests {
         };
         let ratio = e(0.01) / e(0.005);
         assert!((ratio - 2.0).abs() < 0.05, "{ratio}");
+    }
+
+    /// `--only` selects by name prefix, and one that selects nothing is an error
+    /// (not an empty, passing run).
+    #[test]
+    fn only_selects_by_prefix_and_refuses_an_empty_selection() {
+        let e = evaluate(CASES, true, Some("no-such-source/")).unwrap_err();
+        assert!(e.contains("no quick case"), "{e}");
+        // a full-only prefix selects nothing in quick mode
+        let e = evaluate(CASES, true, Some("eibeck2000/multiplicative-gel")).unwrap_err();
+        assert!(e.contains("no quick case"), "{e}");
     }
 }
