@@ -1,4 +1,4 @@
-//! The situations of the C-ABI fuzzing campaigns' findings 2–4 and 9–11 (docs/results/fuzzing.md),
+//! The situations of the C-ABI fuzzing campaigns' findings 2–4 and 9–12 (docs/results/fuzzing.md),
 //! rebuilt on every size-count scheme through the facade. The byte-level reproducers of
 //! findings 1–4 were lost to a `crash-*` ignore pattern that also matched
 //! `fuzz/regressions/`; these tests are not those inputs: the ones for findings 3 and 4
@@ -241,4 +241,39 @@ fn counters_near_the_top_of_u64_saturate() {
         b.advance_to(1.0, &mut rng).unwrap();
         assert_eq!(b.totals().events, u64::MAX, "{}", info.name);
     }
+}
+
+/// Finding 12: a state stopped by the work budget right after a particle doubling
+/// restores. The doubling's resync rebuilds the buckets' slots (dropping the empties of
+/// removals) and leaves the proposal tables stale until the next proposal; a bucket's
+/// table slots `tab` may then exceed its slots, which restore refused ("bucket slots
+/// inconsistent"), so a host could not clone the sim. Two monomers in a volume of
+/// 8e-256 under the additive kernel, calls of 500 units, as the fuzzer had it.
+#[test]
+fn a_state_stopped_after_a_doubling_restores() {
+    use coagula_core::scheme::Budget;
+    let k = Coagulation::additive();
+    let v = 8.154920269121583e-256;
+    let mut restored = 0;
+    for info in count_schemes() {
+        for seed in 0..32 {
+            let Some(mut a) = build(info.id, k, &[2], v) else {
+                break;
+            };
+            let mut rng = Pcg64Mcg::new(seed);
+            for h in [205.0, 460.0] {
+                let mut budget = Budget::work(500);
+                if a.advance_within(h / 64.0, &mut budget, &mut rng).is_err() {
+                    break;
+                }
+                let buf = save(&*a);
+                let mut b = build(info.id, k, &[2], v).unwrap();
+                b.restore(&mut Reader::new(&buf))
+                    .unwrap_or_else(|e| panic!("{} seed {seed}: {e}", info.name));
+                assert_eq!(save(&*b), buf, "{}", info.name);
+                restored += 1;
+            }
+        }
+    }
+    assert!(restored > 32, "{restored} restores");
 }

@@ -1265,8 +1265,11 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         for bk in s.buckets.iter_mut() {
             let (slots, tab, bn, cap, judged) = (r.u64()?, r.u64()?, r.u64()?, r.u64()?, r.u64()?);
             // (`judged` is only a heuristic's memory; doublings double it even in a
-            // bucket that has since emptied, so any value is one a run can leave)
-            if tab > slots || bn > slots {
+            // bucket that has since emptied, so any value is one a run can leave.
+            // `tab` is that of the tables in use: a resync may shrink the slots below
+            // it, and leaves the tables stale until the next proposal rebuilds them —
+            // a state a budget can stop in, found by fuzzing)
+            if bn > slots || (!stale && tab > slots) {
                 return Err(bad("bucket slots inconsistent"));
             }
             (bk.slots, bk.tab, bk.n, bk.cap, bk.judged) = (slots, tab, bn, cap, judged);
@@ -1325,10 +1328,11 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         if total != n || counts[m as usize + 1..].iter().any(|&c| c != 0) {
             return Err(bad("counts do not add up"));
         }
-        // the overflow holds distinct grown buckets; with current tables, every one
+        // the overflow holds distinct buckets; with current tables, exactly the grown
+        // ones (stale tables are rebuilt, and the overflow emptied, before any use)
         let grown = s.buckets.iter().filter(|bk| bk.slots > bk.tab).count();
         if over.iter().enumerate().any(|(i, &b)| {
-            b >= nb || s.buckets[b].slots == s.buckets[b].tab || over[..i].contains(&b)
+            b >= nb || over[..i].contains(&b) || (!stale && s.buckets[b].slots <= s.buckets[b].tab)
         }) || (!stale && over.len() != grown)
         {
             return Err(bad("overflow list inconsistent"));
