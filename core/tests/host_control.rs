@@ -13,7 +13,7 @@ use crate::common;
 use coagula_core::Error;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::scheme::Budget;
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State, StateKind};
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::{Infallible, TryRng};
 
@@ -234,13 +234,15 @@ impl TryRng for Stuck {
 #[test]
 fn a_stuck_random_stream_cannot_hang_a_call() {
     type StuckSim = dyn Simulation<Coagulation, NoFragmentation, Stuck>;
+    let mut built = 0;
     for word in [0, u64::MAX, 0x8000_0000_0000_0000, 0x0123_4567_89ab_cdef] {
         for info in registry::SCHEMES {
             for batched in [false, true] {
                 let opts = Options::default().with_batched_clock(batched).with_dt(0.1);
                 let sizes = [1.0, 2.0, 3.0, 4.0];
                 let counts = [5000, 3];
-                let init = if info.id == SchemeId::MassFlow {
+                // every particle-list scheme (mass flow, MFA, DSA) from sizes
+                let init = if info.state == StateKind::Sizes {
                     Init::Sizes {
                         sizes: &sizes,
                         mass: 1.0,
@@ -268,9 +270,13 @@ fn a_stuck_random_stream_cannot_hang_a_call() {
                 if let Ok(rep) = r {
                     assert!(rep.proposals <= 1 << 20, "{}", info.name);
                 }
+                built += 1;
             }
         }
     }
+    // every scheme of the registry (the particle-list ones from sizes), both clocks,
+    // each word
+    assert_eq!(built, 4 * 2 * registry::SCHEMES.len(), "schemes skipped");
 }
 
 #[test]

@@ -22,6 +22,10 @@
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::random::unit_f64;
+
+/// Tries of the acceptance–rejection within a group before the exact scan (see
+/// `Groups::sample`).
+const GROUP_TRIES: u32 = 64;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -440,30 +444,35 @@ impl Groups {
             }
         }
         let (first, count) = (self.start[g] as usize, u64::from(self.count(g)));
-        if g == 1 {
-            // the catch-all: exactly, by its members' integer weights (its bound can be
-            // far above them, and the group is drawn rarely: see the module docs)
-            let v = (unit_f64(rng.next_u64()) * self.sum[1] as f64) as u128;
-            let mut acc = 0u128;
-            let members = &self.perm[first..first + count as usize];
-            for s in members {
-                acc += u128::from(self.mantissa(s.w, 1));
-                if v < acc {
+        let members = &self.perm[first..first + count as usize];
+        if g != 1 {
+            // acceptance–rejection within the binade: each try accepts with probability
+            // at least 1/2, so GROUP_TRIES rejections in a row come with probability
+            // 2^-64 from a sound stream, and always from a stuck one (a broken host
+            // callback), which must not hang the call; the scan below draws from the
+            // same law, so the fallback changes nothing in distribution
+            let bound = self.bnd[g];
+            for _ in 0..GROUP_TRIES {
+                let r = ((u128::from(rng.next_u64()) * u128::from(count)) >> 64) as usize;
+                let s = members[r];
+                if unit_f64(rng.next_u64()) * bound < s.w {
                     return s.i as usize;
                 }
             }
-            // (v rounded up to the total: the last member of positive weight)
-            let last = members.iter().rev().find(|s| self.mantissa(s.w, 1) > 0);
-            return last.map_or(members[0].i, |s| s.i) as usize;
         }
-        let bound = self.bnd[g];
-        loop {
-            let r = ((u128::from(rng.next_u64()) * u128::from(count)) >> 64) as usize;
-            let s = self.perm[first + r];
-            if unit_f64(rng.next_u64()) * bound < s.w {
+        // exactly, by the members' integer weights: the catch-all always (its bound can
+        // be far above them, and the group is drawn rarely: see the module docs)
+        let v = (unit_f64(rng.next_u64()) * self.sum[g] as f64) as u128;
+        let mut acc = 0u128;
+        for s in members {
+            acc += u128::from(self.mantissa(s.w, g));
+            if v < acc {
                 return s.i as usize;
             }
         }
+        // (v rounded up to the total: the last member of positive weight)
+        let last = members.iter().rev().find(|s| self.mantissa(s.w, g) > 0);
+        last.map_or(members[0].i, |s| s.i) as usize
     }
 
     /// The window and the order of the particles, for a checkpoint.
