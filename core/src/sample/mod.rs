@@ -3,3 +3,4 @@
 
 pub(crate) mod alias;
 pub mod sum_tree;
+pub(crate) mod wide_tree;

@@ -209,10 +209,20 @@ impl<W: Weight> SumTree<W> {
     fn set_leaf_unchecked(&mut self, i: usize, w: W) {
         let mut node = self.cap + i;
         self.nodes[node] = w;
+        // the running sum stays in a register: each level loads only the sibling,
+        // never the node just stored (no store-to-load chain); the sums are the
+        // same bits as `left + right` (addition commutes exactly)
+        let mut sum = w;
         while node > 1 {
+            let sibling = self.nodes[node ^ 1];
+            let (l, r) = if node & 1 == 0 {
+                (sum, sibling)
+            } else {
+                (sibling, sum)
+            };
+            sum = l.add(r).unwrap_or(l);
             node >>= 1;
-            let (l, r) = (self.nodes[2 * node], self.nodes[2 * node + 1]);
-            self.nodes[node] = l.add(r).unwrap_or(l);
+            self.nodes[node] = sum;
         }
     }
 
@@ -275,12 +285,10 @@ impl<W: Weight> SumTree<W> {
         while node < self.cap {
             let left = self.nodes[2 * node];
             let right = self.nodes[2 * node + 1];
-            if u < left || right <= W::ZERO {
-                node *= 2;
-            } else {
-                u = u.sub(left);
-                node = 2 * node + 1;
-            }
+            // branch-free step (a random descent mispredicts half its branches)
+            let go_right = !(u < left || right <= W::ZERO);
+            u = if go_right { u.sub(left) } else { u };
+            node = 2 * node + go_right as usize;
         }
         Ok(node - self.cap)
     }

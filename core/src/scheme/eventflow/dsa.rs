@@ -27,7 +27,7 @@ use super::super::{Budget, Pending, Scheme, StepReport, check_target};
 use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
-use crate::random::{exp1, unit_f64};
+use crate::random::{Ziggurat, unit_f64};
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -325,7 +325,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     if let Err(e) = Pending::check(self.time, mean) {
                         break Err(e);
                     }
-                    Pending::after(self.time, mean, exp1(rng))
+                    Pending::after(self.time, mean, Ziggurat::new().sample(rng))
                 }
             };
             if p.at > t {

@@ -15,6 +15,12 @@
 //! [`Dsa`](super::Dsa) has one per particle, 10^6 from 10^6 monomers) and stays in
 //! cache, so a proposal costs what a low-rank proposal costs. The size table doubles
 //! when a merge passes it (bounded by the memory budget and the size limit).
+//!
+//! What an event costs, and what keeps it small: the tree is 8-ary with a node per
+//! cache line (both draws descend it side by side; the three moved leaves are
+//! recomputed level by level), a kernel whose low-rank form is exact is evaluated
+//! from factors cached per size (no cube roots for the Brownian kernel), and waiting
+//! times come from the ziggurat. The figures are in `docs/results/eventflow-samplers.md`.
 
 use super::super::population::{
     DEFAULT_MEMORY_BUDGET, Population, check_counts, dense_from_pairs, try_resize, within_budget,
@@ -23,8 +29,8 @@ use super::super::{Budget, Pending, Scheme, StepReport, check_target};
 use super::{accept, check_pending, majorant};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use crate::random::{below, exp1};
-use crate::sample::sum_tree::SumTree;
+use crate::random::{Ziggurat, below};
+use crate::sample::wide_tree::WideTree;
 use alloc::borrow::Cow;
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -32,8 +38,31 @@ use rand_core::Rng;
 /// Sizes below this start the table (the tree's smallest length).
 const MIN_TABLE: usize = 64;
 
-/// Bytes per size: the count, h and two tree nodes.
-const BYTES_PER_SIZE: usize = 8 + 8 + 16;
+/// Bytes per size: the count, h and two tree nodes, and `2R` cached factors for a
+/// kernel of rank R whose low-rank form is exact.
+fn bytes_per_size(rank: usize) -> usize {
+    8 + 8 + 16 + 16 * rank
+}
+
+/// The rank R whose factors `a_r, b_r` are cached per size: the kernel's rank when
+/// its low-rank form is exact (`K = Σ_r a_r(x) b_r(y) + a_r(y) b_r(x)`), so a proposal
+/// evaluates K from the table with `2R` products instead of calling the kernel (the
+/// Brownian kernel's cube roots were a quarter of the time); 0 otherwise.
+fn cached_rank<K: CoagulationKernel>(kernel: &K) -> usize {
+    let r = kernel.rank();
+    if kernel.low_rank_is_exact() && (1..=crate::kernel::MAX_RANK).contains(&r) {
+        r
+    } else {
+        0
+    }
+}
+
+/// Writes size `x`'s factors `[a_0 … a_{R−1}, b_0 … b_{R−1}]` into `out` (length 2R).
+fn size_factors<K: CoagulationKernel>(kernel: &K, x: f64, out: &mut [f64]) {
+    let r = out.len() / 2;
+    let (a, b) = out.split_at_mut(r);
+    kernel.factors(x, a, b);
+}
 
 /// Direct simulation over size counts (see the module docs).
 pub struct DsaCounts<K> {
@@ -44,7 +73,11 @@ pub struct DsaCounts<K> {
     /// cannot be made, see `event`).
     h: Vec<f64>,
     /// `h(k) N_k` at leaf `k − 1`.
-    tree: SumTree<f64>,
+    tree: WideTree,
+    /// The cached rank R (see [`cached_rank`]), and `fac[2R(k − 1)..2Rk]` = size k's
+    /// factors `a_0 … a_{R−1}, b_0 … b_{R−1}` (empty when R = 0).
+    rank: usize,
+    fac: Vec<f64>,
     pop: Population,
     strict: bool,
     time: f64,
@@ -79,7 +112,8 @@ impl<K: CoagulationKernel> DsaCounts<K> {
     }
 
     /// [`new`](Self::new) with a memory budget of `bytes` for the size table (32 bytes
-    /// a size), which the initial table must fit.
+    /// a size, 16R more for a kernel whose rank-R low-rank form is exact), which the
+    /// initial table must fit.
     pub fn new_with_memory_budget(
         kernel: K,
         counts: &[u64],
@@ -91,7 +125,9 @@ impl<K: CoagulationKernel> DsaCounts<K> {
             kernel,
             counts: Vec::new(),
             h: Vec::new(),
-            tree: SumTree::new(),
+            tree: WideTree::default(),
+            rank: 0,
+            fac: Vec::new(),
             pop,
             strict: false,
             time: 0.0,
@@ -109,7 +145,8 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         self
     }
 
-    /// Sets the memory budget of the size table (32 bytes a size).
+    /// Sets the memory budget of the size table (32 bytes a size, 16R more for a kernel
+    /// whose rank-R low-rank form is exact).
     pub fn with_memory_budget(mut self, bytes: usize) -> Self {
         self.pop.memory_budget = bytes;
         self
@@ -124,17 +161,24 @@ impl<K: CoagulationKernel> DsaCounts<K> {
 
     /// Builds the table for `counts` (validated first; nothing changes on error).
     fn fill(&mut self, counts: &[u64]) -> Result<()> {
-        let (c, h, tree) = table(
+        let t = table(
             &self.kernel,
             counts,
             self.pop.size_limit,
             self.pop.memory_budget,
         )?;
-        self.counts = c;
-        self.h = h;
-        self.tree = tree;
+        self.install(t);
         self.pending = None;
         Ok(())
+    }
+
+    /// Takes the tables of `t`.
+    fn install(&mut self, t: Tables) {
+        self.counts = t.counts;
+        self.h = t.h;
+        self.tree = t.tree;
+        self.rank = t.rank;
+        self.fac = t.fac;
     }
 
     /// Doubles the table until size `s` fits (within the memory budget).
@@ -143,14 +187,23 @@ impl<K: CoagulationKernel> DsaCounts<K> {
             .ok()
             .and_then(usize::checked_next_power_of_two)
             .ok_or(Error::Overflow { name: "size table" })?;
-        within_budget(need.checked_mul(BYTES_PER_SIZE), self.pop.memory_budget)?;
+        within_budget(
+            need.checked_mul(bytes_per_size(self.rank)),
+            self.pop.memory_budget,
+        )?;
         let old = self.counts.len();
+        let w = 2 * self.rank;
+        self.tree.resize_zero(need)?;
         try_resize(&mut self.counts, need, 0)?;
         try_resize(&mut self.h, need, f64::NAN)?;
+        try_resize(&mut self.fac, need * w, 0.0)?;
         for k in old..need {
-            self.h[k] = majorant(&self.kernel, (k + 1) as f64).unwrap_or(f64::NAN);
+            let x = (k + 1) as f64;
+            self.h[k] = majorant(&self.kernel, x).unwrap_or(f64::NAN);
+            if w > 0 {
+                size_factors(&self.kernel, x, &mut self.fac[k * w..(k + 1) * w]);
+            }
         }
-        self.tree.resize_zero(need);
         Ok(())
     }
 
@@ -207,16 +260,14 @@ impl<K: CoagulationKernel> DsaCounts<K> {
     /// size); the next proposal is drawn afresh.
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
         let largest = self.largest() as usize;
-        let (c, h, tree) = table(
+        let t = table(
             &kernel,
             &self.counts[..largest],
             self.pop.size_limit,
             self.pop.memory_budget,
         )?;
         self.kernel = kernel;
-        self.counts = c;
-        self.h = h;
-        self.tree = tree;
+        self.install(t);
         self.pending = None;
         Ok(())
     }
@@ -228,22 +279,10 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         Ok(())
     }
 
-    /// The proposal rate `(Σ h N)² / (2V)`; 0 with fewer than two particles.
-    #[inline]
-    fn rate(&self) -> f64 {
-        let a = self.tree.total();
-        if self.pop.n < 2 {
-            0.0
-        } else {
-            a * (a / (2.0 * self.pop.volume))
-        }
-    }
-
     /// One proposal; `Ok(true)` when the state changed (errors change nothing).
     #[inline]
     fn event<R: Rng + ?Sized>(&mut self, rep: &mut StepReport, rng: &mut R) -> Result<bool> {
-        let k = self.tree.sample_rng(rng)?;
-        let l = self.tree.sample_rng(rng)?;
+        let (k, l) = self.tree.sample_pair_rng(rng)?;
         if k == l {
             // the same particle with probability 1/N_k
             let nk = self.counts[k];
@@ -254,7 +293,11 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         }
         let (x, y) = (k as u64 + 1, l as u64 + 1);
         let hh = self.h[k] * self.h[l];
-        let kv = self.kernel.rate(x as f64, y as f64);
+        let kv = if self.rank > 0 {
+            self.cached_rate(k, l)
+        } else {
+            self.kernel.rate(x as f64, y as f64)
+        };
         if !accept(kv, hh, self.strict, &mut rep.bound_violations, rng)? {
             rep.rejections += 1;
             return Ok(false);
@@ -276,26 +319,55 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         self.counts[l] -= 1;
         self.counts[m] += 1;
         self.pop.n -= 1;
-        for i in [k, l, m] {
+        let weight = |i: usize| {
             let c = self.counts[i];
-            let w = if c == 0 { 0.0 } else { self.h[i] * c as f64 };
-            self.tree.update(i, w)?;
+            (i, if c == 0 { 0.0 } else { self.h[i] * c as f64 })
+        };
+        let moved = self.tree.update_many([weight(k), weight(l), weight(m)]);
+        if moved.is_err() {
+            // (not reached: the weights were checked above) leave the state as it was
+            self.counts[k] += 1;
+            self.counts[l] += 1;
+            self.counts[m] -= 1;
+            self.pop.n += 1;
         }
+        moved?;
         Ok(true)
     }
+
+    /// `K(k + 1, l + 1)` from the cached factors (the kernel's low-rank form is exact).
+    #[inline]
+    fn cached_rate(&self, k: usize, l: usize) -> f64 {
+        let r = self.rank;
+        let fk = &self.fac[2 * r * k..2 * r * (k + 1)];
+        let fl = &self.fac[2 * r * l..2 * r * (l + 1)];
+        let mut s = 0.0;
+        for q in 0..r {
+            s += fk[q] * fl[r + q] + fl[q] * fk[r + q];
+        }
+        s
+    }
+}
+
+/// The tables of a size-count state (see the fields of [`DsaCounts`]).
+struct Tables {
+    counts: Vec<u64>,
+    h: Vec<f64>,
+    tree: WideTree,
+    rank: usize,
+    fac: Vec<f64>,
 }
 
 /// The size table of `counts` under `kernel`: the counts padded to a power of two, `h`
 /// at every size, the tree of `h(k) N_k`. Errors: no particle or an overflowing total,
 /// a size past `limit`, tables past `budget`, a kernel without a valid majorant at an
 /// occupied size, a weight that overflows.
-#[allow(clippy::type_complexity)]
 fn table<K: CoagulationKernel>(
     kernel: &K,
     counts: &[u64],
     limit: u64,
     budget: usize,
-) -> Result<(Vec<u64>, Vec<f64>, SumTree<f64>)> {
+) -> Result<Tables> {
     check_counts(counts)?;
     let largest = counts
         .iter()
@@ -308,7 +380,8 @@ fn table<K: CoagulationKernel>(
         });
     }
     let m = counts.len().max(MIN_TABLE).next_power_of_two();
-    within_budget(m.checked_mul(BYTES_PER_SIZE), budget)?;
+    let rank = cached_rank(kernel);
+    within_budget(m.checked_mul(bytes_per_size(rank)), budget)?;
     for (i, &c) in counts.iter().enumerate() {
         if c > 0 {
             let h = majorant(kernel, (i + 1) as f64)?;
@@ -330,7 +403,20 @@ fn table<K: CoagulationKernel>(
             *wk = hk * c as f64;
         }
     }
-    Ok((full, h, SumTree::from_weights(&w)?))
+    let mut fac = Vec::new();
+    try_resize(&mut fac, m * 2 * rank, 0.0)?;
+    if rank > 0 {
+        for (k, f) in fac.chunks_exact_mut(2 * rank).enumerate() {
+            size_factors(kernel, (k + 1) as f64, f);
+        }
+    }
+    Ok(Tables {
+        counts: full,
+        h,
+        tree: WideTree::from_weights(&w)?,
+        rank,
+        fac,
+    })
 }
 
 impl<K: CoagulationKernel> Scheme for DsaCounts<K> {
@@ -347,25 +433,29 @@ impl<K: CoagulationKernel> Scheme for DsaCounts<K> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let out = loop {
-            let total = self.rate();
-            if !total.is_finite() {
-                break Err(Error::InvalidRate {
-                    name: "total event rate (overflows a double)",
-                    value: total,
-                });
-            }
             let p = match self.pending {
                 Some(p) => p,
                 None => {
-                    if total.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+                    // the mean waiting time 2V / (Σ h N)² with one division (the
+                    // rate's two divisions were a tenth of an event's time)
+                    let a = self.tree.total();
+                    let aa = a * a;
+                    if !aa.is_finite() {
+                        break Err(Error::InvalidRate {
+                            name: "total event rate (overflows a double)",
+                            value: aa,
+                        });
+                    }
+                    if self.pop.n < 2 || aa.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater)
+                    {
                         self.time = t;
                         break Ok(());
                     }
-                    let mean = 1.0 / total;
+                    let mean = (2.0 * self.pop.volume) / aa;
                     if let Err(e) = Pending::check(self.time, mean) {
                         break Err(e);
                     }
-                    Pending::after(self.time, mean, exp1(rng))
+                    Pending::after(self.time, mean, Ziggurat::new().sample(rng))
                 }
             };
             self.pending = Some(p);
@@ -466,20 +556,17 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for DsaCounts<K> {
             return Err(bad("a particle is larger than the size limit"));
         }
         let pop = Population::new(&counts, volume).map_err(|_| bad("no particle, or too many"))?;
-        let (c, h, tree) =
-            table(&self.kernel, &counts, limit, self.pop.memory_budget).map_err(|_| {
-                bad("a size where the kernel's majorant is invalid, or past the budget")
-            })?;
-        let a = tree.total();
+        let t = table(&self.kernel, &counts, limit, self.pop.memory_budget).map_err(|_| {
+            bad("a size where the kernel's majorant is invalid, or past the budget")
+        })?;
+        let a = t.tree.total();
         let rate = if pop.n < 2 {
             0.0
         } else {
             a * (a / (2.0 * volume))
         };
         check_pending(&pending, rate)?;
-        self.counts = c;
-        self.h = h;
-        self.tree = tree;
+        self.install(t);
         self.pop.n = pop.n;
         self.pop.n0 = self.pop.n0.max(pop.n);
         self.pop.volume = volume;
