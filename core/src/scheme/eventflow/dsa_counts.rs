@@ -440,18 +440,19 @@ impl<K: CoagulationKernel> Scheme for DsaCounts<K> {
                     // rate's two divisions were a tenth of an event's time)
                     let a = self.tree.total();
                     let aa = a * a;
-                    if !aa.is_finite() {
-                        break Err(Error::InvalidRate {
-                            name: "total event rate (overflows a double)",
-                            value: aa,
-                        });
-                    }
                     if self.pop.n < 2 || aa.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater)
                     {
                         self.time = t;
                         break Ok(());
                     }
                     let mean = (2.0 * self.pop.volume) / aa;
+                    // the rate 1 / mean must be a finite double
+                    if mean.is_nan() || mean < 1.0 / f64::MAX {
+                        break Err(Error::InvalidRate {
+                            name: "total event rate (overflows a double)",
+                            value: 1.0 / mean,
+                        });
+                    }
                     if let Err(e) = Pending::check(self.time, mean) {
                         break Err(e);
                     }

@@ -302,6 +302,14 @@ fn refused_input_and_capacity() {
         .unwrap();
     m.advance_to(100.0, &mut rng).unwrap();
     assert!(m.totals().removed > 0);
+    // over size counts, a volume so small that the proposal rate overflows a double:
+    // an error, the clock as before (not a run of zero waiting times)
+    let mut c = DsaCounts::new(k, &[3000, 40], 2.2e-308).unwrap();
+    assert!(matches!(
+        c.advance_to(1.0, &mut rng),
+        Err(Error::InvalidRate { .. })
+    ));
+    assert_eq!((c.time(), c.counts().into_owned()), (0.0, vec![3000, 40]));
 }
 
 /// Steps `s` one proposal per call until a call fails; checks that the failing call
