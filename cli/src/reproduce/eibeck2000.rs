@@ -625,15 +625,13 @@ fn fig1_3(quick: bool, plot1: Option<String>, plot3: Option<String>) -> Result<(
             .expect("run")
     };
     let mut q_curves = Vec::new();
-    {
-        println!(
-            "## Figure 3: quotient (6.13) of normalised systematic errors of m2\n\n\
-             ẽ Ñ m0(t) / (e N), e = mean − reference (in standard errors in brackets), MFA with \
-             b_N = ∞; paper: about 6.\n"
-        );
-        println!("| t | pair | DSA error (z) | MFA error (z) | quotient | ± SE |");
-        println!("|---|---|---|---|---|---|");
-    }
+    println!(
+        "## Figure 3: quotient (6.13) of normalised systematic errors of m2\n\n\
+         ẽ Ñ m0(t) / (e N), e = mean − reference (in standard errors in brackets), MFA with \
+         b_N = ∞; paper: about 6.\n"
+    );
+    println!("| t | pair | DSA error (z) | MFA error (z) | quotient | ± SE |");
+    println!("|---|---|---|---|---|---|");
     for (nd, nm) in [(1usize << 11, 16usize), (1 << 13, 64), (1 << 13, 16)] {
         let (d, m) = (find("DSA", nd), find("MFA∞", nm));
         let mut qs = Vec::new();
