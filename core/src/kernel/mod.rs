@@ -33,6 +33,7 @@
 mod check;
 mod coagulation;
 mod fragmentation;
+pub mod temperature;
 
 pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
 pub use coagulation::{BOLTZMANN, Coagulation};
