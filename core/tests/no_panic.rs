@@ -10,7 +10,7 @@ use coagula_core::kernel::{BinaryUniform, Coagulation, NoFragmentation, UserKern
 use coagula_core::qmc::{DigitalSequence, Niederreiter2, Sobol};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
-use coagula_core::scheme::eventflow::{Dsa, Mfa, Sampler};
+use coagula_core::scheme::eventflow::{Dsa, DsaCounts, Mfa, Sampler};
 use coagula_core::scheme::lowrank::{Bucketed, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use proptest::prelude::*;
@@ -240,6 +240,9 @@ proptest! {
         if small && let Ok(mut s) = AcceptanceRejection::new(k, &counts, volume) {
             let _ = s.advance_to(t, &mut rng);
         }
+        if let Ok(mut s) = DsaCounts::new(k, &counts, volume) && small {
+            let _ = s.advance_to(t, &mut rng);
+        }
     }
 
 }
@@ -265,19 +268,25 @@ proptest! {
         let mut ar = AcceptanceRejection::new_with_memory_budget(k, &[40], 40.0, 1 << 20)
             .unwrap()
             .with_size_limit(limit);
-        let before = (lr.counts().to_vec(), inv.counts(), ar.counts());
+        let mut dc = DsaCounts::new_with_memory_budget(k, &[40], 40.0, 1 << 20)
+            .unwrap()
+            .with_size_limit(limit);
+        let before = (lr.counts().to_vec(), inv.counts(), ar.counts(), dc.counts().into_owned());
         let ok = [
             lr.set_counts(&counts, volume).is_ok(),
             inv.set_counts(&counts, volume).is_ok(),
             ar.set_counts(&counts, volume).is_ok(),
+            dc.set_counts(&counts, volume).is_ok(),
         ];
         if !ok[0] { prop_assert_eq!(&before.0, &lr.counts().to_vec()); }
         if !ok[1] { prop_assert_eq!(&before.1, &inv.counts()); }
         if !ok[2] { prop_assert_eq!(&before.2, &ar.counts()); }
+        if !ok[3] { prop_assert_eq!(&before.3, &dc.counts().into_owned()); }
         if small {
             let _ = lr.advance_to(0.01, &mut rng);
             let _ = inv.advance_to(0.01, &mut rng);
             let _ = ar.advance_to(0.01, &mut rng);
+            let _ = dc.advance_to(0.01, &mut rng);
         }
     }
 
@@ -320,6 +329,22 @@ proptest! {
         let mut inv = Inverse::monodisperse(k, 50).unwrap();
         let mut ar = AcceptanceRejection::monodisperse(k, 50).unwrap();
         let mut mf = MassFlow::new(k, NoFragmentation, &[1.0; 8], 1.0, 0.1, PointSource::niederreiter()).unwrap();
+        // direct simulation over counts, with its own checkpoint bent the same way
+        let mut dc = DsaCounts::monodisperse(k, 50).unwrap();
+        dc.advance_to(0.5, &mut rng).unwrap();
+        let mut dgood = vec![0u8; dc.checkpoint_len()];
+        dc.save_to(&mut dgood).unwrap();
+        let mut dbent = dgood.clone();
+        let j = flip % dbent.len();
+        dbent[j] = value;
+        for buf in [&bytes, &bent, &dbent] {
+            let before = (dc.counts().into_owned(), dc.time());
+            if dc.restore_from(buf).is_err() {
+                prop_assert_eq!(&before, &(dc.counts().into_owned(), dc.time()));
+            } else {
+                let _ = dc.advance_to(dc.time() + 0.01, &mut rng);
+            }
+        }
         for buf in [&bytes, &bent] {
             let before = lr.counts().to_vec();
             if lr.restore_from(buf).is_err() {
