@@ -128,8 +128,14 @@ impl WideTree {
         for d in 1..self.levels.len() {
             let (lo, hi) = self.levels.split_at_mut(d);
             let (below, up) = (&lo[d - 1], &mut hi[0]);
+            for p in 0..K {
+                let x = idx[p];
+                // paths that met below share the rest of the way: sum a line once
+                if !idx[..p].contains(&x) {
+                    up[x / 8].0[x % 8] = line_sum(&below[x]);
+                }
+            }
             for x in &mut idx {
-                up[*x / 8].0[*x % 8] = line_sum(&below[*x]);
                 *x /= 8;
             }
         }
