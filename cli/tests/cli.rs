@@ -53,6 +53,21 @@ fn run_writes_csv_close_to_exact() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `coagula run --help` names every scheme of the registry.
+#[test]
+fn run_help_names_every_scheme() {
+    let out = coagula().args(["run", "--help"]).output().unwrap();
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    for s in coagula_core::scheme::registry::SCHEMES {
+        assert!(
+            help.contains(&format!(" {},", s.name)) || help.contains(&format!(" {})", s.name)),
+            "`coagula run --help` does not name {}",
+            s.name
+        );
+    }
+}
+
 #[test]
 fn bad_arguments_fail_with_a_message() {
     let out = coagula()
