@@ -19,7 +19,10 @@ module coagula
   integer(c_int32_t), parameter :: COAG_RANDOMIZATION_NONE = 0, COAG_RANDOMIZATION_SHIFT = 1, &
        COAG_RANDOMIZATION_MATOUSEK = 2, COAG_RANDOMIZATION_OWEN = 3
   integer(c_int32_t), parameter :: COAG_METHOD_LOWRANK = 0, COAG_METHOD_INVERSE = 1, &
-       COAG_METHOD_REJECTION = 2, COAG_METHOD_LOWRANK_TREE = 3
+       COAG_METHOD_REJECTION = 2, COAG_METHOD_LOWRANK_TREE = 3, COAG_METHOD_DSA_COUNTS = 4
+  integer(c_int32_t), parameter :: COAG_EVENTFLOW_MFA = 0, COAG_EVENTFLOW_DSA = 1
+  integer(c_int32_t), parameter :: COAG_SAMPLER_DEFAULT = 0, COAG_SAMPLER_TREE = 1, &
+       COAG_SAMPLER_GROUPS = 2
   integer(c_int32_t), parameter :: COAG_EXACT_CONSTANT = 0, COAG_EXACT_ADDITIVE = 1, &
        COAG_EXACT_MULTIPLICATIVE = 2, COAG_EXACT_MARCUS_LUSHNIKOV = 3, COAG_EXACT_COAG_FRAG = 4
 
@@ -44,6 +47,18 @@ module coagula
      integer(c_int64_t) :: stream
      integer(c_int32_t) :: batched_clock
   end type coag_counts_config
+
+  type, bind(c) :: coag_eventflow_config
+     integer(c_size_t) :: struct_size
+     integer(c_int32_t) :: method
+     real(c_double) :: mass
+     real(c_double) :: truncation
+     integer(c_int64_t) :: capacity
+     integer(c_int32_t) :: sampler
+     integer(c_int32_t) :: strict_bound
+     integer(c_int64_t) :: seed
+     integer(c_int64_t) :: stream
+  end type coag_eventflow_config
 
   ! user kernels: procedures with bind(c) interfaces, passed with c_funloc
   type, bind(c) :: coag_user_kernel
@@ -128,6 +143,22 @@ module coagula
        integer(c_size_t), value :: size
        integer(c_int32_t) :: coag_counts_default_config
      end function
+     ! size: c_sizeof(out)
+     function coag_eventflow_default_config(out, size) bind(c, name="coag_eventflow_default_config")
+       import :: coag_eventflow_config, c_int32_t, c_size_t
+       type(coag_eventflow_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_eventflow_default_config
+     end function
+     function coag_eventflow_new(config, kernel, frag, sizes, n, out) bind(c, name="coag_eventflow_new")
+       import :: coag_eventflow_config, c_ptr, c_double, c_size_t, c_int32_t
+       type(coag_eventflow_config), intent(in) :: config
+       type(c_ptr), value :: kernel, frag
+       real(c_double), intent(in) :: sizes(*)
+       integer(c_size_t), value :: n
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_eventflow_new
+     end function
      function coag_massflow_new(config, kernel, frag, sizes, n, out) bind(c, name="coag_massflow_new")
        import :: coag_massflow_config, c_ptr, c_double, c_size_t, c_int32_t
        type(coag_massflow_config), intent(in) :: config
@@ -156,6 +187,29 @@ module coagula
        integer(c_size_t), value :: workspace_bytes
        type(c_ptr), intent(out) :: out
        integer(c_int32_t) :: coag_massflow_new_in
+     end function
+     function coag_eventflow_workspace_size(config, frag, n, out) &
+          bind(c, name="coag_eventflow_workspace_size")
+       import :: coag_eventflow_config, c_ptr, c_size_t, c_int32_t
+       type(coag_eventflow_config), intent(in) :: config
+       type(c_ptr), value :: frag
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_eventflow_workspace_size
+     end function
+     ! the workspace (real(c_double) array, c_loc of it) must stay allocated until
+     ! coag_sim_free
+     function coag_eventflow_new_in(config, kernel, frag, sizes, n, workspace, workspace_bytes, out) &
+          bind(c, name="coag_eventflow_new_in")
+       import :: coag_eventflow_config, c_ptr, c_double, c_size_t, c_int32_t
+       type(coag_eventflow_config), intent(in) :: config
+       type(c_ptr), value :: kernel, frag
+       real(c_double), intent(in) :: sizes(*)
+       integer(c_size_t), value :: n
+       type(c_ptr), value :: workspace
+       integer(c_size_t), value :: workspace_bytes
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_eventflow_new_in
      end function
      function coag_sim_method(sim, out) bind(c, name="coag_sim_method")
        import :: c_ptr, c_int32_t
@@ -399,6 +453,14 @@ module coagula
        type(coag_massflow_config), intent(out) :: out
        integer(c_size_t), value :: size
        integer(c_int32_t) :: coag_sim_massflow_config
+     end function
+     ! size: c_sizeof(out)
+     function coag_sim_eventflow_config(sim, out, size) bind(c, name="coag_sim_eventflow_config")
+       import :: c_ptr, coag_eventflow_config, c_size_t, c_int32_t
+       type(c_ptr), value :: sim
+       type(coag_eventflow_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_sim_eventflow_config
      end function
      ! size: c_sizeof(out)
      function coag_sim_counts_config(sim, out, size) bind(c, name="coag_sim_counts_config")

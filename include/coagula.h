@@ -171,6 +171,38 @@
 #define COAG_METHOD_LOWRANK_TREE 3
 
 /*
+ Direct simulation (Marcus–Lushnikov, Eibeck & Wagner 2000) over size counts: the
+ finite-N process itself, no particle doubling (the kernel needs a product majorant).
+ */
+#define COAG_METHOD_DSA_COUNTS 4
+
+/*
+ Eibeck & Wagner's event-driven mass flow algorithm (particles carry mass `M1 / N`).
+ */
+#define COAG_EVENTFLOW_MFA 0
+
+/*
+ Eibeck & Wagner's direct simulation over a list of particles (Marcus–Lushnikov).
+ */
+#define COAG_EVENTFLOW_DSA 1
+
+/*
+ The scheme's default weighted sampler (the faster in our measurements: groups for
+ the mass flow algorithm, the sum tree for direct simulation).
+ */
+#define COAG_SAMPLER_DEFAULT 0
+
+/*
+ A sum tree over the particles.
+ */
+#define COAG_SAMPLER_TREE 1
+
+/*
+ Eibeck & Wagner's group acceptance–rejection (one group per binade of the weight).
+ */
+#define COAG_SAMPLER_GROUPS 2
+
+/*
  Opaque fragmentation handle (`coag_fragmentation` in C).
  */
 typedef struct coag_fragmentation coag_fragmentation;
@@ -295,7 +327,9 @@ typedef struct {
    */
   uint64_t rejections;
   /*
-   Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
+   Proposals where the kernel exceeded its declared bound: always 0 except for the
+   event-driven schemes without `strict_bound` (elsewhere, and with it, a kernel
+   above its bound is an error, `COAG_INVALID_RATE`).
    */
   uint64_t bound_violations;
   /*
@@ -315,6 +349,57 @@ typedef struct {
    */
   uint64_t bounces;
 } coag_step_report;
+
+/*
+ Configuration of the event-driven schemes over particle sizes (Eibeck & Wagner
+ 2000): the mass flow algorithm and direct simulation. Fill it with
+ `coag_eventflow_default_config`, which sets `struct_size`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_eventflow_config)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   `COAG_EVENTFLOW_*`.
+   */
+  int32_t method;
+  /*
+   The mass M1 > 0 of the initial particles: the mass flow algorithm's particles
+   each carry `M1 / N` (the sizes are samples of the mass distribution); direct
+   simulation's are real particles in the volume `Σ sizes / M1` (the sizes are
+   samples of the number distribution).
+   */
+  double mass;
+  /*
+   Truncation `b_N` of the mass flow algorithm: particles larger than it leave
+   (the gel); 0 means none (infinite). Not used by direct simulation.
+   */
+  double truncation;
+  /*
+   Particle capacity of direct simulation (fragmentation adds particles); 0: the
+   initial number without fragmentation, four times it with.
+   */
+  uint64_t capacity;
+  /*
+   `COAG_SAMPLER_*`.
+   */
+  int32_t sampler;
+  /*
+   Non-zero: a kernel value above the product majorant `h(x) h(y)` is an error
+   (`COAG_INVALID_RATE`) instead of a counted violation (the step report's
+   `bound_violations`).
+   */
+  int32_t strict_bound;
+  /*
+   Seed of the sim's random stream.
+   */
+  uint64_t seed;
+  /*
+   Stream id.
+   */
+  uint64_t stream;
+} coag_eventflow_config;
 
 /*
  Configuration of the time-driven mass-flow scheme (Lécot et al. 2019). Fill it with
@@ -573,6 +658,58 @@ void coag_fragmentation_free(coag_fragmentation *frag);
 int32_t coag_step_report_init(coag_step_report *out, size_t size);
 
 /*
+ Writes the default event-driven configuration into a struct of `size` bytes
+ (`sizeof(coag_eventflow_config)`), with `struct_size` set: the mass flow
+ algorithm, mass 1, no truncation, automatic capacity, the default sampler, bound
+ violations counted, seed 0, stream 0.
+
+ # Safety
+ `out` must be NULL or valid for writing `size` bytes.
+ */
+int32_t coag_eventflow_default_config(coag_eventflow_config *out, size_t size);
+
+/*
+ An event-driven sim (Eibeck & Wagner 2000) over the `n` particle sizes `sizes`
+ (each finite and > 0): the mass flow algorithm or direct simulation, as
+ `config.method` says (see `coag_eventflow_config` for what the sizes mean). The
+ kernel needs a product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)` (every built-in
+ kernel has one; a user kernel declares it, else `COAG_UNSUPPORTED`). `frag` may be
+ NULL (pure coagulation); with it, break-ups are events at rate `Ḟ(x)` (no time
+ step).
+
+ # Safety
+ Pointers must be NULL or valid (`sizes` for `n` doubles).
+ */
+int32_t coag_eventflow_new(const coag_eventflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, coag_sim **out);
+
+/*
+ Bytes of caller-owned workspace an event-driven sim of `n` particles needs under
+ `config` and `frag` (NULL: none) — for `coag_eventflow_new_in` with the same
+ arguments: the particles and the sum trees (direct simulation: for its capacity).
+ The group sampler's index tables (`COAG_SAMPLER_GROUPS`, the mass flow algorithm's
+ default) are allocated by the library besides.
+
+ # Safety
+ Pointers must be NULL or valid; `out` writable.
+ */
+int32_t coag_eventflow_workspace_size(const coag_eventflow_config *config, const coag_fragmentation *frag, size_t n, size_t *out);
+
+/*
+ `coag_eventflow_new` in memory the caller owns: `workspace` (aligned for `double`,
+ `workspace_bytes` ≥ `coag_eventflow_workspace_size` for the same config, frag and
+ n) holds the particles and their sum trees for the sim's whole life; no step
+ allocates (the group sampler's index tables excepted: allocated here). The caller
+ keeps the buffer alive and untouched until `coag_sim_free`; the sim zeroes it
+ first, so after a refused construction its contents are lost. `sizes` must not
+ overlap it. A clone (`coag_sim_clone`) lives in memory the library owns.
+
+ # Safety
+ Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
+ used by nothing else until the sim is freed.
+ */
+int32_t coag_eventflow_new_in(const coag_eventflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, void *workspace, size_t workspace_bytes, coag_sim **out);
+
+/*
  Writes the default mass-flow configuration into a struct of `size` bytes
  (`sizeof(coag_massflow_config)`), with `struct_size` set: Δt = 0.01, mass 1,
  Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
@@ -795,8 +932,9 @@ int32_t coag_sim_get_pairs(const coag_sim *sim, uint64_t *sizes, uint64_t *count
 int32_t coag_sim_set_pairs(coag_sim *sim, const uint64_t *sizes, const uint64_t *counts, size_t len, double volume);
 
 /*
- Copies the particle sizes of a mass-flow sim (sorted ascending) into `buf`, which
- must hold `coag_sim_state_len` values.
+ Copies the particle sizes of a sim over particle sizes into `buf`, which must hold
+ `coag_sim_state_len` values: sorted ascending for the time-driven mass-flow
+ scheme, in storage order for the event-driven ones.
 
  # Safety
  `sim` NULL or live; `buf` valid for `len` doubles.
@@ -804,8 +942,11 @@ int32_t coag_sim_set_pairs(coag_sim *sim, const uint64_t *sizes, const uint64_t 
 int32_t coag_sim_get_sizes(const coag_sim *sim, double *buf, size_t len);
 
 /*
- Replaces the particle sizes of a mass-flow sim (same number, each finite and > 0):
- a host applying growth or nucleation between steps.
+ Replaces the particle sizes of a sim over particle sizes (each finite and > 0): a
+ host applying growth or nucleation between steps. The time-driven mass-flow scheme
+ takes the same number of sizes; the mass flow algorithm at most its initial number
+ N (the rest count as gone to the gel), each at most its truncation `b_N`; direct
+ simulation at most its capacity (its volume stays).
 
  # Safety
  `sim` NULL or live; `sizes` valid for `len` doubles.
@@ -842,7 +983,10 @@ int32_t coag_sim_set_counts(coag_sim *sim, const uint64_t *counts, size_t len, d
 int32_t coag_sim_set_kernel(coag_sim *sim, const coag_kernel *kernel);
 
 /*
- Replaces the fragmentation kernel of a mass-flow sim (NULL: none).
+ Replaces the fragmentation kernel of a mass-flow or event-driven sim (NULL: none).
+ Direct simulation's capacity stays what it was made with: one made without
+ fragmentation and an automatic capacity holds only its initial number of particles
+ (`COAG_CAPACITY` when break-ups pass it; set `capacity` to make room).
 
  # Safety
  `sim` NULL or live; `frag` NULL or live.
@@ -869,8 +1013,10 @@ int32_t coag_sim_set_time(coag_sim *sim, double t);
 /*
  Changes the total mass M1 a mass-flow sim's particles carry (finite, > 0): a host
  adding mass (condensation, a feed) or removing it between steps; each particle
- then carries `M1 / N`. `COAG_UNSUPPORTED` for a size-count sim (its mass is its
- counts: use `coag_sim_set_counts` or `coag_sim_set_pairs`).
+ then carries `M1 / N` (the mass flow algorithm: likewise). `COAG_UNSUPPORTED` for a
+ size-count sim (its mass is its counts: use `coag_sim_set_counts` or
+ `coag_sim_set_pairs`) and for direct simulation (its mass is its sizes over its
+ volume: use `coag_sim_set_sizes`).
 
  # Safety
  `sim` NULL or live.
@@ -899,6 +1045,16 @@ int32_t coag_sim_massflow_config(const coag_sim *sim, coag_massflow_config *out,
  `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
  */
 int32_t coag_sim_counts_config(const coag_sim *sim, coag_counts_config *out, size_t size);
+
+/*
+ The configuration of an event-driven sim over particle sizes as it stands (the
+ mass as `coag_sim_set_mass` left it) into a struct of `size` bytes
+ (`sizeof(coag_eventflow_config)`); `COAG_UNSUPPORTED` for other sims.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ */
+int32_t coag_sim_eventflow_config(const coag_sim *sim, coag_eventflow_config *out, size_t size);
 
 /*
  Makes the sim draw its random numbers from `next(user_data)` (64 random bits per

@@ -163,6 +163,19 @@ inline coag_counts_config counts_default_config() {
     return c;
 }
 
+/// Bytes of workspace an event-driven sim of n particles needs (Sim::eventflow_in).
+inline std::size_t eventflow_workspace_size(const coag_eventflow_config &c, const Fragmentation *f, std::size_t n) {
+    size_t b;
+    check(coag_eventflow_workspace_size(&c, f ? f->get() : nullptr, n, &b));
+    return b;
+}
+
+inline coag_eventflow_config eventflow_default_config() {
+    coag_eventflow_config c;
+    check(coag_eventflow_default_config(&c, sizeof c));
+    return c;
+}
+
 /// A simulation: any scheme, stepped with advance_to.
 class Sim {
   public:
@@ -180,6 +193,23 @@ class Sim {
         coag_sim *s = nullptr;
         check(coag_massflow_new_in(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), workspace,
                                    bytes, &s));
+        return Sim(s);
+    }
+    /// An event-driven scheme of Eibeck & Wagner (c.method: COAG_EVENTFLOW_MFA or
+    /// COAG_EVENTFLOW_DSA) over the particle sizes `sizes`; `f` may be null.
+    static Sim eventflow(const coag_eventflow_config &c, const Kernel &k, const Fragmentation *f,
+                         const std::vector<double> &sizes) {
+        coag_sim *s = nullptr;
+        check(coag_eventflow_new(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), &s));
+        return Sim(s);
+    }
+    /// The event-driven scheme in caller-owned memory (`bytes` ≥ eventflow_workspace_size,
+    /// aligned for double), which must outlive the Sim.
+    static Sim eventflow_in(const coag_eventflow_config &c, const Kernel &k, const Fragmentation *f,
+                            const std::vector<double> &sizes, void *workspace, std::size_t bytes) {
+        coag_sim *s = nullptr;
+        check(coag_eventflow_new_in(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), workspace,
+                                    bytes, &s));
         return Sim(s);
     }
     /// A size-count scheme: counts[i] particles of size i + 1.
@@ -236,6 +266,11 @@ class Sim {
     coag_massflow_config massflow_config() const {
         coag_massflow_config c;
         check(coag_sim_massflow_config(s_.get(), &c, sizeof c));
+        return c;
+    }
+    coag_eventflow_config eventflow_config() const {
+        coag_eventflow_config c;
+        check(coag_sim_eventflow_config(s_.get(), &c, sizeof c));
         return c;
     }
     coag_counts_config counts_config() const {

@@ -8,6 +8,7 @@ use crate::{
     non_null, read_config, slice, slice_mut, write,
 };
 use coagula_core::checkpoint::{Reader, Writer};
+use coagula_core::kernel::CoagulationKernel;
 use coagula_core::qmc::Randomization;
 use coagula_core::random::{Purpose, generator, substream};
 use coagula_core::scheme::massflow::{PointSource, Sorting};
@@ -39,14 +40,37 @@ pub const COAG_METHOD_INVERSE: i32 = 1;
 pub const COAG_METHOD_REJECTION: i32 = 2;
 /// Osinsky's low-rank Monte Carlo with the paper's per-size segment trees.
 pub const COAG_METHOD_LOWRANK_TREE: i32 = 3;
+/// Direct simulation (Marcus–Lushnikov, Eibeck & Wagner 2000) over size counts: the
+/// finite-N process itself, no particle doubling (the kernel needs a product majorant).
+pub const COAG_METHOD_DSA_COUNTS: i32 = 4;
 
 /// The `COAG_METHOD_*` codes and the registry's schemes they name.
-const METHODS: [(i32, SchemeId); 4] = [
+const METHODS: [(i32, SchemeId); 5] = [
     (COAG_METHOD_LOWRANK, SchemeId::LowRank),
     (COAG_METHOD_INVERSE, SchemeId::Inverse),
     (COAG_METHOD_REJECTION, SchemeId::Rejection),
     (COAG_METHOD_LOWRANK_TREE, SchemeId::LowRankTree),
+    (COAG_METHOD_DSA_COUNTS, SchemeId::DsaCounts),
 ];
+
+/// Eibeck & Wagner's event-driven mass flow algorithm (particles carry mass `M1 / N`).
+pub const COAG_EVENTFLOW_MFA: i32 = 0;
+/// Eibeck & Wagner's direct simulation over a list of particles (Marcus–Lushnikov).
+pub const COAG_EVENTFLOW_DSA: i32 = 1;
+
+/// The `COAG_EVENTFLOW_*` codes and the registry's schemes they name.
+const EVENTFLOW: [(i32, SchemeId); 2] = [
+    (COAG_EVENTFLOW_MFA, SchemeId::Mfa),
+    (COAG_EVENTFLOW_DSA, SchemeId::Dsa),
+];
+
+/// The scheme's default weighted sampler (the faster in our measurements: groups for
+/// the mass flow algorithm, the sum tree for direct simulation).
+pub const COAG_SAMPLER_DEFAULT: i32 = 0;
+/// A sum tree over the particles.
+pub const COAG_SAMPLER_TREE: i32 = 1;
+/// Eibeck & Wagner's group acceptance–rejection (one group per binade of the weight).
+pub const COAG_SAMPLER_GROUPS: i32 = 2;
 
 /// Configuration of the time-driven mass-flow scheme (Lécot et al. 2019). Fill it with
 /// `coag_massflow_default_config`, which sets `struct_size`.
@@ -102,6 +126,39 @@ pub struct coag_counts_config {
     pub batched_clock: i32,
 }
 
+/// Configuration of the event-driven schemes over particle sizes (Eibeck & Wagner
+/// 2000): the mass flow algorithm and direct simulation. Fill it with
+/// `coag_eventflow_default_config`, which sets `struct_size`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct coag_eventflow_config {
+    /// `sizeof(coag_eventflow_config)` as the caller compiled it.
+    pub struct_size: usize,
+    /// `COAG_EVENTFLOW_*`.
+    pub method: i32,
+    /// The mass M1 > 0 of the initial particles: the mass flow algorithm's particles
+    /// each carry `M1 / N` (the sizes are samples of the mass distribution); direct
+    /// simulation's are real particles in the volume `Σ sizes / M1` (the sizes are
+    /// samples of the number distribution).
+    pub mass: f64,
+    /// Truncation `b_N` of the mass flow algorithm: particles larger than it leave
+    /// (the gel); 0 means none (infinite). Not used by direct simulation.
+    pub truncation: f64,
+    /// Particle capacity of direct simulation (fragmentation adds particles); 0: the
+    /// initial number without fragmentation, four times it with.
+    pub capacity: u64,
+    /// `COAG_SAMPLER_*`.
+    pub sampler: i32,
+    /// Non-zero: a kernel value above the product majorant `h(x) h(y)` is an error
+    /// (`COAG_INVALID_RATE`) instead of a counted violation (the step report's
+    /// `bound_violations`).
+    pub strict_bound: i32,
+    /// Seed of the sim's random stream.
+    pub seed: u64,
+    /// Stream id.
+    pub stream: u64,
+}
+
 /// What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
 /// `coag_step_report_init`) before passing it; the library writes the fields that fit.
 #[repr(C)]
@@ -117,7 +174,9 @@ pub struct coag_step_report {
     pub proposals: u64,
     /// Proposals rejected by thinning.
     pub rejections: u64,
-    /// Always 0: a kernel above its declared bound is an error (`COAG_INVALID_RATE`).
+    /// Proposals where the kernel exceeded its declared bound: always 0 except for the
+    /// event-driven schemes without `strict_bound` (elsewhere, and with it, a kernel
+    /// above its bound is an error, `COAG_INVALID_RATE`).
     pub bound_violations: u64,
     /// Probabilities above 1 that were clipped (time-driven scheme).
     pub clipped: u64,
@@ -132,6 +191,7 @@ pub struct coag_step_report {
 /// Bytes of the first version of each config (the smallest `struct_size` accepted).
 const MASSFLOW_CONFIG_V1: usize = std::mem::size_of::<coag_massflow_config>();
 const COUNTS_CONFIG_V1: usize = std::mem::offset_of!(coag_counts_config, batched_clock);
+const EVENTFLOW_CONFIG_V1: usize = std::mem::size_of::<coag_eventflow_config>();
 const STEP_REPORT_V1: usize = std::mem::size_of::<coag_step_report>();
 
 fn report_of(r: StepReport) -> coag_step_report {
@@ -190,6 +250,7 @@ pub type coag_cancel_callback = Option<unsafe extern "C" fn(user_data: *mut c_vo
 enum Config {
     MassFlow(coag_massflow_config),
     Counts(coag_counts_config),
+    EventFlow(coag_eventflow_config),
 }
 
 /// Opaque simulation handle (`coag_sim` in C).
@@ -208,6 +269,9 @@ pub struct coag_sim {
     /// Work units per `coag_sim_advance_to` (0: no limit) and the cancellation poll.
     work_limit: u64,
     cancel: Option<(unsafe extern "C" fn(*mut c_void) -> i32, *mut c_void)>,
+    /// The initial number of particles of a mass flow algorithm sim (its checkpoints
+    /// are for that number: a clone is built with it); 0 for other sims.
+    n0: usize,
 }
 
 /// # Safety
@@ -222,6 +286,7 @@ unsafe fn new_sim(
     let (seed, stream) = match config {
         Config::MassFlow(c) => (c.seed, c.stream),
         Config::Counts(c) => (c.seed, c.stream),
+        Config::EventFlow(c) => (c.seed, c.stream),
     };
     let sim = coag_sim {
         sim,
@@ -233,6 +298,7 @@ unsafe fn new_sim(
         frag,
         work_limit: 0,
         cancel: None,
+        n0: 0,
     };
     // SAFETY: the function's contract.
     unsafe { write(out, Box::into_raw(Box::new(sim))) };
@@ -335,6 +401,344 @@ fn default_counts() -> coag_counts_config {
         seed: 0,
         stream: 0,
         batched_clock: 0,
+    }
+}
+
+fn default_eventflow() -> coag_eventflow_config {
+    coag_eventflow_config {
+        struct_size: EVENTFLOW_CONFIG_V1,
+        method: COAG_EVENTFLOW_MFA,
+        mass: 1.0,
+        truncation: 0.0,
+        capacity: 0,
+        sampler: COAG_SAMPLER_DEFAULT,
+        strict_bound: 0,
+        seed: 0,
+        stream: 0,
+    }
+}
+
+/// Writes the default event-driven configuration into a struct of `size` bytes
+/// (`sizeof(coag_eventflow_config)`), with `struct_size` set: the mass flow
+/// algorithm, mass 1, no truncation, automatic capacity, the default sampler, bound
+/// violations counted, seed 0, stream 0.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing `size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_eventflow_default_config(
+    out: *mut coag_eventflow_config,
+    size: usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        unsafe {
+            write_sized(
+                out,
+                size,
+                EVENTFLOW_CONFIG_V1,
+                default_eventflow(),
+                "eventflow config",
+            )
+        }
+    })
+}
+
+/// The registry options of an event-driven config (checked).
+fn eventflow_options(c: &coag_eventflow_config) -> Result<Options, Fail> {
+    let mut o = Options::default().with_strict_bound(c.strict_bound != 0);
+    match c.sampler {
+        COAG_SAMPLER_DEFAULT => {}
+        COAG_SAMPLER_TREE => o = o.with_sampler(coagula_core::scheme::eventflow::Sampler::SumTree),
+        COAG_SAMPLER_GROUPS => o = o.with_sampler(coagula_core::scheme::eventflow::Sampler::Groups),
+        x => return fail(COAG_INVALID_ARGUMENT, format!("unknown sampler {x}")),
+    }
+    if c.truncation != 0.0 {
+        if c.truncation.is_nan() || c.truncation < 0.0 {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!(
+                    "truncation {} (b_N > 0, or 0 for none)",
+                    coagula_core::error::Short(c.truncation)
+                ),
+            );
+        }
+        o = o.with_truncation(c.truncation);
+    }
+    let Ok(cap) = usize::try_from(c.capacity) else {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!("capacity {} does not fit this machine", c.capacity),
+        );
+    };
+    Ok(o.with_capacity(cap))
+}
+
+/// An event-driven sim (Eibeck & Wagner 2000) over the `n` particle sizes `sizes`
+/// (each finite and > 0): the mass flow algorithm or direct simulation, as
+/// `config.method` says (see `coag_eventflow_config` for what the sizes mean). The
+/// kernel needs a product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)` (every built-in
+/// kernel has one; a user kernel declares it, else `COAG_UNSUPPORTED`). `frag` may be
+/// NULL (pure coagulation); with it, break-ups are events at rate `Ḟ(x)` (no time
+/// step).
+///
+/// # Safety
+/// Pointers must be NULL or valid (`sizes` for `n` doubles).
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_eventflow_new(
+    config: *const coag_eventflow_config,
+    kernel: *const coag_kernel,
+    frag: *const coag_fragmentation,
+    sizes: *const f64,
+    n: usize,
+    out: *mut *mut coag_sim,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL is checked; otherwise valid by the caller's contract.
+        let (c, id, k, f, x) = unsafe { eventflow_inputs(config, kernel, frag, sizes, n) }?;
+        non_null(out, "out")?;
+        let c = resolve_eventflow(c, id, n, &f)?;
+        let opts = eventflow_options(&c)?;
+        let init = Init::Sizes {
+            sizes: x,
+            mass: c.mass,
+        };
+        let sim = registry::build(id, k, f, &init, &opts)?;
+        // SAFETY: `out` checked non-null; writable (contract).
+        unsafe { new_sim(sim, Config::EventFlow(c), k, f, out) }.map(|()| {
+            // SAFETY: just written, a live handle.
+            unsafe { (**out).n0 = if id == SchemeId::Mfa { n } else { 0 } };
+        })
+    })
+}
+
+/// The inputs of an event-driven constructor: the config (method known), the kernel,
+/// the fragmentation kernel (NULL: none) and the sizes.
+///
+/// # Safety
+/// Each pointer NULL or valid (`sizes` for `n` doubles), as the constructors document.
+unsafe fn eventflow_inputs<'a>(
+    config: *const coag_eventflow_config,
+    kernel: *const coag_kernel,
+    frag: *const coag_fragmentation,
+    sizes: *const f64,
+    n: usize,
+) -> Result<
+    (
+        coag_eventflow_config,
+        SchemeId,
+        Kernel,
+        Fragmentation,
+        &'a [f64],
+    ),
+    Fail,
+> {
+    // SAFETY (all four): NULL is checked; otherwise valid by the caller's contract.
+    let c = unsafe { read_config(config, "config", EVENTFLOW_CONFIG_V1, default_eventflow()) }?;
+    let k = unsafe { handle(kernel, "kernel") }?.k;
+    let f = if frag.is_null() {
+        Fragmentation::None
+    } else {
+        unsafe { handle(frag, "frag") }?.f
+    };
+    let x = unsafe { slice(sizes, n, "sizes") }?;
+    let Some(&(_, id)) = EVENTFLOW.iter().find(|(m, _)| *m == c.method) else {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!("unknown eventflow method {}", c.method),
+        );
+    };
+    Ok((c, id, k, f, x))
+}
+
+/// Bytes of caller-owned workspace an event-driven sim of `n` particles needs under
+/// `config` and `frag` (NULL: none) — for `coag_eventflow_new_in` with the same
+/// arguments: the particles and the sum trees (direct simulation: for its capacity).
+/// The group sampler's index tables (`COAG_SAMPLER_GROUPS`, the mass flow algorithm's
+/// default) are allocated by the library besides.
+///
+/// # Safety
+/// Pointers must be NULL or valid; `out` writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_eventflow_workspace_size(
+    config: *const coag_eventflow_config,
+    frag: *const coag_fragmentation,
+    n: usize,
+    out: *mut usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL is checked; otherwise valid by the caller's contract.
+        let c = unsafe { read_config(config, "config", EVENTFLOW_CONFIG_V1, default_eventflow()) }?;
+        let f = if frag.is_null() {
+            Fragmentation::None
+        } else {
+            unsafe { handle(frag, "frag") }?.f
+        };
+        non_null(out, "out")?;
+        let Some(&(_, id)) = EVENTFLOW.iter().find(|(m, _)| *m == c.method) else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("unknown eventflow method {}", c.method),
+            );
+        };
+        let bytes = eventflow_workspace(&c, id, n, &f)?.1;
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, bytes) };
+        Ok(())
+    })
+}
+
+/// The resolved configuration and the workspace bytes of an event-driven sim.
+fn eventflow_workspace(
+    c: &coag_eventflow_config,
+    id: SchemeId,
+    n: usize,
+    f: &Fragmentation,
+) -> Result<(coag_eventflow_config, usize), Fail> {
+    let c = resolve_eventflow(*c, id, n, f)?;
+    // (what the constructor would refuse, the query refuses)
+    eventflow_options(&c)?;
+    // (the registry's rule: N particles, or direct simulation's capacity, resolved)
+    let particles = match id {
+        SchemeId::Mfa => n,
+        _ => usize::try_from(c.capacity).unwrap_or(usize::MAX),
+    };
+    let len = coagula_core::scheme::eventflow::workspace_len(particles);
+    Ok((c, workspace_bytes_for(len, n)?))
+}
+
+/// `coag_eventflow_new` in memory the caller owns: `workspace` (aligned for `double`,
+/// `workspace_bytes` ≥ `coag_eventflow_workspace_size` for the same config, frag and
+/// n) holds the particles and their sum trees for the sim's whole life; no step
+/// allocates (the group sampler's index tables excepted: allocated here). The caller
+/// keeps the buffer alive and untouched until `coag_sim_free`; the sim zeroes it
+/// first, so after a refused construction its contents are lost. `sizes` must not
+/// overlap it. A clone (`coag_sim_clone`) lives in memory the library owns.
+///
+/// # Safety
+/// Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
+/// used by nothing else until the sim is freed.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_eventflow_new_in(
+    config: *const coag_eventflow_config,
+    kernel: *const coag_kernel,
+    frag: *const coag_fragmentation,
+    sizes: *const f64,
+    n: usize,
+    workspace: *mut c_void,
+    workspace_bytes: usize,
+    out: *mut *mut coag_sim,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL is checked; otherwise valid by the caller's contract.
+        let (c, id, k, f, x) = unsafe { eventflow_inputs(config, kernel, frag, sizes, n) }?;
+        non_null(out, "out")?;
+        let (c, need) = eventflow_workspace(&c, id, n, &f)?;
+        check_workspace(workspace, workspace_bytes, need, x)?;
+        // what can be refused without the kernel, before the caller's memory is zeroed
+        if x.is_empty() || x.iter().any(|&v| !(v > 0.0 && v.is_finite())) {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "sizes: at least one, each finite and > 0",
+            );
+        }
+        if c.truncation > 0.0 && x.iter().any(|&v| v > c.truncation) {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "truncation b_N below the largest initial size",
+            );
+        }
+        if id == SchemeId::Dsa && (n as u64) > c.capacity {
+            return fail(
+                crate::COAG_CAPACITY,
+                format!("capacity {} below the {n} initial particles", c.capacity),
+            );
+        }
+        let opts = eventflow_options(&c)?;
+        let init = Init::Sizes {
+            sizes: x,
+            mass: c.mass,
+        };
+        // SAFETY: checked by check_workspace; valid and exclusively the sim's until
+        // coag_sim_free (contract)
+        let ws = unsafe { zeroed_workspace(workspace, need) };
+        let sim = registry::build_in(id, k, f, &init, &opts, ws)?;
+        // SAFETY: `out` checked non-null; writable (contract).
+        unsafe { new_sim(sim, Config::EventFlow(c), k, f, out) }.map(|()| {
+            // SAFETY: just written, a live handle.
+            unsafe { (**out).n0 = if id == SchemeId::Mfa { n } else { 0 } };
+        })
+    })
+}
+
+/// An event-driven configuration as it runs, each setting in one canonical form, so
+/// that a checkpoint's configuration record matches exactly the sims that run the same
+/// way: the default sampler named (groups for the mass flow algorithm, the sum tree
+/// for direct simulation), no truncation as 0, direct simulation's automatic capacity
+/// resolved (the registry's rule: the initial number, four times it with
+/// fragmentation), `strict_bound` 0 or 1. Refused: a truncation for direct simulation
+/// or a capacity for the mass flow algorithm (settings they do not have), and a
+/// capacity whose workspace exceeds the machine's memory budget.
+fn resolve_eventflow(
+    c: coag_eventflow_config,
+    id: SchemeId,
+    n: usize,
+    f: &Fragmentation,
+) -> Result<coag_eventflow_config, Fail> {
+    let mut c = c;
+    c.strict_bound = i32::from(c.strict_bound != 0);
+    if c.truncation == f64::INFINITY || c.truncation == 0.0 {
+        c.truncation = 0.0; // (also −0.0)
+    }
+    let mfa = id == SchemeId::Mfa;
+    c.sampler = match (c.sampler, mfa) {
+        (COAG_SAMPLER_DEFAULT, true) => COAG_SAMPLER_GROUPS,
+        (COAG_SAMPLER_DEFAULT, false) => COAG_SAMPLER_TREE,
+        (x, _) => x,
+    };
+    if mfa {
+        if c.capacity != 0 {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "capacity: the mass flow algorithm keeps its initial number of particles (capacity is for direct simulation; leave it 0)",
+            );
+        }
+        within_machine_budget(n)?;
+        return Ok(c);
+    }
+    if c.truncation != 0.0 {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            "truncation: direct simulation keeps every particle (b_N is for the mass flow algorithm; leave it 0)",
+        );
+    }
+    if c.capacity == 0 {
+        let auto = if matches!(f, Fragmentation::None) {
+            n.max(1)
+        } else {
+            n.saturating_mul(4).max(1)
+        };
+        c.capacity = auto as u64;
+    }
+    within_machine_budget(usize::try_from(c.capacity).unwrap_or(usize::MAX))?;
+    Ok(c)
+}
+
+/// Refuses an event-driven workspace for `particles` (sizes and trees) past the memory
+/// budget the size-count schemes grow within (half the machine's memory).
+fn within_machine_budget(particles: usize) -> Result<(), Fail> {
+    let budget = coagula_core::scheme::population::machine_memory_budget();
+    match coagula_core::scheme::eventflow::workspace_len(particles)
+        .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
+    {
+        Some(b) if b <= budget => Ok(()),
+        b => fail(
+            crate::COAG_CAPACITY,
+            format!(
+                "{particles} particles: {} bytes of workspace, past the memory budget of {budget} bytes",
+                b.map_or("more than 2^64".to_string(), |b| b.to_string())
+            ),
+        ),
     }
 }
 
@@ -508,6 +912,63 @@ pub unsafe extern "C" fn coag_massflow_workspace_size(n: usize, out: *mut usize)
     })
 }
 
+/// Bytes of a workspace of `len` doubles (`None`: it overflows), refused past
+/// `isize::MAX`.
+fn workspace_bytes_for(len: Option<usize>, n: usize) -> Result<usize, Fail> {
+    match len
+        .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
+        .filter(|&b| b <= isize::MAX as usize)
+    {
+        Some(b) => Ok(b),
+        None => fail(
+            COAG_INVALID_ARGUMENT,
+            format!("workspace for {n} particles overflows"),
+        ),
+    }
+}
+
+/// Checks a caller workspace for `need` bytes: non-null, aligned for `double`, large
+/// enough, not overlapping `sizes`.
+fn check_workspace(
+    workspace: *mut c_void,
+    bytes: usize,
+    need: usize,
+    sizes: &[f64],
+) -> Result<(), Fail> {
+    non_null(workspace, "workspace")?;
+    if !(workspace as usize).is_multiple_of(std::mem::align_of::<f64>()) {
+        return fail(COAG_INVALID_ARGUMENT, "workspace is not aligned for double");
+    }
+    if bytes < need {
+        return fail(
+            crate::COAG_BUFFER_TOO_SMALL,
+            format!(
+                "workspace: {bytes} bytes for {} particles, {need} needed",
+                sizes.len()
+            ),
+        );
+    }
+    let (w0, s0) = (workspace as usize, sizes.as_ptr() as usize);
+    if !sizes.is_empty() && w0 < s0.saturating_add(8 * sizes.len()) && s0 < w0.saturating_add(need)
+    {
+        return fail(COAG_INVALID_ARGUMENT, "sizes overlap the workspace");
+    }
+    Ok(())
+}
+
+/// The caller's workspace as a slice of doubles, zeroed (so that it is initialised).
+///
+/// # Safety
+/// `workspace` passed [`check_workspace`] for `need` bytes, and is valid and used by
+/// nothing else for the life of the sim built on it.
+unsafe fn zeroed_workspace(workspace: *mut c_void, need: usize) -> &'static mut [f64] {
+    // SAFETY: the function's contract.
+    unsafe {
+        std::ptr::write_bytes(workspace.cast::<u8>(), 0, need);
+        std::slice::from_raw_parts_mut(workspace.cast::<f64>(), need / 8)
+    }
+}
+
 /// `coag_massflow_new` in memory the caller owns: `workspace` (aligned for `double`,
 /// `workspace_bytes` ≥ `coag_massflow_workspace_size(n)`) holds the particles, the
 /// points and the scratch for the sim's whole life; no step allocates. The caller keeps
@@ -532,29 +993,8 @@ pub unsafe extern "C" fn coag_massflow_new_in(
         // SAFETY: NULL is checked; otherwise valid by the caller's contract.
         let (c, k, f, x) = unsafe { massflow_inputs(config, kernel, frag, sizes, n) }?;
         non_null(out, "out")?;
-        non_null(workspace, "workspace")?;
-        if !(workspace as usize).is_multiple_of(std::mem::align_of::<f64>()) {
-            return fail(COAG_INVALID_ARGUMENT, "workspace is not aligned for double");
-        }
-        let Some(need) = coagula_core::scheme::massflow::workspace_len(n)
-            .and_then(|l| l.checked_mul(std::mem::size_of::<f64>()))
-            .filter(|&b| b <= isize::MAX as usize)
-        else {
-            return fail(
-                COAG_INVALID_ARGUMENT,
-                format!("workspace for {n} particles overflows"),
-            );
-        };
-        if workspace_bytes < need {
-            return fail(
-                crate::COAG_BUFFER_TOO_SMALL,
-                format!("workspace: {workspace_bytes} bytes for {n} particles, {need} needed"),
-            );
-        }
-        let (w0, s0) = (workspace as usize, sizes as usize);
-        if !x.is_empty() && w0 < s0.saturating_add(8 * n) && s0 < w0.saturating_add(need) {
-            return fail(COAG_INVALID_ARGUMENT, "sizes overlap the workspace");
-        }
+        let need = workspace_bytes_for(coagula_core::scheme::massflow::workspace_len(n), n)?;
+        check_workspace(workspace, workspace_bytes, need, x)?;
         // everything the construction can refuse, before the caller's memory is zeroed
         coagula_core::scheme::massflow::check_setup(x, c.mass, c.dt)?;
         let opts = massflow_options(&c)?;
@@ -562,12 +1002,9 @@ pub unsafe extern "C" fn coag_massflow_new_in(
             sizes: x,
             mass: c.mass,
         };
-        // SAFETY: non-null, aligned, `need` bytes valid and exclusively the sim's until
-        // coag_sim_free (contract); zeroed first so the slice is initialised.
-        let ws: &'static mut [f64] = unsafe {
-            std::ptr::write_bytes(workspace.cast::<u8>(), 0, need);
-            std::slice::from_raw_parts_mut(workspace.cast::<f64>(), need / 8)
-        };
+        // SAFETY: checked by check_workspace; valid and exclusively the sim's until
+        // coag_sim_free (contract)
+        let ws = unsafe { zeroed_workspace(workspace, need) };
         let sim = registry::build_in(SchemeId::MassFlow, k, f, &init, &opts, ws)?;
         // SAFETY: `out` checked non-null; writable (contract).
         unsafe { new_sim(sim, Config::MassFlow(c), k, f, out) }
@@ -655,7 +1092,7 @@ pub unsafe extern "C" fn coag_sim_method(sim: *const coag_sim, out: *mut i32) ->
         let Some(&(m, _)) = METHODS.iter().find(|(_, i)| *i == id) else {
             return fail(
                 COAG_UNSUPPORTED,
-                "method: a mass-flow sim has no COAG_METHOD",
+                "method: a sim over particle sizes (mass flow, mfa, dsa) has no COAG_METHOD (an event-driven sim's is in coag_sim_eventflow_config)",
             );
         };
         // SAFETY: checked non-null; writable (contract).
@@ -1124,8 +1561,9 @@ pub unsafe extern "C" fn coag_sim_set_pairs(
     })
 }
 
-/// Copies the particle sizes of a mass-flow sim (sorted ascending) into `buf`, which
-/// must hold `coag_sim_state_len` values.
+/// Copies the particle sizes of a sim over particle sizes into `buf`, which must hold
+/// `coag_sim_state_len` values: sorted ascending for the time-driven mass-flow
+/// scheme, in storage order for the event-driven ones.
 ///
 /// # Safety
 /// `sim` NULL or live; `buf` valid for `len` doubles.
@@ -1163,8 +1601,11 @@ pub unsafe extern "C" fn coag_sim_get_sizes(
     })
 }
 
-/// Replaces the particle sizes of a mass-flow sim (same number, each finite and > 0):
-/// a host applying growth or nucleation between steps.
+/// Replaces the particle sizes of a sim over particle sizes (each finite and > 0): a
+/// host applying growth or nucleation between steps. The time-driven mass-flow scheme
+/// takes the same number of sizes; the mass flow algorithm at most its initial number
+/// N (the rest count as gone to the gel), each at most its truncation `b_N`; direct
+/// simulation at most its capacity (its volume stays).
 ///
 /// # Safety
 /// `sim` NULL or live; `sizes` valid for `len` doubles.
@@ -1272,7 +1713,10 @@ pub unsafe extern "C" fn coag_sim_set_kernel(
     })
 }
 
-/// Replaces the fragmentation kernel of a mass-flow sim (NULL: none).
+/// Replaces the fragmentation kernel of a mass-flow or event-driven sim (NULL: none).
+/// Direct simulation's capacity stays what it was made with: one made without
+/// fragmentation and an automatic capacity holds only its initial number of particles
+/// (`COAG_CAPACITY` when break-ups pass it; set `capacity` to make room).
 ///
 /// # Safety
 /// `sim` NULL or live; `frag` NULL or live.
@@ -1329,8 +1773,10 @@ pub unsafe extern "C" fn coag_sim_set_time(sim: *mut coag_sim, t: f64) -> i32 {
 
 /// Changes the total mass M1 a mass-flow sim's particles carry (finite, > 0): a host
 /// adding mass (condensation, a feed) or removing it between steps; each particle
-/// then carries `M1 / N`. `COAG_UNSUPPORTED` for a size-count sim (its mass is its
-/// counts: use `coag_sim_set_counts` or `coag_sim_set_pairs`).
+/// then carries `M1 / N` (the mass flow algorithm: likewise). `COAG_UNSUPPORTED` for a
+/// size-count sim (its mass is its counts: use `coag_sim_set_counts` or
+/// `coag_sim_set_pairs`) and for direct simulation (its mass is its sizes over its
+/// volume: use `coag_sim_set_sizes`).
 ///
 /// # Safety
 /// `sim` NULL or live.
@@ -1340,8 +1786,10 @@ pub unsafe extern "C" fn coag_sim_set_mass(sim: *mut coag_sim, mass: f64) -> i32
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle_mut(sim, "sim") }?;
         s.sim.set_mass(mass)?;
-        if let Config::MassFlow(c) = &mut s.config {
-            c.mass = mass;
+        match &mut s.config {
+            Config::MassFlow(c) => c.mass = mass,
+            Config::EventFlow(c) => c.mass = mass,
+            Config::Counts(_) => {}
         }
         Ok(())
     })
@@ -1360,18 +1808,21 @@ pub unsafe extern "C" fn coag_sim_massflow_config(
     out: *mut coag_massflow_config,
     size: usize,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: NULL checked; live by contract.
-        let s = unsafe { handle(sim, "sim") }?;
-        let Config::MassFlow(c) = s.config else {
-            return fail(
-                COAG_UNSUPPORTED,
-                "config: a size-count sim (use coag_sim_counts_config)",
-            );
-        };
-        // SAFETY: forwarded contract.
-        unsafe { write_sized(out, size, MASSFLOW_CONFIG_V1, c, "massflow config") }
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        config_out(
+            sim,
+            out,
+            size,
+            MASSFLOW_CONFIG_V1,
+            "massflow config",
+            |c| match c {
+                Config::MassFlow(c) => Some(*c),
+                _ => None,
+            },
+            "config: not a mass-flow sim (use coag_sim_counts_config or coag_sim_eventflow_config)",
+        )
+    }
 }
 
 /// The configuration of a size-count sim as it stands (the volume and size limit
@@ -1388,18 +1839,50 @@ pub unsafe extern "C" fn coag_sim_counts_config(
     out: *mut coag_counts_config,
     size: usize,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: NULL checked; live by contract.
-        let s = unsafe { handle(sim, "sim") }?;
-        let Config::Counts(c) = s.config else {
-            return fail(
-                COAG_UNSUPPORTED,
-                "config: a mass-flow sim (use coag_sim_massflow_config)",
-            );
-        };
-        // SAFETY: forwarded contract.
-        unsafe { write_sized(out, size, COUNTS_CONFIG_V1, c, "counts config") }
-    })
+    // SAFETY: forwarded contract.
+    unsafe {
+        config_out(
+            sim,
+            out,
+            size,
+            COUNTS_CONFIG_V1,
+            "counts config",
+            |c| match c {
+                Config::Counts(c) => Some(*c),
+                _ => None,
+            },
+            "config: not a size-count sim (use coag_sim_massflow_config or coag_sim_eventflow_config)",
+        )
+    }
+}
+
+/// The configuration of an event-driven sim over particle sizes as it stands (the
+/// mass as `coag_sim_set_mass` left it) into a struct of `size` bytes
+/// (`sizeof(coag_eventflow_config)`); `COAG_UNSUPPORTED` for other sims.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_eventflow_config(
+    sim: *const coag_sim,
+    out: *mut coag_eventflow_config,
+    size: usize,
+) -> i32 {
+    // SAFETY: forwarded contract.
+    unsafe {
+        config_out(
+            sim,
+            out,
+            size,
+            EVENTFLOW_CONFIG_V1,
+            "eventflow config",
+            |c| match c {
+                Config::EventFlow(c) => Some(*c),
+                _ => None,
+            },
+            "config: not an event-driven sim over particle sizes (use coag_sim_massflow_config or coag_sim_counts_config)",
+        )
+    }
 }
 
 /// Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
@@ -1440,6 +1923,32 @@ pub unsafe extern "C" fn coag_sim_reseed(sim: *mut coag_sim, seed: u64, stream: 
     })
 }
 
+/// Writes the sim's configuration of the kind `pick` finds into a caller struct of
+/// `size` bytes (`COAG_UNSUPPORTED` with `refuse` for a sim of another kind).
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or valid for writing `size` bytes; T the config
+/// struct of `v1`.
+unsafe fn config_out<T: Copy>(
+    sim: *const coag_sim,
+    out: *mut T,
+    size: usize,
+    v1: usize,
+    name: &str,
+    pick: fn(&Config) -> Option<T>,
+    refuse: &'static str,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        let Some(c) = pick(&s.config) else {
+            return fail(COAG_UNSUPPORTED, refuse);
+        };
+        // SAFETY: forwarded contract.
+        unsafe { write_sized(out, size, v1, c, name) }
+    })
+}
+
 /// The first word of a format-1 C-ABI checkpoint (the generator's tag, no checksum):
 /// recognised to say why it is refused.
 const GENERATOR_TAG: u64 = u64::from_le_bytes(*b"XOSHI256");
@@ -1470,6 +1979,19 @@ fn config_words(c: &Config) -> Vec<(&'static str, u64, bool)> {
             ("seed", c.seed, false),
             ("stream", c.stream, false),
         ],
+        Config::EventFlow(c) => vec![
+            ("kind (eventflow)", 2, true),
+            ("method", c.method as u64, true),
+            ("mass", c.mass.to_bits(), true),
+            ("truncation", c.truncation.to_bits(), true),
+            // (any capacity the state fits restores: a run that filled its
+            // workspace can move to a larger one; the sim keeps its own)
+            ("capacity", c.capacity, false),
+            ("sampler", c.sampler as u64, true),
+            ("strict_bound", u64::from(c.strict_bound != 0), true),
+            ("seed", c.seed, false),
+            ("stream", c.stream, false),
+        ],
     }
 }
 
@@ -1494,6 +2016,17 @@ fn config_from(like: &Config, w: &[u64]) -> Config {
             memory_budget: w[5],
             seed: w[6],
             stream: w[7],
+            ..c
+        }),
+        Config::EventFlow(c) => Config::EventFlow(coag_eventflow_config {
+            method: w[1] as i32,
+            mass: f64::from_bits(w[2]),
+            truncation: f64::from_bits(w[3]),
+            capacity: w[4],
+            sampler: w[5] as i32,
+            strict_bound: w[6] as i32,
+            seed: w[7],
+            stream: w[8],
             ..c
         }),
     }
@@ -1668,12 +2201,27 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
                 )));
             }
         }
+        // the configuration as it stands may differ from the one made only where a
+        // setter changes it (mass, Δt, volume, the stream): a record that claims
+        // another method, point set, sampler… is forged
+        for (i, &(name, _, _)) in ours.iter().enumerate() {
+            if !settable(name) && words[1][i] != words[0][i] {
+                return Err(bad(format!(
+                    "its two configuration records disagree on {name}, which no call changes"
+                )));
+            }
+        }
         // seed and stream are the stream's now in use; the memory budget stays this
         // sim's (the state was checked against it)
+        // (and likewise an event-driven sim's capacity)
         let keep_budget = |c: Config| match (c, s.built) {
             (Config::Counts(mut c), Config::Counts(ours)) => {
                 c.memory_budget = ours.memory_budget;
                 Config::Counts(c)
+            }
+            (Config::EventFlow(mut c), Config::EventFlow(ours)) => {
+                c.capacity = ours.capacity;
+                Config::EventFlow(c)
             }
             (c, _) => c,
         };
@@ -1700,9 +2248,18 @@ pub unsafe extern "C" fn coag_sim_restore(sim: *mut coag_sim, buf: *const u8, le
     })
 }
 
+/// Whether a configuration word may change after construction (by a setter, or as
+/// the size-count constructor resolves a 0 into the value that runs).
+fn settable(name: &str) -> bool {
+    matches!(
+        name,
+        "mass" | "dt" | "volume" | "size_limit" | "memory_budget" | "capacity" | "seed" | "stream"
+    )
+}
+
 /// A configuration word for a message: floats as numbers.
 fn show(name: &str, w: u64) -> String {
-    if matches!(name, "mass" | "dt" | "volume") {
+    if matches!(name, "mass" | "dt" | "volume" | "truncation") {
         coagula_core::error::Short(f64::from_bits(w)).to_string()
     } else {
         (w as i64).to_string()
@@ -1737,10 +2294,46 @@ pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coa
                 };
                 registry::build(id, s.kernel, s.frag, &init, &massflow_options(&c)?)?
             }
+            (Some(State::Sizes(x)), Config::EventFlow(c)) => {
+                // a state of the same shape, replaced below: the mass flow algorithm's
+                // checkpoint is for its initial number of particles, direct
+                // simulation's for its capacity (in the configuration). The blank's
+                // size is one the sim holds, or else one the kernel and the truncation
+                // allow; direct simulation's blank is one particle in volume 1 (its
+                // state may be empty, or sum past the largest double)
+                let lo = s.kernel.min_size().max(f64::MIN_POSITIVE);
+                let hi = if c.truncation > 0.0 {
+                    c.truncation
+                } else {
+                    f64::INFINITY
+                };
+                let d = x
+                    .iter()
+                    .copied()
+                    .reduce(f64::min)
+                    .unwrap_or_else(|| 1.0f64.max(lo).min(hi));
+                let (sizes, mass) = if id == SchemeId::Mfa {
+                    (vec![d; s.n0], c.mass)
+                } else {
+                    (vec![d], d)
+                };
+                let init = Init::Sizes {
+                    sizes: &sizes,
+                    mass,
+                };
+                registry::build(id, s.kernel, s.frag, &init, &eventflow_options(&c)?)?
+            }
             (_, Config::Counts(c)) => {
                 // a trivial state of the same scheme and options, replaced below
+                // (direct simulation over counts: empty, as a kernel's min_size may
+                // exclude size 1 and no majorant is needed at a size nobody holds)
+                let blank: &[u64] = if id == SchemeId::DsaCounts {
+                    &[0]
+                } else {
+                    &[2]
+                };
                 let init = Init::Counts {
-                    counts: &[2],
+                    counts: blank,
                     volume: 1.0,
                 };
                 registry::build(id, s.kernel, s.frag, &init, &counts_options(&c))?
@@ -1762,6 +2355,7 @@ pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coa
             frag: s.frag,
             work_limit: s.work_limit,
             cancel: s.cancel,
+            n0: s.n0,
         };
         // SAFETY: checked non-null; writable (contract).
         unsafe { write(out, Box::into_raw(Box::new(copy))) };

@@ -61,6 +61,7 @@ enum Op {
     RoundTrip(u8),
     RestoreInto(u8, u8),
     Clone(u8),
+    Config(u8),
 }
 
 const SLOTS: usize = 4;
@@ -310,6 +311,32 @@ pub fn run(data: &[u8]) {
                     if st != COAG_OK {
                         assert_eq!(checkpoint(b), cb);
                     }
+                }
+                Op::Config(i) => {
+                    // exactly one of the three configurations reads back
+                    let s = live!(i);
+                    if s.is_null() {
+                        continue;
+                    }
+                    let (mut a, mut b, mut c): (
+                        coag_massflow_config,
+                        coag_counts_config,
+                        coag_eventflow_config,
+                    ) = (std::mem::zeroed(), std::mem::zeroed(), std::mem::zeroed());
+                    let sts = [
+                        coag_sim_massflow_config(s, &mut a, size_of_val(&a)),
+                        coag_sim_counts_config(s, &mut b, size_of_val(&b)),
+                        coag_sim_eventflow_config(s, &mut c, size_of_val(&c)),
+                    ];
+                    assert_eq!(
+                        sts.iter().filter(|&&st| st == COAG_OK).count(),
+                        1,
+                        "{sts:?}"
+                    );
+                    assert!(
+                        sts.iter()
+                            .all(|&st| st == COAG_OK || st == COAG_UNSUPPORTED)
+                    );
                 }
                 Op::Clone(i) => {
                     let s = live!(i);

@@ -4,16 +4,18 @@
 use coagula::*;
 use std::ptr::null_mut;
 
-/// The scheme kinds the targets build: mass flow, then the `COAG_METHOD_*`.
-pub const KINDS: usize = 5;
+/// The scheme kinds the targets build: mass flow, then the `COAG_METHOD_*` (0–4 as
+/// 1–5), then the event-driven schemes over particles (MFA, DSA).
+pub const KINDS: usize = 8;
 
 /// Statuses a call may return (anything else, in particular `COAG_PANIC`, is a bug).
 pub fn is_status(st: i32) -> bool {
     (COAG_OK..=COAG_RNG_FAILURE).contains(&st) && st != COAG_PANIC
 }
 
-/// A small sim of kind `kind % KINDS` under the additive kernel (mass flow: 16
-/// particles; counts: 300 monomers and a few larger), its growing tables capped at
+/// A small sim of kind `kind % KINDS` under the additive kernel (mass flow and the
+/// event-driven schemes over particles: 16 particles; counts: 300 monomers and a few
+/// larger), its growing tables capped at
 /// 16 MiB and every call at 20 000 proposals, so that an execution stays short.
 ///
 /// # Safety
@@ -32,7 +34,19 @@ pub unsafe fn sim_of(kind: usize, monomers: u64, budget: u64) -> *mut coag_sim {
         let mut k = null_mut();
         assert_eq!(coag_kernel_new_additive(0.0, &mut k), COAG_OK);
         let mut s = null_mut();
-        if kind.is_multiple_of(KINDS) {
+        if kind % KINDS >= 6 {
+            let mut c: coag_eventflow_config = std::mem::zeroed();
+            assert_eq!(
+                coag_eventflow_default_config(&mut c, size_of_val(&c)),
+                COAG_OK
+            );
+            c.method = [COAG_EVENTFLOW_MFA, COAG_EVENTFLOW_DSA][kind % KINDS - 6];
+            let x: Vec<f64> = (0..16).map(|i| 1.0 + (i % 3) as f64).collect();
+            assert_eq!(
+                coag_eventflow_new(&c, k, std::ptr::null(), x.as_ptr(), 16, &mut s),
+                COAG_OK
+            );
+        } else if kind.is_multiple_of(KINDS) {
             let mut c: coag_massflow_config = std::mem::zeroed();
             assert_eq!(
                 coag_massflow_default_config(&mut c, size_of_val(&c)),
@@ -52,6 +66,7 @@ pub unsafe fn sim_of(kind: usize, monomers: u64, budget: u64) -> *mut coag_sim {
                 COAG_METHOD_LOWRANK_TREE,
                 COAG_METHOD_INVERSE,
                 COAG_METHOD_REJECTION,
+                COAG_METHOD_DSA_COUNTS,
             ][kind % KINDS - 1];
             c.memory_budget = budget;
             let n = [monomers, 20, 0, 3];

@@ -76,6 +76,39 @@ int main(void) {
     EXPECT(coag_massflow_new(&mc, k, NULL, sizes, 4, &s), COAG_INVALID_ARGUMENT);
     CHECK(s == NULL, "no sim written on error");
 
+    coag_eventflow_config ec;
+    EXPECT(coag_eventflow_default_config(NULL, sizeof ec), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_default_config(&ec, 8), COAG_INVALID_ARGUMENT);
+    OK(coag_eventflow_default_config(&ec, sizeof ec));
+    sizes[2] = 1.0;
+    EXPECT(coag_eventflow_new(NULL, k, NULL, sizes, 4, &s), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_new(&ec, NULL, NULL, sizes, 4, &s), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_new(&ec, k, NULL, NULL, 4, &s), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_new(&ec, k, NULL, sizes, 4, NULL), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_new(&ec, k, NULL, sizes, 0, &s), COAG_INVALID_ARGUMENT);
+    ec.struct_size = 4; /* not a config this library knows */
+    EXPECT(coag_eventflow_new(&ec, k, NULL, sizes, 4, &s), COAG_INVALID_ARGUMENT);
+    CHECK(s == NULL, "no sim written on error");
+    OK(coag_eventflow_default_config(&ec, sizeof ec));
+    OK(coag_eventflow_new(&ec, k, NULL, sizes, 4, &s));
+    EXPECT(coag_sim_eventflow_config(s, NULL, sizeof ec), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_eventflow_config(NULL, &ec, sizeof ec), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_eventflow_config(s, &ec, 8), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_dt(s, 0.1), COAG_UNSUPPORTED);
+    size_t ewb;
+    EXPECT(coag_eventflow_workspace_size(NULL, NULL, 4, &ewb), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_workspace_size(&ec, NULL, 4, NULL), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_workspace_size(&ec, NULL, SIZE_MAX, &ewb), COAG_CAPACITY);
+    OK(coag_eventflow_workspace_size(&ec, NULL, 4, &ewb));
+    coag_sim *es = NULL;
+    EXPECT(coag_eventflow_new_in(&ec, k, NULL, sizes, 4, NULL, ewb, &es), COAG_NULL_PARAMETER);
+    EXPECT(coag_eventflow_new_in(NULL, k, NULL, sizes, 4, sizes, ewb, &es), COAG_NULL_PARAMETER);
+    CHECK(es == NULL, "no sim written on error");
+    coag_massflow_config mback;
+    EXPECT(coag_sim_massflow_config(s, &mback, sizeof mback), COAG_UNSUPPORTED);
+    coag_sim_free(s);
+    s = NULL;
+
     coag_counts_config lc;
     OK(coag_counts_default_config(&lc, sizeof lc));
     uint64_t counts[2] = {0, 0};

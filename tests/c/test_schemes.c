@@ -69,6 +69,10 @@ static void c_const_factors(double x, double *a, double *b, void *ud) {
     a[0] = 0.5 * *(const double *)ud;
     b[0] = 1.0;
 }
+static double c_const_majorant(double x, void *ud) {
+    (void)x;
+    return sqrt(*(const double *)ud);
+}
 static double c_const_sup(double lo, double hi, void *ud) {
     (void)lo;
     (void)hi;
@@ -77,18 +81,18 @@ static double c_const_sup(double lo, double hi, void *ud) {
 
 static void counts_schemes(void) {
     static double k0 = 1.0;
-    coag_user_kernel uk = {c_const, NULL, 1, c_const_factors, 1, c_const_sup, &k0};
+    coag_user_kernel uk = {c_const, c_const_majorant, 1, c_const_factors, 1, c_const_sup, &k0};
     coag_kernel *user, *builtin;
     OK(coag_kernel_new_user(&uk, &user));
     OK(coag_kernel_new_constant(1.0, &builtin));
     const coag_kernel *kernels[2] = {builtin, user};
-    const int methods[4] = {COAG_METHOD_LOWRANK, COAG_METHOD_LOWRANK_TREE, COAG_METHOD_INVERSE,
-                            COAG_METHOD_REJECTION};
+    const int methods[5] = {COAG_METHOD_LOWRANK, COAG_METHOD_LOWRANK_TREE, COAG_METHOD_INVERSE,
+                            COAG_METHOD_REJECTION, COAG_METHOD_DSA_COUNTS};
     double e_m0, e_n1;
     OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 2.0, &e_m0));
     OK(coag_exact_density(COAG_EXACT_CONSTANT, 1, 2.0, &e_n1));
     for (int ki = 0; ki < 2; ki++) {
-        for (int mi = 0; mi < 4; mi++) {
+        for (int mi = 0; mi < 5; mi++) {
             stats m0 = {0}, n1 = {0};
             for (int r = 0; r < REPLICAS; r++) {
                 coag_counts_config c;
@@ -123,6 +127,331 @@ static void counts_schemes(void) {
     }
     coag_kernel_free(user);
     coag_kernel_free(builtin);
+}
+
+/* A checkpoint of `s` (malloc'ed; length in *n). */
+static uint8_t *snapshot(coag_sim *s, size_t *n) {
+    OK(coag_sim_checkpoint_size(s, n));
+    uint8_t *b = malloc(*n);
+    OK(coag_sim_checkpoint(s, b, *n, NULL));
+    return b;
+}
+
+/* Whether two sims hold the same checkpoint (state, stream, configuration). */
+static int same_sim(coag_sim *a, coag_sim *b) {
+    size_t na, nb;
+    uint8_t *x = snapshot(a, &na), *y = snapshot(b, &nb);
+    int eq = na == nb && memcmp(x, y, na) == 0;
+    free(x);
+    free(y);
+    return eq;
+}
+
+/* Whether two sims hold the same particle sizes. */
+static int same_sizes(coag_sim *a, coag_sim *b) {
+    size_t la, lb;
+    OK(coag_sim_state_len(a, &la));
+    OK(coag_sim_state_len(b, &lb));
+    if (la != lb) return 0;
+    double *xa = malloc((la + 1) * sizeof *xa), *xb = malloc((la + 1) * sizeof *xb);
+    OK(coag_sim_get_sizes(a, xa, la));
+    OK(coag_sim_get_sizes(b, xb, la));
+    int eq = memcmp(xa, xb, la * sizeof *xa) == 0;
+    free(xa);
+    free(xb);
+    return eq;
+}
+
+/* An event-driven sim of `n` monomers (method, sampler, seed; mass 1). */
+static coag_sim *eventflow_sim(const coag_kernel *k, const coag_fragmentation *f, int method, int sampler,
+                               double truncation, uint64_t seed, size_t n) {
+    static double ones[1 << 12];
+    for (size_t i = 0; i < n; i++) ones[i] = 1.0;
+    coag_eventflow_config c;
+    OK(coag_eventflow_default_config(&c, sizeof c));
+    c.method = method;
+    c.sampler = sampler;
+    c.truncation = truncation;
+    c.seed = seed;
+    coag_sim *s;
+    OK(coag_eventflow_new(&c, k, f, ones, n, &s));
+    return s;
+}
+
+/* The event-driven schemes over particle sizes (Eibeck & Wagner 2000) against the
+ * constant-kernel solution from monomers, M0(t) = 1 / (1 + t/2) (per unit of mass: both
+ * schemes are given mass 1), with every sampler; the mass flow algorithm's gel mass for
+ * the multiplicative kernel, 1 - 1/t at t = 2; configuration, checkpoints and clones. */
+static void eventflow_schemes(void) {
+    coag_kernel *k;
+    OK(coag_kernel_new_constant(1.0, &k));
+    enum { NP = 1 << 12 };
+    double e_m0;
+    OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 1.0, &e_m0));
+    const int methods[2] = {COAG_EVENTFLOW_MFA, COAG_EVENTFLOW_DSA};
+    const int samplers[3] = {COAG_SAMPLER_DEFAULT, COAG_SAMPLER_TREE, COAG_SAMPLER_GROUPS};
+    for (int mi = 0; mi < 2; mi++) {
+        for (int si = 0; si < 3; si++) {
+            stats m0 = {0};
+            for (int r = 0; r < REPLICAS; r++) {
+                coag_sim *s = eventflow_sim(k, NULL, methods[mi], samplers[si], 0.0, 2000 + r, NP);
+                for (int h = 1; h <= 10; h++) OK(coag_sim_advance_to(s, 0.1 * h, NULL));
+                double v;
+                OK(coag_sim_moment(s, 0.0, &v));
+                stats_push(&m0, v);
+                coag_sim_free(s);
+            }
+            CHECK(fabs(m0.mean - e_m0) < Z_TOL * stats_se(&m0), "eventflow %d sampler %d: M0 %g ± %g vs %g",
+                  mi, si, m0.mean, stats_se(&m0), e_m0);
+        }
+        /* the sampler is the one asked for: the default is groups for MFA, the tree for
+         * DSA (the same run bit for bit), the other one another run */
+        coag_sim *d = eventflow_sim(k, NULL, methods[mi], COAG_SAMPLER_DEFAULT, 0.0, 7, 256);
+        coag_sim *g = eventflow_sim(k, NULL, methods[mi], mi == 0 ? COAG_SAMPLER_GROUPS : COAG_SAMPLER_TREE,
+                                    0.0, 7, 256);
+        coag_sim *o = eventflow_sim(k, NULL, methods[mi], mi == 0 ? COAG_SAMPLER_TREE : COAG_SAMPLER_GROUPS,
+                                    0.0, 7, 256);
+        OK(coag_sim_advance_to(d, 1.0, NULL));
+        OK(coag_sim_advance_to(g, 1.0, NULL));
+        OK(coag_sim_advance_to(o, 1.0, NULL));
+        CHECK(same_sim(d, g), "method %d: the default sampler is not the documented one", mi);
+        CHECK(!same_sizes(d, o), "method %d: the other sampler gave the same run", mi);
+        coag_sim_free(d);
+        coag_sim_free(g);
+        coag_sim_free(o);
+    }
+    coag_kernel_free(k);
+
+    /* gelation: the mass flow algorithm's gel mass 1 - n(t)/N against 1 - 1/t with
+     * b_N = N (one run's sd is 0.008; 400 replicas measured the bias at -0.0002 ± 0.0004,
+     * so no allowance beyond the replicas' own: a factor 2 in the rates moves it by
+     * tenths) */
+    coag_kernel *km;
+    OK(coag_kernel_new_multiplicative(&km));
+    stats gel = {0};
+    for (int r = 0; r < REPLICAS; r++) {
+        coag_sim *s = eventflow_sim(km, NULL, COAG_EVENTFLOW_MFA, COAG_SAMPLER_DEFAULT, NP, 3000 + r, NP);
+        OK(coag_sim_advance_to(s, 2.0, NULL));
+        double g;
+        OK(coag_sim_gel_mass(s, &g));
+        stats_push(&gel, g);
+        coag_sim_free(s);
+    }
+    CHECK(fabs(gel.mean - 0.5) < Z_TOL * stats_se(&gel), "MFA gel mass %g ± %g vs 0.5", gel.mean, stats_se(&gel));
+
+    /* configuration read back (resolved), checkpoint, restore and clone continue bit for
+     * bit: direct simulation with fragmentation */
+    coag_fragmentation *f;
+    OK(coag_fragmentation_new_binary_uniform(0.5, &f));
+    coag_sim *a = eventflow_sim(km, f, COAG_EVENTFLOW_DSA, COAG_SAMPLER_DEFAULT, 0.0, 17, 256);
+    coag_sim *b = eventflow_sim(km, f, COAG_EVENTFLOW_DSA, COAG_SAMPLER_DEFAULT, 0.0, 17, 256);
+    coag_eventflow_config back;
+    OK(coag_sim_eventflow_config(a, &back, sizeof back));
+    CHECK(back.method == COAG_EVENTFLOW_DSA && back.capacity == 4 * 256 && back.sampler == COAG_SAMPLER_TREE &&
+              back.seed == 17,
+          "config read back: method %d capacity %llu sampler %d", back.method, (unsigned long long)back.capacity,
+          back.sampler);
+    int m;
+    EXPECT(coag_sim_method(a, &m), COAG_UNSUPPORTED);
+    EXPECT(coag_sim_set_mass(a, 2.0), COAG_UNSUPPORTED);
+    OK(coag_sim_advance_to(a, 0.5, NULL));
+    size_t need;
+    uint8_t *buf = snapshot(a, &need);
+    coag_sim *cl;
+    OK(coag_sim_clone(a, &cl));
+    CHECK(same_sim(a, cl), "DSA clone differs");
+    OK(coag_sim_restore(b, buf, need));
+    OK(coag_sim_advance_to(a, 1.5, NULL));
+    OK(coag_sim_advance_to(b, 1.5, NULL));
+    OK(coag_sim_advance_to(cl, 1.5, NULL));
+    CHECK(same_sizes(a, b), "restored DSA run differs");
+    CHECK(same_sizes(a, cl), "cloned DSA run differs");
+    /* a sim of another capacity the state fits takes the checkpoint (a run that filled
+     * its workspace moves to a larger one) and keeps its own capacity */
+    coag_eventflow_config c;
+    OK(coag_eventflow_default_config(&c, sizeof c));
+    c.method = COAG_EVENTFLOW_DSA;
+    c.capacity = 5000;
+    static double ones[256];
+    for (int i = 0; i < 256; i++) ones[i] = 1.0;
+    coag_sim *other;
+    OK(coag_eventflow_new(&c, km, f, ones, 256, &other));
+    OK(coag_sim_restore(other, buf, need));
+    OK(coag_sim_eventflow_config(other, &back, sizeof back));
+    CHECK(back.capacity == 5000, "restored capacity %llu", (unsigned long long)back.capacity);
+    coag_sim_free(other);
+    /* another configuration refuses the checkpoint, the sim unchanged */
+    for (int v = 0; v < 4; v++) {
+        OK(coag_eventflow_default_config(&c, sizeof c));
+        c.method = COAG_EVENTFLOW_DSA;
+        if (v == 0) c.mass = 2.0;
+        if (v == 1) c.sampler = COAG_SAMPLER_GROUPS;
+        if (v == 2) c.strict_bound = 1;
+        if (v == 3) c.method = COAG_EVENTFLOW_MFA;
+        OK(coag_eventflow_new(&c, km, f, ones, 256, &other));
+        size_t n0;
+        uint8_t *before = snapshot(other, &n0);
+        EXPECT(coag_sim_restore(other, buf, need), COAG_BAD_CHECKPOINT);
+        size_t n1;
+        uint8_t *after = snapshot(other, &n1);
+        CHECK(n0 == n1 && memcmp(before, after, n0) == 0, "refused restore %d changed the sim", v);
+        free(before);
+        free(after);
+        coag_sim_free(other);
+    }
+    free(buf);
+    coag_sim_free(a);
+    coag_sim_free(b);
+    coag_sim_free(cl);
+
+    /* the mass flow algorithm with particles gone to the gel and its mass changed:
+     * clone and checkpoint continue the same run */
+    coag_sim *mfa = eventflow_sim(km, NULL, COAG_EVENTFLOW_MFA, COAG_SAMPLER_DEFAULT, 64, 5, 256);
+    OK(coag_sim_advance_to(mfa, 1.5, NULL));
+    double g0;
+    OK(coag_sim_gel_mass(mfa, &g0));
+    CHECK(g0 > 0.0, "no particle left before the clone (gel %g)", g0);
+    OK(coag_sim_set_mass(mfa, 3.0));
+    OK(coag_sim_eventflow_config(mfa, &back, sizeof back));
+    CHECK(back.mass == 3.0 && back.truncation == 64 && back.sampler == COAG_SAMPLER_GROUPS, "MFA config");
+    coag_sim *mcl, *mrs = eventflow_sim(km, NULL, COAG_EVENTFLOW_MFA, COAG_SAMPLER_DEFAULT, 64, 99, 256);
+    OK(coag_sim_clone(mfa, &mcl));
+    CHECK(same_sim(mfa, mcl), "MFA clone differs");
+    buf = snapshot(mfa, &need);
+    OK(coag_sim_restore(mrs, buf, need));
+    free(buf);
+    OK(coag_sim_advance_to(mfa, 3.0, NULL));
+    OK(coag_sim_advance_to(mcl, 3.0, NULL));
+    OK(coag_sim_advance_to(mrs, 3.0, NULL));
+    CHECK(same_sim(mfa, mcl) && same_sizes(mfa, mcl), "cloned MFA run differs");
+    CHECK(same_sizes(mfa, mrs), "restored MFA run differs");
+    coag_sim_free(mfa);
+    coag_sim_free(mcl);
+    coag_sim_free(mrs);
+
+    /* both schemes in memory the caller owns run bit for bit as in the library's; a
+     * workspace too small, misaligned or overlapping the sizes is refused */
+    for (int mi = 0; mi < 2; mi++) {
+        coag_eventflow_config wc;
+        OK(coag_eventflow_default_config(&wc, sizeof wc));
+        wc.method = mi == 0 ? COAG_EVENTFLOW_MFA : COAG_EVENTFLOW_DSA;
+        wc.truncation = mi == 0 ? 64.0 : 0.0;
+        wc.seed = 11;
+        size_t bytes;
+        OK(coag_eventflow_workspace_size(&wc, f, 256, &bytes));
+        double *ws = calloc(bytes / 8 + 1, sizeof *ws);
+        coag_sim *own, *in, *none2 = NULL;
+        OK(coag_eventflow_new(&wc, km, f, ones, 256, &own));
+        EXPECT(coag_eventflow_new_in(&wc, km, f, ones, 256, ws, bytes - 8, &none2), COAG_BUFFER_TOO_SMALL);
+        EXPECT(coag_eventflow_new_in(&wc, km, f, ones, 256, (char *)ws + 1, bytes, &none2), COAG_INVALID_ARGUMENT);
+        /* sizes inside the workspace: refused before the workspace is zeroed */
+        for (int i = 0; i < 8; i++) ws[i] = 1.0;
+        EXPECT(coag_eventflow_new_in(&wc, km, f, ws, 8, ws, bytes, &none2), COAG_INVALID_ARGUMENT);
+        CHECK(ws[0] == 1.0 && ws[7] == 1.0, "a refused workspace was zeroed");
+        /* a workspace sized without fragmentation is too small for it */
+        size_t bare_bytes;
+        OK(coag_eventflow_workspace_size(&wc, NULL, 256, &bare_bytes));
+        if (mi == 1) {
+            CHECK(bare_bytes < bytes, "DSA with fragmentation needs more room: %zu vs %zu", bare_bytes, bytes);
+            EXPECT(coag_eventflow_new_in(&wc, km, f, ones, 256, ws, bare_bytes, &none2), COAG_BUFFER_TOO_SMALL);
+        }
+        CHECK(none2 == NULL, "a sim from a refused workspace");
+        OK(coag_eventflow_new_in(&wc, km, f, ones, 256, ws, bytes, &in));
+        OK(coag_sim_advance_to(own, 1.0, NULL));
+        OK(coag_sim_advance_to(in, 1.0, NULL));
+        CHECK(same_sim(own, in), "method %d: the workspace run differs", mi);
+        /* a clone (in the library's memory) and a checkpoint move between the two */
+        coag_sim *wcl;
+        OK(coag_sim_clone(in, &wcl));
+        CHECK(same_sim(in, wcl), "method %d: clone of a workspace sim differs", mi);
+        size_t wn;
+        uint8_t *wb = snapshot(own, &wn);
+        OK(coag_sim_restore(in, wb, wn));
+        free(wb);
+        OK(coag_sim_advance_to(own, 2.0, NULL));
+        OK(coag_sim_advance_to(in, 2.0, NULL));
+        OK(coag_sim_advance_to(wcl, 2.0, NULL));
+        CHECK(same_sim(own, in) && same_sim(own, wcl), "method %d: the runs part after a clone", mi);
+        coag_sim_free(wcl);
+        coag_sim_free(in);
+        coag_sim_free(own);
+        free(ws);
+    }
+
+    /* clones of states a blank of the first particle's size would not fit: direct
+     * simulation emptied by the host, direct simulation over counts under a kernel
+     * whose bounds start at size 2 */
+    coag_sim *dsa = eventflow_sim(km, NULL, COAG_EVENTFLOW_DSA, COAG_SAMPLER_DEFAULT, 0.0, 1, 16);
+    OK(coag_sim_set_sizes(dsa, ones, 0));
+    OK(coag_sim_clone(dsa, &cl));
+    CHECK(same_sim(dsa, cl), "clone of an empty DSA differs");
+    coag_sim_free(cl);
+    coag_sim_free(dsa);
+    coag_kernel *k2;
+    OK(coag_kernel_new_additive(2.0, &k2));
+    coag_counts_config cc;
+    OK(coag_counts_default_config(&cc, sizeof cc));
+    cc.method = COAG_METHOD_DSA_COUNTS;
+    uint64_t n3[3] = {0, 0, 100};
+    coag_sim *dc;
+    OK(coag_counts_new(&cc, k2, n3, 3, &dc));
+    OK(coag_sim_method(dc, &m));
+    CHECK(m == COAG_METHOD_DSA_COUNTS, "method %d", m);
+    OK(coag_sim_advance_to(dc, 0.5, NULL));
+    OK(coag_sim_clone(dc, &cl));
+    CHECK(same_sim(dc, cl), "clone of dsa-counts differs");
+    coag_sim_free(cl);
+    coag_sim_free(dc);
+    coag_kernel_free(k2);
+
+    /* bad input: clear errors, no sim */
+    coag_sim *none = NULL;
+    OK(coag_eventflow_default_config(&c, sizeof c));
+    c.method = 7;
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    c.method = COAG_EVENTFLOW_MFA;
+    c.sampler = 9;
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    c.sampler = COAG_SAMPLER_DEFAULT;
+    c.truncation = -1.0;
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    c.truncation = 0.5; /* below the largest initial size */
+    CHECK(coag_eventflow_new(&c, km, NULL, ones, 16, &none) != COAG_OK, "b_N below a size accepted");
+    c.truncation = NAN;
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    size_t qb;
+    EXPECT(coag_eventflow_workspace_size(&c, NULL, 16, &qb), COAG_INVALID_ARGUMENT);
+    c.truncation = 0.0;
+    c.sampler = 9;
+    EXPECT(coag_eventflow_workspace_size(&c, NULL, 16, &qb), COAG_INVALID_ARGUMENT);
+    c.sampler = COAG_SAMPLER_DEFAULT;
+    c.capacity = 100; /* the mass flow algorithm has none */
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    c.capacity = 0;
+    c.method = COAG_EVENTFLOW_DSA;
+    c.truncation = 100.0; /* direct simulation has none */
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_INVALID_ARGUMENT);
+    c.truncation = 0.0;
+    c.capacity = UINT64_MAX / 2; /* a workspace past any memory */
+    EXPECT(coag_eventflow_new(&c, km, NULL, ones, 16, &none), COAG_CAPACITY);
+    c.capacity = 8; /* fewer than the initial particles */
+    CHECK(coag_eventflow_new(&c, km, NULL, ones, 16, &none) != COAG_OK, "capacity below N accepted");
+    c.capacity = 0;
+    c.mass = NAN;
+    CHECK(coag_eventflow_new(&c, km, NULL, ones, 16, &none) != COAG_OK, "NaN mass accepted");
+    c.mass = 1.0;
+    double bad[2] = {1.0, -2.0};
+    CHECK(coag_eventflow_new(&c, km, NULL, bad, 2, &none) != COAG_OK, "a negative size accepted");
+    /* a user kernel that declares no product majorant */
+    static double k1 = 1.0;
+    coag_user_kernel bare = {c_const, NULL, 0, NULL, 0, NULL, &k1};
+    coag_kernel *nomaj;
+    OK(coag_kernel_new_user(&bare, &nomaj));
+    EXPECT(coag_eventflow_new(&c, nomaj, NULL, ones, 16, &none), COAG_UNSUPPORTED);
+    CHECK(none == NULL, "a sim was made from bad input");
+    coag_kernel_free(nomaj);
+    coag_kernel_free(km);
+    coag_fragmentation_free(f);
 }
 
 /* Changing the kernel between steps: K = 1 on [0, 1], K = 2 on [1, 2] gives
@@ -342,6 +671,7 @@ int main(void) {
     massflow_in_caller_workspace();
     massflow_lecot();
     counts_schemes();
+    eventflow_schemes();
     change_kernel_between_steps();
     host_randomness();
     checkpoint_restore();

@@ -92,6 +92,34 @@ int main() {
         in.set_sizes(std::vector<double>(1024, 2.0));
         CHECK(in.sizes()[0] == 2.0, "set_sizes");
     }
+    {
+        // the mass flow algorithm, event-driven, with gelation: the multiplicative
+        // kernel's gel mass at t = 2 is 1 - 1/t = 0.5 (one run of 4096 particles with
+        // b_N = N: its standard deviation is about 0.01)
+        coagula::Kernel km = coagula::Kernel::multiplicative();
+        auto ec = coagula::eventflow_default_config();
+        ec.truncation = 4096;
+        ec.seed = 3;
+        auto e = coagula::Sim::eventflow(ec, km, nullptr, std::vector<double>(4096, 1.0));
+        e.advance_to(2.0);
+        CHECK(std::fabs(e.gel_mass() - 0.5) < 0.06, "MFA gel mass %g", e.gel_mass());
+        CHECK(e.eventflow_config().truncation == 4096, "eventflow config read back");
+        // the same run in caller-owned memory, bit for bit
+        std::vector<double> ws(coagula::eventflow_workspace_size(ec, nullptr, 4096) / sizeof(double));
+        auto in = coagula::Sim::eventflow_in(ec, km, nullptr, std::vector<double>(4096, 1.0), ws.data(),
+                                             ws.size() * sizeof(double));
+        in.advance_to(2.0);
+        CHECK(in.sizes() == e.sizes(), "eventflow in a workspace: the sizes differ");
+        // direct simulation: a clone continues as the original
+        ec.method = COAG_EVENTFLOW_DSA;
+        ec.truncation = 0;
+        auto d = coagula::Sim::eventflow(ec, km, nullptr, std::vector<double>(512, 1.0));
+        d.advance_to(0.5);
+        auto dc = d.clone();
+        d.advance_to(1.5);
+        dc.advance_to(1.5);
+        CHECK(d.sizes() == dc.sizes() && d.totals().events > 0, "DSA clone differs");
+    }
     auto cc = coagula::counts_default_config();
     cc.method = COAG_METHOD_INVERSE;
     auto a = coagula::Sim::counts(cc, k, {2000, 10});

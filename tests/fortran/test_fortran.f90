@@ -75,6 +75,9 @@ program test_fortran
   real(c_double) :: m2b
   type(coag_counts_config) :: lc
   type(coag_massflow_config) :: mc
+  type(coag_eventflow_config) :: ec, ec2
+  real(c_double) :: ones(2048)
+  real(c_double), allocatable :: xa(:), xb(:)
   type(coag_step_report) :: rep
   integer(c_int64_t) :: counts(1)
   real(c_double) :: m0, s1, s2, mean, se, exact, m2
@@ -105,10 +108,7 @@ program test_fortran
      s2 = s2 + m0 * m0
      call coag_sim_free(sim)
   end do
-  mean = s1 / reps
-  se = sqrt((s2 / reps - mean * mean) / (reps - 1))
-  call ok(coag_exact_moment(COAG_EXACT_CONSTANT, 0_c_int32_t, 2.0_c_double, exact))
-  call check(abs(mean - exact) < 6.072_c_double * se, "low-rank M0(2) within 6.07 SE of the exact value")
+  call check_m0(2.0_c_double, "low-rank M0(2) within 6.07 SE of the exact value")
 
   call ok(coag_fragmentation_new_binary_uniform(1.0_c_double, f))
   call ok(coag_massflow_default_config(mc, c_sizeof(mc)))
@@ -240,6 +240,48 @@ program test_fortran
   call coag_sim_free(sm)
   call coag_fragmentation_free(fu)
   call coag_kernel_free(ku)
+  ! direct simulation over particles, event-driven: M0(1) of the constant kernel from
+  ! 32 replicas within 6.07 standard errors of the exact value
+  ones = 1.0_c_double
+  s1 = 0
+  s2 = 0
+  do r = 1, reps
+     call ok(coag_eventflow_default_config(ec, c_sizeof(ec)))
+     ec%method = COAG_EVENTFLOW_DSA
+     ec%seed = int(300 + r, c_int64_t)
+     call ok(coag_eventflow_new(ec, k, c_null_ptr, ones, size(ones, kind=c_size_t), sm))
+     call ok(coag_sim_advance_to(sm, 1.0_c_double, rep))
+     call ok(coag_sim_moment(sm, 0.0_c_double, m0))
+     if (r == 1) then
+        call ok(coag_sim_eventflow_config(sm, ec2, c_sizeof(ec2)))
+        call check(ec2%method == COAG_EVENTFLOW_DSA .and. ec2%capacity == size(ones), "eventflow config")
+     end if
+     s1 = s1 + m0
+     s2 = s2 + m0 * m0
+     call coag_sim_free(sm)
+  end do
+  call check_m0(1.0_c_double, "DSA M0(1) within 6.07 SE of the exact value")
+  ! the same DSA in a workspace the caller owns runs bit for bit alike
+  ec%seed = 301
+  call ok(coag_eventflow_new(ec, k, c_null_ptr, ones, size(ones, kind=c_size_t), sm))
+  call ok(coag_sim_advance_to(sm, 1.0_c_double, rep))
+  call ok(coag_sim_moment(sm, 0.0_c_double, m0))
+  call ok(coag_eventflow_workspace_size(ec, c_null_ptr, size(ones, kind=c_size_t), wbytes))
+  allocate(ws(wbytes / 8))
+  call ok(coag_eventflow_new_in(ec, k, c_null_ptr, ones, size(ones, kind=c_size_t), c_loc(ws), wbytes, sim2))
+  call ok(coag_sim_advance_to(sim2, 1.0_c_double, rep))
+  call ok(coag_sim_state_len(sm, nw))
+  call ok(coag_sim_state_len(sim2, nocc))
+  call check(nw == nocc, "eventflow workspace: the same number of particles")
+  allocate(xa(nw), xb(nw))
+  call ok(coag_sim_get_sizes(sm, xa, nw))
+  call ok(coag_sim_get_sizes(sim2, xb, nw))
+  call check(all(transfer(xa, 0_c_int64_t, size(xa)) == transfer(xb, 0_c_int64_t, size(xb))), &
+       "eventflow workspace: the same sizes bit for bit")
+  deallocate(xa, xb)
+  call coag_sim_free(sim2)
+  call coag_sim_free(sm)
+  deallocate(ws)
   ! errors: a step back in time fails and names the problem
   call check(coag_sim_advance_to(sim, 0.5_c_double, rep) == COAG_TIME_BACKWARDS, "time backwards refused")
   call check(index(coag_error_message(), "before the current time") > 0, "error message")
@@ -259,6 +301,17 @@ contains
        stop 1
     end if
   end subroutine ok
+
+  ! the replicas' mean of M0 (sums s1, s2 of reps values) within 6.07 standard errors
+  ! of the constant kernel's exact M0(t)
+  subroutine check_m0(t, what)
+    real(c_double), intent(in) :: t
+    character(len=*), intent(in) :: what
+    mean = s1 / reps
+    se = sqrt((s2 / reps - mean * mean) / (reps - 1))
+    call ok(coag_exact_moment(COAG_EXACT_CONSTANT, 0_c_int32_t, t, exact))
+    call check(abs(mean - exact) < 6.072_c_double * se, what)
+  end subroutine check_m0
 
   subroutine check(cond, what)
     logical, intent(in) :: cond
