@@ -542,13 +542,18 @@ unsafe fn eventflow_inputs<'a>(
         unsafe { handle(frag, "frag") }?.f
     };
     let x = unsafe { slice(sizes, n, "sizes") }?;
-    let Some(&(_, id)) = EVENTFLOW.iter().find(|(m, _)| *m == c.method) else {
-        return fail(
+    Ok((c, eventflow_id(&c)?, k, f, x))
+}
+
+/// The registry's scheme of an event-driven config's `COAG_EVENTFLOW_*` method.
+fn eventflow_id(c: &coag_eventflow_config) -> Result<SchemeId, Fail> {
+    match EVENTFLOW.iter().find(|(m, _)| *m == c.method) {
+        Some(&(_, id)) => Ok(id),
+        None => fail(
             COAG_INVALID_ARGUMENT,
             format!("unknown eventflow method {}", c.method),
-        );
-    };
-    Ok((c, id, k, f, x))
+        ),
+    }
 }
 
 /// Bytes of caller-owned workspace an event-driven sim of `n` particles needs under
@@ -575,13 +580,7 @@ pub unsafe extern "C" fn coag_eventflow_workspace_size(
             unsafe { handle(frag, "frag") }?.f
         };
         non_null(out, "out")?;
-        let Some(&(_, id)) = EVENTFLOW.iter().find(|(m, _)| *m == c.method) else {
-            return fail(
-                COAG_INVALID_ARGUMENT,
-                format!("unknown eventflow method {}", c.method),
-            );
-        };
-        let bytes = eventflow_workspace(&c, id, n, &f)?.1;
+        let bytes = eventflow_workspace(&c, eventflow_id(&c)?, n, &f)?.1;
         // SAFETY: checked non-null; writable (contract).
         unsafe { write(out, bytes) };
         Ok(())
