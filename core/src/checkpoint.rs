@@ -260,6 +260,7 @@ pub(crate) mod tag {
     pub const MFA: u64 = 6;
     pub const DSA: u64 = 7;
     pub const DSA_COUNTS: u64 = 8;
+    pub const LANGEVIN: u64 = 9;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

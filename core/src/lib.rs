@@ -17,6 +17,8 @@
 //!   concentrations, gel mass and replica statistics;
 //! * [`qmc`] — digital (t,s)-sequences in base 2 (Niederreiter, Sobol'), their
 //!   randomisations, and the point sources the quasi-Monte Carlo schemes draw from;
+//! * [`langevin`] — Langevin particle tracking with specular or absorbing walls (Maftei
+//!   et al. 2016): trajectory batches, Richardson–Romberg, kernels from first hits;
 //! * [`scheme`] — the stepping schemes behind one `advance_to` interface, the shared
 //!   size-count population, and the registry with the object-safe facade
 //!   ([`scheme::registry`]) that the C ABI and the CLI are written over.
@@ -42,6 +44,7 @@ pub mod checkpoint;
 pub mod error;
 pub mod exact;
 pub mod kernel;
+pub mod langevin;
 pub mod observe;
 pub mod qmc;
 pub mod random;

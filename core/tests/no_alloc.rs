@@ -211,3 +211,51 @@ fn the_counter_sees_allocations() {
         0
     );
 }
+
+/// No Langevin step allocates: a batch in caller-owned storage, 1-D (the paper's
+/// problem, specular and absorbing, with and without a budget) and 3-D, and the
+/// statistics over it.
+#[test]
+fn langevin_steps_do_not_allocate() {
+    use coagula_core::langevin::{Batch, Config, Friction, Wall, paper, workspace_len};
+    use coagula_core::scheme::Budget;
+    for wall in [Wall::Specular, Wall::Absorbing] {
+        let cfg = paper::config(wall, 0.05, paper::Choices::default()).unwrap();
+        let mut ws = vec![0u64; workspace_len(1, 100).unwrap()];
+        let mut b = Batch::with_starts_in(
+            cfg,
+            paper::PaperDrift,
+            100,
+            1,
+            0,
+            |_| ([0.5], [-1.5]),
+            &mut ws[..],
+        )
+        .unwrap();
+        let mut rng = generator(1, 0);
+        let n = allocations(|| {
+            b.advance_to(1.6, &mut rng).unwrap();
+            b.advance_within(3.2, &mut Budget::work(1000), &mut rng)
+                .unwrap();
+            let _ = b.statistics(|x, u| paper::observable(x[0], u[0])).mean();
+            let _ = b.hit_statistics();
+        });
+        assert_eq!(n, 0, "{wall:?}: {n} allocations");
+    }
+    let cfg = Config::<3>::ball(1.0, 0.01, 1.0, Wall::Specular).unwrap();
+    let mut ws = vec![0u64; workspace_len(3, 64).unwrap()];
+    let mut b = Batch::with_starts_in(
+        cfg,
+        Friction { rate: 1.0 },
+        64,
+        2,
+        0,
+        |_| ([1.5, 0.0, 0.0], [-1.0, 0.0, 0.0]),
+        &mut ws[..],
+    )
+    .unwrap();
+    let n = allocations(|| {
+        b.advance_to(1.0, &mut generator(2, 0)).unwrap();
+    });
+    assert_eq!(n, 0, "3-D: {n} allocations");
+}

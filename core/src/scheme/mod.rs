@@ -152,6 +152,11 @@ impl<'a> Budget<'a> {
         self
     }
 
+    /// No limit and no callback: a call may run to its target in any order of work.
+    pub(crate) fn is_unlimited(&self) -> bool {
+        self.left == u64::MAX && self.cancel.is_none()
+    }
+
     /// Units left.
     pub fn left(&self) -> u64 {
         self.left
