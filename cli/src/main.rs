@@ -148,16 +148,19 @@ enum Command {
         #[arg(long)]
         only: Option<String>,
     },
-    /// Reproduce a paper's experiment: `lecot2019` (Figures 1-2) or `eibeck2000`
-    /// (Figures 1, 3, 5, 7 and the efficiency gain).
+    /// Reproduce a paper's experiment: `lecot2019` (Figures 1-2), `eibeck2000`
+    /// (Figures 1, 3, 5, 7 and the efficiency gain) or `maftei2016` (the Langevin
+    /// test problem's step ladder, its open choices, kernels from first hits).
     Reproduce {
         /// Which experiment.
         #[arg(value_enum)]
         which: Experiment,
-        /// eibeck2000: the figures to run (fig1, fig3, fig5, fig7, kappa, or all).
+        /// eibeck2000: the figures to run (fig1, fig3, fig5, fig7, kappa, or all);
+        /// maftei2016: the parts (ladder, choices, kernel, or all).
         #[arg(long, value_delimiter = ',', default_value = "all")]
         figures: Vec<String>,
-        /// eibeck2000: a tenth of the particles or replicas.
+        /// eibeck2000: a tenth of the particles or replicas; maftei2016: 1/128 of the
+        /// trajectories.
         #[arg(long)]
         quick: bool,
         /// Largest log2 N, 7..=24 (the paper's N = 2^7 .. 2^20).
@@ -170,7 +173,7 @@ enum Command {
         #[arg(long, default_value_t = 20, value_parser = rqmc_count)]
         rqmc: u32,
         /// lecot2019: draw Figure 2 (an .svg file); eibeck2000: a directory for
-        /// `eibeck2000-<figure>.svg`.
+        /// `eibeck2000-<figure>.svg`; maftei2016: the bias plot (an .svg file).
         #[arg(long)]
         plot: Option<String>,
     },
@@ -248,6 +251,20 @@ enum BenchKind {
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
         repeat: u32,
     },
+    /// Langevin trajectory batches (Maftei et al. 2016): trajectory-steps per second on
+    /// one thread and on all threads (the same bits), for the paper's 1-D specular and
+    /// absorbing problems and a 3-D ball with friction.
+    Langevin {
+        /// Trajectories per run (at least 1).
+        #[arg(long, default_value_t = 1 << 20, value_parser = clap::value_parser!(u64).range(1..))]
+        trajectories: u64,
+        /// Time step of the 1-D runs (> 0; the run goes to T = 3.2).
+        #[arg(long, default_value_t = 0.05, value_parser = positive_f64)]
+        dt: f64,
+        /// Runs of each (the minimum time is reported).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
+        repeat: u32,
+    },
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
@@ -320,6 +337,7 @@ enum BenchKind {
 enum Experiment {
     Lecot2019,
     Eibeck2000,
+    Maftei2016,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -493,6 +511,14 @@ fn main() -> ExitCode {
                 Experiment::Eibeck2000 => {
                     reproduce::eibeck2000::reproduce(&figures, quick, plot.as_deref())
                 }
+                Experiment::Maftei2016 => {
+                    let parts = if figures.iter().any(|f| f == "all") {
+                        vec!["all".into()]
+                    } else {
+                        figures.clone()
+                    };
+                    reproduce::maftei2016::reproduce(&parts, quick, plot.as_deref())
+                }
             };
             return match done {
                 Ok(()) => ExitCode::SUCCESS,
@@ -527,6 +553,22 @@ fn main() -> ExitCode {
             }
         }
         Command::Qmc { dims, m } => qmc_tvalues(dims as usize, m),
+        Command::Bench {
+            which:
+                BenchKind::Langevin {
+                    trajectories,
+                    dt,
+                    repeat,
+                },
+        } => {
+            return match reproduce::maftei2016::bench(trajectories, dt, repeat) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
         Command::Bench {
             which:
                 BenchKind::Lowrank {

@@ -83,6 +83,24 @@ pub fn run(
     steps: Option<u32>,
     out: Outputs,
 ) -> Result<(), String> {
+    // a Langevin first-hit kernel scenario (no population: its own runner)
+    let (name, text) = resolve(scenario)?;
+    if crate::reproduce::maftei2016::is_first_hits(&text) {
+        if !overrides.is_empty() || steps.is_some() || out.csv.is_some() || out.plot.is_some() {
+            return Err(format!(
+                "{name}: a first-hit kernel scenario takes no --set, --steps, --csv or --plot (edit the file; --json - prints JSON)"
+            ));
+        }
+        if out.json.as_deref().is_some_and(|p| p != "-") {
+            return Err(format!(
+                "{name}: --json goes to standard output (-) for a first-hit kernel scenario"
+            ));
+        }
+        if out.check {
+            return Ok(());
+        }
+        return crate::reproduce::maftei2016::first_hits_scenario(&name, &text, out.json.is_some());
+    }
     let plan = plan(scenario, overrides, steps)?;
     // every output is opened before the work starts
     if out.csv.as_deref() == Some("-") && out.json.as_deref() == Some("-") {

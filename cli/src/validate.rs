@@ -137,10 +137,15 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
     let mode = if quick { "quick" } else { "full" };
     let mut out = Vec::new();
     let selected = |name: &str| only.is_none_or(|p| name.starts_with(p));
-    if !file
-        .case
-        .iter()
-        .any(|c| selected(&c.name) && c.modes.iter().any(|m| m == mode))
+    // the Langevin cases are computed in code (a trajectory batch is not a population
+    // scenario): `maftei2016/...`
+    const LANGEVIN: &str = "maftei2016/";
+    let langevin = only.is_none_or(|p| LANGEVIN.starts_with(p) || p.starts_with(LANGEVIN));
+    if !langevin
+        && !file
+            .case
+            .iter()
+            .any(|c| selected(&c.name) && c.modes.iter().any(|m| m == mode))
     {
         return Err(format!(
             "no {mode} case starts with {:?}",
@@ -185,6 +190,17 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
             }
             run_case(&name, spec, &overrides, &mut out)?;
         }
+    }
+    if langevin {
+        let mut cases = crate::reproduce::maftei2016::cases(quick)?;
+        cases.retain(|c| selected(&c.case));
+        if cases.is_empty() && out.is_empty() {
+            return Err(format!(
+                "no {mode} case starts with {:?}",
+                only.unwrap_or_default()
+            ));
+        }
+        out.extend(cases);
     }
     Ok(out)
 }
