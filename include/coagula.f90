@@ -26,6 +26,36 @@ module coagula
   integer(c_int32_t), parameter :: COAG_EXACT_CONSTANT = 0, COAG_EXACT_ADDITIVE = 1, &
        COAG_EXACT_MULTIPLICATIVE = 2, COAG_EXACT_MARCUS_LUSHNIKOV = 3, COAG_EXACT_COAG_FRAG = 4
 
+  integer(c_int32_t), parameter :: COAG_WALL_SPECULAR = 0, COAG_WALL_ABSORBING = 1
+  integer(c_int32_t), parameter :: COAG_BOUND_NONE = 0, COAG_BOUND_CLAMP = 1, COAG_BOUND_REFLECT = 2
+  integer(c_int32_t), parameter :: COAG_DRIFT_ZERO = 0, COAG_DRIFT_FRICTION = 1, &
+       COAG_DRIFT_MAFTEI2016 = 2, COAG_DRIFT_CALLBACK = 3
+
+  ! Langevin batches (Maftei et al. 2016); fill with coag_langevin_default_config
+  type, bind(c) :: coag_langevin_config
+     integer(c_size_t) :: struct_size
+     integer(c_int32_t) :: dim, wall
+     real(c_double) :: dt, sigma, radius, period
+     integer(c_int32_t) :: bound_kind
+     real(c_double) :: bound
+     integer(c_int32_t) :: drift
+     real(c_double) :: friction_rate
+     type(c_funptr) :: drift_fn
+     type(c_ptr) :: drift_user_data
+  end type coag_langevin_config
+
+  ! a first-hit kernel estimation; set struct_size = c_sizeof(it)
+  type, bind(c) :: coag_first_hits
+     integer(c_size_t) :: struct_size
+     integer(c_int32_t) :: dim
+     real(c_double) :: radius, outer, from, to, dt, sigma, velocity_sd
+     integer(c_int64_t) :: trajectories
+     integer(c_int32_t) :: drift
+     real(c_double) :: friction_rate
+     type(c_funptr) :: drift_fn
+     type(c_ptr) :: drift_user_data
+  end type coag_first_hits
+
   type, bind(c) :: coag_massflow_config
      integer(c_size_t) :: struct_size
      real(c_double) :: dt
@@ -86,6 +116,106 @@ module coagula
   end type coag_step_report
 
   interface
+     function coag_langevin_default_config(out, size) bind(c, name="coag_langevin_default_config")
+       import :: coag_langevin_config, c_size_t, c_int32_t
+       type(coag_langevin_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_langevin_default_config
+     end function
+     function coag_langevin_new(config, n, x0, u0, seed, first_id, out) bind(c, name="coag_langevin_new")
+       import :: coag_langevin_config, c_int64_t, c_double, c_ptr, c_int32_t
+       type(coag_langevin_config), intent(in) :: config
+       integer(c_int64_t), value :: n
+       real(c_double), intent(in) :: x0(*), u0(*)
+       integer(c_int64_t), value :: seed, first_id
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_langevin_new
+     end function
+     function coag_langevin_workspace_size(config, n, out) bind(c, name="coag_langevin_workspace_size")
+       import :: coag_langevin_config, c_int64_t, c_size_t, c_int32_t
+       type(coag_langevin_config), intent(in) :: config
+       integer(c_int64_t), value :: n
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_langevin_workspace_size
+     end function
+     ! the workspace (c_loc of a real(c_double) array) must stay allocated until
+     ! coag_langevin_free
+     function coag_langevin_new_in(config, n, x0, u0, seed, first_id, workspace, workspace_bytes, out) &
+          bind(c, name="coag_langevin_new_in")
+       import :: coag_langevin_config, c_int64_t, c_double, c_ptr, c_size_t, c_int32_t
+       type(coag_langevin_config), intent(in) :: config
+       integer(c_int64_t), value :: n
+       real(c_double), intent(in) :: x0(*), u0(*)
+       integer(c_int64_t), value :: seed, first_id
+       type(c_ptr), value :: workspace
+       integer(c_size_t), value :: workspace_bytes
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_langevin_new_in
+     end function
+     subroutine coag_langevin_free(h) bind(c, name="coag_langevin_free")
+       import :: c_ptr
+       type(c_ptr), value :: h
+     end subroutine
+     function coag_langevin_advance_to(h, t, report) bind(c, name="coag_langevin_advance_to")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: h
+       real(c_double), value :: t
+       type(c_ptr), value :: report
+       integer(c_int32_t) :: coag_langevin_advance_to
+     end function
+     ! time, dim, n: c_loc of the variables, or c_null_ptr
+     function coag_langevin_info(h, time, dim, n) bind(c, name="coag_langevin_info")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: h, time, dim, n
+       integer(c_int32_t) :: coag_langevin_info
+     end function
+     ! x, u (n*dim doubles), hits (n int64), first_hit (n doubles): c_loc or c_null_ptr
+     function coag_langevin_state(h, x, u, hits, first_hit, len) bind(c, name="coag_langevin_state")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h, x, u, hits, first_hit
+       integer(c_size_t), value :: len
+       integer(c_int32_t) :: coag_langevin_state
+     end function
+     ! f: c_funloc of a bind(c) function (x, u, dim, user_data) -> real(c_double), or
+     ! c_null_funptr for the hits per trajectory; absorbed: c_loc or c_null_ptr
+     function coag_langevin_mean(h, f, user_data, mean, std_error, absorbed) bind(c, name="coag_langevin_mean")
+       import :: c_ptr, c_funptr, c_double, c_int32_t
+       type(c_ptr), value :: h
+       type(c_funptr), value :: f
+       type(c_ptr), value :: user_data
+       real(c_double), intent(out) :: mean, std_error
+       type(c_ptr), value :: absorbed
+       integer(c_int32_t) :: coag_langevin_mean
+     end function
+     function coag_langevin_checkpoint_size(h, out) bind(c, name="coag_langevin_checkpoint_size")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_langevin_checkpoint_size
+     end function
+     function coag_langevin_save(h, buf, n, written) bind(c, name="coag_langevin_save")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(out) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: written
+       integer(c_int32_t) :: coag_langevin_save
+     end function
+     function coag_langevin_restore(h, buf, n) bind(c, name="coag_langevin_restore")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(in) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_int32_t) :: coag_langevin_restore
+     end function
+     function coag_first_hit_kernel(p, seed, first_id, mean, std_error, hits) bind(c, name="coag_first_hit_kernel")
+       import :: coag_first_hits, c_int64_t, c_double, c_int32_t
+       type(coag_first_hits), intent(in) :: p
+       integer(c_int64_t), value :: seed, first_id
+       real(c_double), intent(out) :: mean, std_error
+       integer(c_int64_t), intent(out) :: hits
+       integer(c_int32_t) :: coag_first_hit_kernel
+     end function
      function coag_kernel_new_constant(k0, out) bind(c, name="coag_kernel_new_constant")
        import :: c_double, c_ptr, c_int32_t
        real(c_double), value :: k0

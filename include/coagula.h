@@ -116,6 +116,51 @@
 #define COAG_EXACT_COAG_FRAG 4
 
 /*
+ Specular reflection at the wall.
+ */
+#define COAG_WALL_SPECULAR 0
+
+/*
+ Absorption at the wall (the trajectory stops at its first hit).
+ */
+#define COAG_WALL_ABSORBING 1
+
+/*
+ No velocity bound.
+ */
+#define COAG_BOUND_NONE 0
+
+/*
+ Velocities past the bound are clamped to it.
+ */
+#define COAG_BOUND_CLAMP 1
+
+/*
+ Velocities past the bound are reflected at it.
+ */
+#define COAG_BOUND_REFLECT 2
+
+/*
+ b = 0.
+ */
+#define COAG_DRIFT_ZERO 0
+
+/*
+ b = −rate u (Ornstein–Uhlenbeck velocity; `friction_rate` = 1/τ).
+ */
+#define COAG_DRIFT_FRICTION 1
+
+/*
+ The test problem of Maftei et al. (2016): b = cos(2πx) + cos(2πu)/2 (dim 1).
+ */
+#define COAG_DRIFT_MAFTEI2016 2
+
+/*
+ The C callback `drift_fn` with `drift_user_data`.
+ */
+#define COAG_DRIFT_CALLBACK 3
+
+/*
  Niederreiter's (1,3)-sequence (Lécot et al.'s choice).
  */
 #define COAG_POINTS_NIEDERREITER 0
@@ -213,6 +258,11 @@ typedef struct coag_fragmentation coag_fragmentation;
 typedef struct coag_kernel coag_kernel;
 
 /*
+ A batch of Langevin trajectories (opaque).
+ */
+typedef struct coag_langevin coag_langevin;
+
+/*
  Opaque simulation handle (`coag_sim` in C).
  */
 typedef struct coag_sim coag_sim;
@@ -302,6 +352,71 @@ typedef struct {
 } coag_user_fragmentation;
 
 /*
+ A drift callback: writes `b(t, x, u)` (`dim` components) to `out` and returns 0; any
+ other return value stops the call with `COAG_INVALID_RATE` (as a NaN does).
+ */
+typedef int32_t (*coag_drift_fn)(double t, const double *x, const double *u, size_t dim, double *out, void *user_data);
+
+/*
+ A Langevin batch's configuration. Fill it with `coag_langevin_default_config`, which
+ sets `struct_size`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_langevin_config)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Dimension 1 (the half-line x ≥ 0, wall at 0), 2 or 3 (outside the ball |x| ≤ radius).
+   */
+  uint32_t dim;
+  /*
+   `COAG_WALL_*`.
+   */
+  int32_t wall;
+  /*
+   Time step > 0.
+   */
+  double dt;
+  /*
+   Noise amplitude σ ≥ 0.
+   */
+  double sigma;
+  /*
+   dim 2 or 3: the excluded ball's radius > 0; dim 1: 0.
+   */
+  double radius;
+  /*
+   dim 1: a periodic border at x = period (positions move back by it); 0 = none.
+   */
+  double period;
+  /*
+   `COAG_BOUND_*`.
+   */
+  int32_t bound_kind;
+  /*
+   The velocity bound (> 0) for `COAG_BOUND_CLAMP` and `COAG_BOUND_REFLECT`.
+   */
+  double bound;
+  /*
+   `COAG_DRIFT_*`.
+   */
+  int32_t drift;
+  /*
+   `COAG_DRIFT_FRICTION`: the rate 1/τ.
+   */
+  double friction_rate;
+  /*
+   `COAG_DRIFT_CALLBACK`: the drift.
+   */
+  coag_drift_fn drift_fn;
+  /*
+   `COAG_DRIFT_CALLBACK`: passed to `drift_fn`, never dereferenced by coagula.
+   */
+  void *drift_user_data;
+} coag_langevin_config;
+
+/*
  What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
  `coag_step_report_init`) before passing it; the library writes the fields that fit.
  */
@@ -349,6 +464,73 @@ typedef struct {
    */
   uint64_t bounces;
 } coag_step_report;
+
+/*
+ An observable `f(x, u)` for `coag_langevin_mean`.
+ */
+typedef double (*coag_observable_fn)(const double *x, const double *u, size_t dim, void *user_data);
+
+/*
+ A first-hit kernel estimation (see `coag_first_hit_kernel`).
+ */
+typedef struct {
+  /*
+   `sizeof(coag_first_hits)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Dimension, 2 or 3.
+   */
+  uint32_t dim;
+  /*
+   Collision radius R = r1 + r2 > 0.
+   */
+  double radius;
+  /*
+   Outer radius L > R of the shell the pairs start in.
+   */
+  double outer;
+  /*
+   Window [from, to) of the hits counted (to > from ≥ 0; the run's final time).
+   */
+  double from;
+  /*
+   End of the window.
+   */
+  double to;
+  /*
+   Time step > 0.
+   */
+  double dt;
+  /*
+   Noise amplitude of the relative velocity.
+   */
+  double sigma;
+  /*
+   Standard deviation of each initial relative velocity component.
+   */
+  double velocity_sd;
+  /*
+   Trajectories (≥ 1).
+   */
+  uint64_t trajectories;
+  /*
+   `COAG_DRIFT_ZERO`, `COAG_DRIFT_FRICTION` or `COAG_DRIFT_CALLBACK`.
+   */
+  int32_t drift;
+  /*
+   `COAG_DRIFT_FRICTION`: the rate 1/τ.
+   */
+  double friction_rate;
+  /*
+   `COAG_DRIFT_CALLBACK`: the relative drift.
+   */
+  coag_drift_fn drift_fn;
+  /*
+   `COAG_DRIFT_CALLBACK`: passed to `drift_fn`.
+   */
+  void *drift_user_data;
+} coag_first_hits;
 
 /*
  Configuration of the event-driven schemes over particle sizes (Eibeck & Wagner
@@ -647,6 +829,131 @@ int32_t coag_fragmentation_new_user(const coag_user_fragmentation *desc, coag_fr
  `frag` must be NULL or a handle from `coag_fragmentation_new_*` not yet freed.
  */
 void coag_fragmentation_free(coag_fragmentation *frag);
+
+/*
+ Writes the default configuration (dim 1, specular, dt 0.01, σ 1, no border, no
+ bound, b = 0) into `out`, a struct of `size` bytes (`sizeof(coag_langevin_config)`).
+
+ # Safety
+ `out` must be NULL or valid for writing `size` bytes.
+ */
+int32_t coag_langevin_default_config(coag_langevin_config *out, size_t size);
+
+/*
+ A batch of `n ≥ 1` trajectories, all starting at `(x0, u0)` (`dim` doubles each), in
+ memory the library owns. Trajectory i has its own generator, the seed policy's
+ `(seed, first_id + i)`: shares of an ensemble built with disjoint `first_id` ranges
+ give the same paths as the whole. Free with `coag_langevin_free`.
+
+ # Safety
+ Pointers must be NULL or valid; `x0`, `u0` hold `config->dim` doubles.
+ */
+int32_t coag_langevin_new(const coag_langevin_config *config, uint64_t n, const double *x0, const double *u0, uint64_t seed, uint64_t first_id, coag_langevin **out);
+
+/*
+ Bytes of caller memory `coag_langevin_new_in` needs for `n` trajectories of
+ `config->dim` dimensions.
+
+ # Safety
+ Pointers must be NULL or valid.
+ */
+int32_t coag_langevin_workspace_size(const coag_langevin_config *config, uint64_t n, size_t *out);
+
+/*
+ `coag_langevin_new` in memory the caller owns: `workspace` (aligned for `double`,
+ `workspace_bytes` ≥ `coag_langevin_workspace_size`) holds every trajectory for the
+ batch's whole life; no step allocates. The caller keeps it alive and untouched until
+ `coag_langevin_free`.
+
+ # Safety
+ Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and used
+ by nothing else until the batch is freed.
+ */
+int32_t coag_langevin_new_in(const coag_langevin_config *config, uint64_t n, const double *x0, const double *u0, uint64_t seed, uint64_t first_id, void *workspace, size_t workspace_bytes, coag_langevin **out);
+
+/*
+ Frees a batch (NULL is a no-op); caller memory is left to the caller.
+
+ # Safety
+ `h` must be NULL or a live handle, not used afterwards.
+ */
+void coag_langevin_free(coag_langevin *h);
+
+/*
+ Steps every trajectory to time `t` (steps end at the multiples of dt; a target
+ between two ends a shortened step). `report` may be NULL. A drift returning NaN,
+ infinity or a non-zero status is `COAG_INVALID_RATE`, with the batch as it was.
+
+ # Safety
+ `h` a live handle used by this thread alone; `report` NULL or valid.
+ */
+int32_t coag_langevin_advance_to(coag_langevin *h, double t, coag_step_report *report);
+
+/*
+ The batch's time, dimension and number of trajectories (any out pointer may be NULL).
+
+ # Safety
+ `h` a live handle; out pointers NULL or writable.
+ */
+int32_t coag_langevin_info(const coag_langevin *h, double *time, size_t *dim, uint64_t *n);
+
+/*
+ Copies the state: positions and velocities (`n·dim` doubles each, trajectory-major),
+ hits (`n`) and first-hit times (`n`, +inf when none); `len` is `n`. Any of the four
+ arrays may be NULL.
+
+ # Safety
+ `h` a live handle; each non-null array valid for its length.
+ */
+int32_t coag_langevin_state(const coag_langevin *h, double *x, double *u, uint64_t *hits, double *first_hit, size_t len);
+
+/*
+ Mean and standard error of `f(X, U)` over the trajectories (absorbed ones at their
+ hit); `f` NULL means the hits per trajectory. `absorbed` (may be NULL) gets the
+ number of absorbed trajectories.
+
+ # Safety
+ `h` a live handle; `f` NULL or a valid callback; out pointers NULL or writable
+ (`mean` and `std_error` required).
+ */
+int32_t coag_langevin_mean(const coag_langevin *h, coag_observable_fn f, void *user_data, double *mean, double *std_error, uint64_t *absorbed);
+
+/*
+ Bytes a checkpoint of the batch needs now.
+
+ # Safety
+ `h` a live handle; `out` writable.
+ */
+int32_t coag_langevin_checkpoint_size(const coag_langevin *h, size_t *out);
+
+/*
+ Saves the batch (configuration, time, every trajectory; not the drift) into `buf`;
+ `written` (may be NULL) gets the bytes used.
+
+ # Safety
+ `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
+ */
+int32_t coag_langevin_save(const coag_langevin *h, uint8_t *buf, size_t len, size_t *written);
+
+/*
+ Restores a checkpoint into a batch of the same dimension and size (its drift stays);
+ on error the batch is unchanged.
+
+ # Safety
+ `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
+ */
+int32_t coag_langevin_restore(coag_langevin *h, const uint8_t *buf, size_t len);
+
+/*
+ The collision kernel of the relative motion, averaged over `[from, to)`, from the
+ first hits of the sphere |x| = R by pairs starting uniformly in R < |x| < L with
+ Maxwellian velocities (see `coagula_core::langevin::kernel`): its estimate, standard
+ error and the hits counted. Trajectories `first_id..` of `seed`.
+
+ # Safety
+ `p` valid for `p->struct_size` bytes; out pointers writable (`hits` may be NULL).
+ */
+int32_t coag_first_hit_kernel(const coag_first_hits *p, uint64_t seed, uint64_t first_id, double *mean, double *std_error, uint64_t *hits);
 
 /*
  Zero-fills a step report of `size` bytes (`sizeof(coag_step_report)`) and sets its

@@ -47,6 +47,9 @@ struct FragFree {
 struct SimFree {
     void operator()(coag_sim *s) const noexcept { coag_sim_free(s); }
 };
+struct LangevinFree {
+    void operator()(coag_langevin *h) const noexcept { coag_langevin_free(h); }
+};
 }  // namespace detail
 
 /// A coagulation kernel.
@@ -363,6 +366,124 @@ class Sim {
     }
     std::unique_ptr<coag_sim, detail::SimFree> s_;
 };
+
+inline coag_langevin_config langevin_default_config() {
+    coag_langevin_config c;
+    check(coag_langevin_default_config(&c, sizeof c));
+    return c;
+}
+
+/// Bytes of caller memory a Langevin batch of n trajectories needs (Langevin::make_in).
+inline std::size_t langevin_workspace_size(const coag_langevin_config &c, std::uint64_t n) {
+    size_t b;
+    check(coag_langevin_workspace_size(&c, n, &b));
+    return b;
+}
+
+/// Mean and standard error of an estimate over trajectories.
+struct Estimate {
+    double mean, std_error;
+    std::uint64_t count;  // absorbed trajectories (Langevin::mean), or hits (first_hit_kernel)
+};
+
+/// A batch of Langevin trajectories with a specular or absorbing wall (Maftei et al.).
+class Langevin {
+  public:
+    /// n trajectories from (x0, u0) (c.dim values each), trajectory i drawing from the
+    /// generator (seed, first_id + i).
+    static Langevin make(const coag_langevin_config &c, std::uint64_t n, const std::vector<double> &x0,
+                         const std::vector<double> &u0, std::uint64_t seed, std::uint64_t first_id = 0) {
+        coag_langevin *h = nullptr;
+        check(coag_langevin_new(&c, n, x0.data(), u0.data(), seed, first_id, &h));
+        return Langevin(h);
+    }
+    /// The same in caller-owned memory (bytes >= langevin_workspace_size, aligned for
+    /// double), which must outlive the batch.
+    static Langevin make_in(const coag_langevin_config &c, std::uint64_t n, const std::vector<double> &x0,
+                            const std::vector<double> &u0, std::uint64_t seed, std::uint64_t first_id,
+                            void *workspace, std::size_t bytes) {
+        coag_langevin *h = nullptr;
+        check(coag_langevin_new_in(&c, n, x0.data(), u0.data(), seed, first_id, workspace, bytes, &h));
+        return Langevin(h);
+    }
+    coag_step_report advance_to(double t) {
+        coag_step_report r = step_report();
+        check(coag_langevin_advance_to(h_.get(), t, &r));
+        return r;
+    }
+    double time() const {
+        double t;
+        check(coag_langevin_info(h_.get(), &t, nullptr, nullptr));
+        return t;
+    }
+    std::size_t dim() const {
+        std::size_t d;
+        check(coag_langevin_info(h_.get(), nullptr, &d, nullptr));
+        return d;
+    }
+    std::uint64_t size() const {
+        std::uint64_t n;
+        check(coag_langevin_info(h_.get(), nullptr, nullptr, &n));
+        return n;
+    }
+    /// Positions (n·dim, trajectory-major).
+    std::vector<double> positions() const {
+        std::vector<double> x(size() * dim());
+        check(coag_langevin_state(h_.get(), x.data(), nullptr, nullptr, nullptr, size()));
+        return x;
+    }
+    /// Velocities (n·dim, trajectory-major).
+    std::vector<double> velocities() const {
+        std::vector<double> u(size() * dim());
+        check(coag_langevin_state(h_.get(), nullptr, u.data(), nullptr, nullptr, size()));
+        return u;
+    }
+    /// Wall hits of each trajectory.
+    std::vector<std::uint64_t> hits() const {
+        std::vector<std::uint64_t> k(size());
+        check(coag_langevin_state(h_.get(), nullptr, nullptr, k.data(), nullptr, size()));
+        return k;
+    }
+    /// Time of each trajectory's first hit (+inf when none).
+    std::vector<double> first_hits() const {
+        std::vector<double> t(size());
+        check(coag_langevin_state(h_.get(), nullptr, nullptr, nullptr, t.data(), size()));
+        return t;
+    }
+    /// Mean and SE of f(X, U) over the trajectories (f null: hits per trajectory);
+    /// count = absorbed trajectories.
+    Estimate mean(coag_observable_fn f = nullptr, void *user_data = nullptr) const {
+        Estimate e{};
+        check(coag_langevin_mean(h_.get(), f, user_data, &e.mean, &e.std_error, &e.count));
+        return e;
+    }
+    std::vector<std::uint8_t> checkpoint() const {
+        std::size_t n = 0;
+        check(coag_langevin_checkpoint_size(h_.get(), &n));
+        std::vector<std::uint8_t> buf(n);
+        check(coag_langevin_save(h_.get(), buf.data(), buf.size(), &n));
+        buf.resize(n);
+        return buf;
+    }
+    void restore(const std::vector<std::uint8_t> &buf) { check(coag_langevin_restore(h_.get(), buf.data(), buf.size())); }
+    coag_langevin *get() const noexcept { return h_.get(); }
+
+  private:
+    explicit Langevin(coag_langevin *h) : h_(h) {}
+    static coag_step_report step_report() {
+        coag_step_report r;
+        check(coag_step_report_init(&r, sizeof r));
+        return r;
+    }
+    std::unique_ptr<coag_langevin, detail::LangevinFree> h_;
+};
+
+/// The collision kernel from first hits (coag_first_hit_kernel); count = hits.
+inline Estimate first_hit_kernel(const coag_first_hits &p, std::uint64_t seed, std::uint64_t first_id = 0) {
+    Estimate e{};
+    check(coag_first_hit_kernel(&p, seed, first_id, &e.mean, &e.std_error, &e.count));
+    return e;
+}
 
 }  // namespace coagula
 

@@ -25,10 +25,12 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 mod kernel;
+mod langevin;
 mod rng;
 mod sim;
 
 pub use kernel::*;
+pub use langevin::*;
 pub use sim::*;
 
 use coagula_core::Error;

@@ -213,7 +213,7 @@ fn report_of(r: StepReport) -> coag_step_report {
 ///
 /// # Safety
 /// `out` non-null and valid for `out->struct_size` bytes (caller contract).
-unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), Fail> {
+pub(crate) unsafe fn write_report(out: *mut coag_step_report, r: StepReport) -> Result<(), Fail> {
     // SAFETY: non-null (caller); a report begins with its size_t struct_size.
     let size = unsafe { out.cast::<usize>().read_unaligned() };
     if size < STEP_REPORT_V1 {
@@ -309,7 +309,7 @@ unsafe fn new_sim(
 ///
 /// # Safety
 /// A non-null `p` must be a live handle, not mutated for `'a`.
-unsafe fn handle<'a, T>(p: *const T, name: &str) -> Result<&'a T, Fail> {
+pub(crate) unsafe fn handle<'a, T>(p: *const T, name: &str) -> Result<&'a T, Fail> {
     non_null(p, name)?;
     // SAFETY: non-null; the function's contract.
     Ok(unsafe { &*p })
@@ -317,7 +317,7 @@ unsafe fn handle<'a, T>(p: *const T, name: &str) -> Result<&'a T, Fail> {
 
 /// # Safety
 /// A non-null `p` must be a live handle used by this thread alone for `'a`.
-unsafe fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
+pub(crate) unsafe fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
     non_null(p, name)?;
     // SAFETY: non-null; the function's contract.
     Ok(unsafe { &mut *p })
@@ -331,7 +331,7 @@ unsafe fn handle_mut<'a, T>(p: *mut T, name: &str) -> Result<&'a mut T, Fail> {
 /// # Safety
 /// A non-null `out` must be valid for writing `size` bytes; T is a repr(C) struct of
 /// numbers beginning with a `usize`.
-unsafe fn write_sized<T: Copy>(
+pub(crate) unsafe fn write_sized<T: Copy>(
     out: *mut T,
     size: usize,
     v1: usize,
@@ -928,7 +928,7 @@ fn workspace_bytes_for(len: Option<usize>, n: usize) -> Result<usize, Fail> {
 
 /// Checks a caller workspace for `need` bytes: non-null, aligned for `double`, large
 /// enough, not overlapping `sizes`.
-fn check_workspace(
+pub(crate) fn check_workspace(
     workspace: *mut c_void,
     bytes: usize,
     need: usize,

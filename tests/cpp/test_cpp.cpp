@@ -159,6 +159,61 @@ int main() {
     a.set_cancel_callback([](void *p) -> std::int32_t { return ++*static_cast<int *>(p) >= 1; }, &polls);
     a.set_kernel(coagula::Kernel::constant(1.0));
     CHECK(a.gel_mass() > 0 && a.concentration(1.0, 1.0) >= 0, "observables");
+    // Langevin batches: b = 0 outside the unit ball keeps E|U|^2 = |u0|^2 + 3 T
+    // (4.89 SE), caller memory and a checkpoint continue bit for bit, errors throw
+    {
+        auto c = coagula::langevin_default_config();
+        c.dim = 3;
+        c.radius = 1.0;
+        c.dt = 0.02;
+        auto b = coagula::Langevin::make(c, 20000, {1.2, 0.0, 0.0}, {-2.0, 0.0, 0.0}, 11);
+        auto r = b.advance_to(1.0);
+        CHECK(r.bounces > 1000 && b.time() == 1.0 && b.dim() == 3 && b.size() == 20000, "langevin run");
+        auto e = b.mean([](const double *, const double *u, std::size_t d, void *) {
+            double s = 0;
+            for (std::size_t k = 0; k < d; ++k) s += u[k] * u[k];
+            return s;
+        });
+        CHECK(std::fabs(e.mean - 7.0) < 4.89 * e.std_error, "E|U|^2 %g +- %g", e.mean, e.std_error);
+        CHECK(b.mean().mean > 0.5 && b.hits().size() == 20000 && b.first_hits().size() == 20000, "hits");
+        auto p = coagula::langevin_default_config();
+        p.drift = COAG_DRIFT_MAFTEI2016;
+        p.dt = 0.1;
+        p.period = 1.0;
+        std::vector<double> ws(coagula::langevin_workspace_size(p, 500) / sizeof(double));
+        auto own = coagula::Langevin::make(p, 500, {0.5}, {-1.5}, 9);
+        auto mine = coagula::Langevin::make_in(p, 500, {0.5}, {-1.5}, 9, 0, ws.data(), ws.size() * sizeof(double));
+        own.advance_to(1.6);
+        mine.advance_to(1.6);
+        auto cp = mine.checkpoint();
+        own.advance_to(3.2);
+        mine.advance_to(3.2);
+        mine.restore(cp);
+        mine.advance_to(3.2);
+        CHECK(own.positions() == mine.positions() && own.velocities() == mine.velocities(), "langevin bits");
+        bool threw = false;
+        try {
+            own.advance_to(1.0);
+        } catch (const coagula::Error &err) {
+            threw = err.code() == COAG_TIME_BACKWARDS;
+        }
+        CHECK(threw, "time backwards throws");
+        coag_first_hits fh{};
+        fh.struct_size = sizeof fh;
+        fh.dim = 2;
+        fh.radius = 0.5;
+        fh.outer = 10.0;
+        fh.from = 0.4;
+        fh.to = 1.0;
+        fh.dt = 0.1;
+        fh.velocity_sd = 1.0;
+        fh.trajectories = 50000;
+        fh.drift = COAG_DRIFT_ZERO;
+        auto k2 = coagula::first_hit_kernel(fh, 3);
+        double exact = 2.0 * 0.5 * std::sqrt(std::acos(-1.0) / 2.0);
+        CHECK(std::fabs(k2.mean - exact) < 4.89 * k2.std_error, "2-D free-flight kernel %g +- %g", k2.mean,
+              k2.std_error);
+    }
     std::printf("test_cpp: %d passed, %d failed\n", checks - failures, failures);
     return failures ? 1 : 0;
 }

@@ -50,6 +50,26 @@ contains
     r = rng_state
     if (c_associated(ud)) r = 0
   end function
+  ! Langevin callbacks: |u|^2 as an observable, friction b = -u as a drift
+  function u_squared(x, u, dim, ud) bind(c) result(r)
+    real(c_double), intent(in) :: x(*), u(*)
+    integer(c_size_t), value :: dim
+    type(c_ptr), value :: ud
+    real(c_double) :: r
+    r = sum(u(1:dim)**2) + 0.0_c_double * x(1)
+    if (c_associated(ud)) r = 0
+  end function
+  function friction_drift(t, x, u, dim, out, ud) bind(c) result(r)
+    real(c_double), value :: t
+    real(c_double), intent(in) :: x(*), u(*)
+    integer(c_size_t), value :: dim
+    real(c_double), intent(out) :: out(*)
+    type(c_ptr), value :: ud
+    integer(c_int32_t) :: r
+    out(1:dim) = -u(1:dim) + 0.0_c_double * (t + x(1))
+    r = 0
+    if (c_associated(ud)) r = 1
+  end function
 end module test_callbacks
 
 program test_fortran
@@ -84,6 +104,18 @@ program test_fortran
   real(c_double), allocatable :: sizes(:)
   integer :: r, h, nfail, nchecks
   integer, parameter :: reps = 32
+  ! Langevin
+  type(coag_langevin_config) :: lgc
+  type(coag_first_hits) :: fh
+  type(c_ptr) :: lb
+  real(c_double), target :: lt
+  integer(c_size_t), target :: ldim
+  integer(c_int64_t), target :: ln
+  integer(c_int64_t) :: lhitc
+  real(c_double), allocatable, target :: lxs(:), lfirst(:), lws(:)
+  integer(c_int64_t), allocatable, target :: lhits(:)
+  integer(c_int8_t), allocatable :: lck(:)
+  integer(c_size_t) :: lnck, lnw, lwb
 
   nfail = 0
   nchecks = 0
@@ -288,6 +320,64 @@ program test_fortran
   call coag_sim_free(sim)
   call coag_fragmentation_free(f)
   call coag_kernel_free(k)
+  ! Langevin batches: b = 0 outside the unit ball keeps E|U|^2 = |u0|^2 + 3 T (4.89 SE)
+  call ok(coag_langevin_default_config(lgc, c_sizeof(lgc)))
+  lgc%dim = 3
+  lgc%radius = 1.0_c_double
+  lgc%dt = 0.02_c_double
+  call ok(coag_langevin_new(lgc, 20000_c_int64_t, [1.2_c_double, 0.0_c_double, 0.0_c_double], &
+       [-2.0_c_double, 0.0_c_double, 0.0_c_double], 11_c_int64_t, 0_c_int64_t, lb))
+  call ok(coag_langevin_advance_to(lb, 1.0_c_double, c_null_ptr))
+  call ok(coag_langevin_mean(lb, c_funloc(u_squared), c_null_ptr, mean, se, c_null_ptr))
+  call check(abs(mean - 7.0_c_double) < 4.89_c_double * se, "langevin E|U|^2 = |u0|^2 + 3T")
+  call ok(coag_langevin_info(lb, c_loc(lt), c_loc(ldim), c_loc(ln)))
+  call check(abs(lt - 1.0_c_double) < 1e-15_c_double .and. ldim == 3 .and. ln == 20000, "langevin info")
+  allocate(lxs(3 * 20000), lhits(20000), lfirst(20000))
+  call ok(coag_langevin_state(lb, c_loc(lxs), c_null_ptr, c_loc(lhits), c_loc(lfirst), 20000_c_size_t))
+  call check(all(lxs(1::3)**2 + lxs(2::3)**2 + lxs(3::3)**2 >= 1.0_c_double - 1e-12_c_double), &
+       "langevin positions outside the ball")
+  call check(sum(lhits) > 1000 .and. minval(lfirst) > 0.0_c_double, "langevin hits")
+  call ok(coag_langevin_checkpoint_size(lb, lnck))
+  allocate(lck(lnck))
+  call ok(coag_langevin_save(lb, lck, lnck, lnw))
+  call ok(coag_langevin_advance_to(lb, 2.0_c_double, c_null_ptr))
+  call ok(coag_langevin_restore(lb, lck, lnw))
+  call ok(coag_langevin_info(lb, c_loc(lt), c_null_ptr, c_null_ptr))
+  call check(abs(lt - 1.0_c_double) < 1e-15_c_double, "langevin restore")
+  st = coag_langevin_advance_to(lb, 0.5_c_double, c_null_ptr)
+  call check(st == COAG_TIME_BACKWARDS, "langevin time backwards")
+  call coag_langevin_free(lb)
+  ! a Fortran drift in caller memory (friction, far from the wall)
+  call ok(coag_langevin_default_config(lgc, c_sizeof(lgc)))
+  lgc%drift = COAG_DRIFT_CALLBACK
+  lgc%drift_fn = c_funloc(friction_drift)
+  call ok(coag_langevin_workspace_size(lgc, 1000_c_int64_t, lwb))
+  allocate(lws(lwb / 8))
+  call ok(coag_langevin_new_in(lgc, 1000_c_int64_t, [50.0_c_double], [0.5_c_double], 5_c_int64_t, &
+       0_c_int64_t, c_loc(lws), lwb, lb))
+  call ok(coag_langevin_advance_to(lb, 1.0_c_double, c_null_ptr))
+  call ok(coag_langevin_mean(lb, c_null_funptr, c_null_ptr, mean, se, c_null_ptr))
+  call check(abs(mean) < 1e-300_c_double, "no hits far from the wall")
+  call coag_langevin_free(lb)
+  ! the free-flight kernel from first hits: pi R^2 <|v|> (4.89 SE)
+  fh%struct_size = c_sizeof(fh)
+  fh%dim = 3
+  fh%radius = 0.5_c_double
+  fh%outer = 10.0_c_double
+  fh%from = 0.4_c_double
+  fh%to = 1.0_c_double
+  fh%dt = 0.1_c_double
+  fh%sigma = 0.0_c_double
+  fh%velocity_sd = 1.0_c_double
+  fh%trajectories = 100000
+  fh%drift = COAG_DRIFT_ZERO
+  fh%friction_rate = 0.0_c_double
+  fh%drift_fn = c_null_funptr
+  fh%drift_user_data = c_null_ptr
+  call ok(coag_first_hit_kernel(fh, 7_c_int64_t, 0_c_int64_t, mean, se, lhitc))
+  exact = acos(-1.0_c_double) * 0.25_c_double * sqrt(8.0_c_double / acos(-1.0_c_double))
+  call check(abs(mean - exact) < 4.89_c_double * se .and. lhitc > 100, "free-flight kernel")
+
   print '(a, i0, a, i0, a)', "test_fortran: ", nchecks - nfail, " passed, ", nfail, " failed"
   if (nfail /= 0) stop 1
 
