@@ -353,7 +353,9 @@ typedef struct {
 
 /*
  A drift callback: writes `b(t, x, u)` (`dim` components) to `out` and returns 0; any
- other return value stops the call with `COAG_INVALID_RATE` (as a NaN does).
+ other return value stops the call with `COAG_INVALID_RATE` (as a NaN does). It runs
+ on the calling thread during `coag_langevin_advance_to` (or `coag_first_hit_kernel`)
+ and must not call into the batch whose call invoked it.
  */
 typedef int32_t (*coag_drift_fn)(double t, const double *x, const double *u, size_t dim, double *out, void *user_data);
 

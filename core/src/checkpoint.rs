@@ -288,8 +288,8 @@ pub(crate) fn read_report(r: &mut Reader) -> Result<crate::scheme::StepReport> {
         bound_violations: r.u64()?,
         clipped: r.u64()?,
         doublings: r.u64()?,
-        // (removals are written after the report by the schemes that remove
-        // particles; no scheme bounces yet)
+        // (removals and bounces are written after the report by the schemes that
+        // have them)
         ..Default::default()
     })
 }

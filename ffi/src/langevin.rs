@@ -16,7 +16,9 @@ use coagula_core::scheme::{Budget, Scheme};
 use std::ffi::c_void;
 
 /// A drift callback: writes `b(t, x, u)` (`dim` components) to `out` and returns 0; any
-/// other return value stops the call with `COAG_INVALID_RATE` (as a NaN does).
+/// other return value stops the call with `COAG_INVALID_RATE` (as a NaN does). It runs
+/// on the calling thread during `coag_langevin_advance_to` (or `coag_first_hit_kernel`)
+/// and must not call into the batch whose call invoked it.
 pub type coag_drift_fn = Option<
     unsafe extern "C" fn(
         t: f64,
@@ -200,6 +202,29 @@ pub struct coag_langevin {
     inner: Inner,
     dim: usize,
     n: usize,
+    /// The caller's workspace (address, bytes), or (0, 0): caller arrays passed to the
+    /// handle must not overlap it.
+    caller: (usize, usize),
+}
+
+/// Refuses a caller array `[p, p + bytes)` that overlaps the handle's workspace or
+/// `other` (another array of the same call).
+fn disjoint(
+    h: &coag_langevin,
+    p: usize,
+    bytes: usize,
+    other: (usize, usize),
+    name: &str,
+) -> Result<(), Fail> {
+    let overlap = |(a, an): (usize, usize)| {
+        an > 0 && bytes > 0 && p < a.saturating_add(an) && a < p.saturating_add(bytes)
+    };
+    if overlap(h.caller) || overlap(other) {
+        return Err(bad(format!(
+            "{name} overlaps the batch's workspace or another array of the call"
+        )));
+    }
+    Ok(())
 }
 
 macro_rules! with_batch {
@@ -310,6 +335,16 @@ fn build(
     first_id: u64,
     store: impl FnOnce(usize) -> Result<Store, Fail>,
 ) -> Result<coag_langevin, Fail> {
+    if n.checked_sub(1)
+        .and_then(|m| first_id.checked_add(m))
+        .is_none()
+        && n > 0
+    {
+        return Err(Fail(
+            crate::COAG_CAPACITY,
+            "first_id + n - 1 overflows".into(),
+        ));
+    }
     let n = usize::try_from(n).map_err(|_| bad("n does not fit in memory"))?;
     let d = c.dim as usize;
     macro_rules! make {
@@ -339,7 +374,12 @@ fn build(
         2 => make!(2, D2),
         _ => make!(3, D3),
     };
-    Ok(coag_langevin { inner, dim: d, n })
+    Ok(coag_langevin {
+        inner,
+        dim: d,
+        n,
+        caller: (0, 0),
+    })
 }
 
 /// A batch of `n ≥ 1` trajectories, all starting at `(x0, u0)` (`dim` doubles each), in
@@ -430,16 +470,21 @@ pub unsafe extern "C" fn coag_langevin_new_in(
         // SAFETY: forwarded contract.
         let (c, x, u) = unsafe { inputs(config, x0, u0) }?;
         non_null(out, "out")?;
-        let h = build(&c, n, &x, &u, seed, first_id, |len| {
-            check_workspace(workspace, workspace_bytes, len * 8, &[])?;
+        let mut h = build(&c, n, &x, &u, seed, first_id, |len| {
+            let bytes = len
+                .checked_mul(8)
+                .filter(|&b| b <= isize::MAX as usize)
+                .ok_or_else(|| bad(format!("workspace for {n} trajectories overflows")))?;
+            check_workspace(workspace, workspace_bytes, bytes, &[])?;
             // SAFETY: checked (non-null, aligned, large enough); the caller's memory for
             // the batch's life (contract).
             let s = unsafe {
-                std::ptr::write_bytes(workspace.cast::<u8>(), 0, len * 8);
+                std::ptr::write_bytes(workspace.cast::<u8>(), 0, bytes);
                 std::slice::from_raw_parts_mut(workspace.cast::<u64>(), len)
             };
             Ok(Store::Caller(s))
         })?;
+        h.caller = (workspace as usize, workspace_bytes);
         // SAFETY: checked non-null; writable (contract).
         unsafe { write(out, Box::into_raw(Box::new(h))) };
         Ok(())
@@ -545,6 +590,28 @@ pub unsafe extern "C" fn coag_langevin_state(
         }
         let d = h.dim;
         let nd = h.n.checked_mul(d).ok_or_else(|| bad("length overflows"))?;
+        // (no array may overlap the workspace or another: they are written while the
+        // records are read)
+        let arrays = [
+            (x as usize, if x.is_null() { 0 } else { nd * 8 }, "x"),
+            (u as usize, if u.is_null() { 0 } else { nd * 8 }, "u"),
+            (
+                hits as usize,
+                if hits.is_null() { 0 } else { h.n * 8 },
+                "hits",
+            ),
+            (
+                first_hit as usize,
+                if first_hit.is_null() { 0 } else { h.n * 8 },
+                "first_hit",
+            ),
+        ];
+        for (i, &(p, b, name)) in arrays.iter().enumerate() {
+            for &(q, c, _) in &arrays[i + 1..] {
+                disjoint(h, p, b, (q, c), name)?;
+            }
+            disjoint(h, p, b, (0, 0), name)?;
+        }
         // SAFETY (all four): NULL allowed (then skipped: length 0); valid otherwise.
         let xs = unsafe { slice_mut(x, if x.is_null() { 0 } else { nd }, "x") }?;
         let us = unsafe { slice_mut(u, if u.is_null() { 0 } else { nd }, "u") }?;
@@ -659,6 +726,13 @@ pub unsafe extern "C" fn coag_langevin_save(
     guard(|| {
         // SAFETY: forwarded contract.
         let h = unsafe { handle(h, "h") }?;
+        disjoint(
+            h,
+            buf as usize,
+            if buf.is_null() { 0 } else { len },
+            (0, 0),
+            "buf",
+        )?;
         // SAFETY: as above.
         let b = unsafe { slice_mut(buf, len, "buf") }?;
         let n = with_batch!(&h.inner, s => s.save_to(b))?;
@@ -684,6 +758,13 @@ pub unsafe extern "C" fn coag_langevin_restore(
     guard(|| {
         // SAFETY: forwarded contract.
         let h = unsafe { handle_mut(h, "h") }?;
+        disjoint(
+            h,
+            buf as usize,
+            if buf.is_null() { 0 } else { len },
+            (0, 0),
+            "buf",
+        )?;
         // SAFETY: as above.
         let b = unsafe { slice(buf, len, "buf") }?;
         with_batch!(&mut h.inner, s => s.restore_from(b))?;

@@ -115,6 +115,13 @@ int main(void) {
     coag_langevin *own = NULL, *mine = NULL;
     OK(coag_langevin_new(&c, 1000, &px, &pu, 9, 0, &own));
     OK(coag_langevin_new_in(&c, 1000, &px, &pu, 9, 0, ws, bytes, &mine));
+    /* (found by review) a count whose workspace bytes overflow is refused, not run in
+     * the small buffer; arrays overlapping the workspace are refused */
+    coag_langevin *huge = NULL;
+    CHECK(coag_langevin_new_in(&c, (uint64_t)1 << 58, &px, &pu, 9, 0, ws, bytes, &huge) != COAG_OK && huge == NULL,
+          "workspace bytes overflow refused");
+    EXPECT(coag_langevin_state(mine, ws, NULL, NULL, NULL, 1000), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_langevin_save(mine, (unsigned char *)ws, 64, NULL), COAG_INVALID_ARGUMENT);
     OK(coag_langevin_advance_to(own, 1.6, NULL));
     OK(coag_langevin_advance_to(mine, 1.6, NULL));
     size_t need = 0, written = 0;

@@ -32,7 +32,6 @@ use crate::error::{Error, Result, finite};
 use crate::observe::Replicas;
 use crate::random::{NormalZiggurat, Purpose, substream};
 use crate::scheme::Scheme;
-use alloc::vec;
 use core::f64::consts::PI;
 use rand_core::Rng;
 
@@ -125,7 +124,13 @@ impl FirstHits {
             }
         }
         let norm = libm::sqrt(norm2);
-        let x = core::array::from_fn(|k| r * dir[k] / norm);
+        let mut x: [f64; D] = core::array::from_fn(|k| r * dir[k] / norm);
+        // rounding may put |x| a hair inside the sphere when r ≈ R
+        while x.iter().map(|c| c * c).sum::<f64>() < self.radius * self.radius {
+            for c in x.iter_mut() {
+                *c *= 1.0 + f64::EPSILON;
+            }
+        }
         let u = core::array::from_fn(|_| self.velocity_sd * NormalZiggurat::sample(&mut g));
         let area = if D == 2 {
             2.0 * PI * r
@@ -154,7 +159,15 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
             name: "trajectory id",
         })?;
     let chunk = CHUNK.min(usize::try_from(p.trajectories).unwrap_or(CHUNK));
-    let mut ws = vec![0u64; super::workspace_len(D, chunk).unwrap_or(0)];
+    let len = super::workspace_len(D, chunk).ok_or(Error::Overflow {
+        name: "Langevin workspace",
+    })?;
+    let mut ws = alloc::vec::Vec::new();
+    ws.try_reserve_exact(len).map_err(|_| Error::Capacity {
+        name: "memory for the Langevin workspace (u64 words)",
+        capacity: len,
+    })?;
+    ws.resize(len, 0u64);
     let (mut rep, mut hits) = (Replicas::new(), 0u64);
     let width = p.to - p.from;
     let mut done = 0u64;

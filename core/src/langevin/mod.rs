@@ -17,7 +17,10 @@
 //! `U_θ = U_θ− − 2 (U_θ−·n) n`, mirrors the free position in the tangent plane, and
 //! diffuses on to the end of the step, `U_θ + b(θ, X_θ, U_θ)(h − s) + σ √(h − s) Z⁺`;
 //! an absorbing wall stops the trajectory at `(X_θ, U_θ−)`. Without a hit,
-//! `u + b(t, x, u) h + σ √h Z`. The bias in `E f(X_T, U_T)` is `C h + O(h²)`
+//! `u + b(t, x, u) h + σ √h Z`. A velocity bound, when set, applies to `U_θ−` as well.
+//! One choice beyond the paper: a trajectory standing on the wall (`x = 0`) and moving
+//! into it hits at `θ = t_i`; the paper's strict `t_i < θ` would mirror its position
+//! without flipping its velocity. The bias in `E f(X_T, U_T)` is `C h + O(h²)`
 //! (the paper's conjecture 33), so [`richardson_romberg`] of the runs at h and h/2
 //! is `O(h²)`.
 //!
@@ -424,6 +427,10 @@ impl<const D: usize> Traj<D> {
 /// Trajectories stepped side by side when a call has no budget.
 const LANES: usize = 8;
 
+/// Largest grid index `t / dt`: below 2^52 an `f64` index counts exactly, so every step
+/// moves the clock forward.
+const MAX_STEP_INDEX: f64 = 4_503_599_627_370_496.0;
+
 /// What one step did.
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Hit {
@@ -544,10 +551,14 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
             });
         }
         let w = Layout::<D>::W;
-        let recs = &mut ws.as_mut()[..need];
+        // every start is checked before the workspace is written
         for i in 0..n {
             let (x, u) = start(i);
             cfg.check_start(&x, &u)?;
+        }
+        let recs = &mut ws.as_mut()[..need];
+        for i in 0..n {
+            let (x, u) = start(i);
             let t = Traj {
                 x,
                 u,
@@ -680,6 +691,12 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
             let c = dot(&tr.x, &tr.x) - cfg.radius * cfg.radius;
             let bq = dot(&tr.x, &tr.u);
             let a = dot(&tr.u, &tr.u);
+            if !(a.is_finite() && (bq * bq).is_finite()) {
+                return Err(Error::InvalidRate {
+                    name: "velocity (too large to find the wall: |u|² overflows)",
+                    value: a,
+                });
+            }
             if bq < 0.0 && a > 0.0 {
                 let disc = bq * bq - a * c;
                 let s = if c <= 0.0 {
@@ -715,7 +732,10 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
         let ss = sig * libm::sqrt(s);
         let mut um = [0.0; D];
         for k in 0..D {
-            um[k] = tr.u[k] + b[k] * s + ss * NormalZiggurat::sample(&mut tr.rng);
+            um[k] = Self::bounded(
+                cfg,
+                tr.u[k] + b[k] * s + ss * NormalZiggurat::sample(&mut tr.rng),
+            );
         }
         if !um.iter().all(|v| v.is_finite()) {
             return Err(Error::InvalidRate {
@@ -729,7 +749,7 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
         }
         tr.hits += 1;
         if tr.first == f64::INFINITY {
-            tr.first = t + s;
+            tr.first = (t + s).min(t + h);
         }
         if cfg.wall == Wall::Absorbing {
             tr.x = xt;
@@ -759,6 +779,24 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
         Ok(Hit::Bounce)
     }
 
+    /// A velocity component with the bound applied.
+    #[inline(always)]
+    fn bounded(cfg: &Config<D>, mut u: f64) -> f64 {
+        match cfg.bound {
+            VelocityBound::None => {}
+            VelocityBound::Clamp(v) => u = u.clamp(-v, v),
+            VelocityBound::Reflect(v) => {
+                if u > v {
+                    u = 2.0 * v - u;
+                } else if u < -v {
+                    u = -2.0 * v - u;
+                }
+                u = u.clamp(-v, v);
+            }
+        }
+        u
+    }
+
     /// Applies the options to the new state and stores it, or fails on a non-finite
     /// velocity (a drift returning NaN or infinity).
     #[inline(always)]
@@ -770,32 +808,22 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
                     value: u[k],
                 });
             }
-            match cfg.bound {
-                VelocityBound::None => {}
-                VelocityBound::Clamp(v) => u[k] = u[k].clamp(-v, v),
-                VelocityBound::Reflect(v) => {
-                    if u[k] > v {
-                        u[k] = 2.0 * v - u[k];
-                    } else if u[k] < -v {
-                        u[k] = -2.0 * v - u[k];
-                    }
-                    u[k] = u[k].clamp(-v, v);
-                }
-            }
+            u[k] = Self::bounded(cfg, u[k]);
         }
         if D == 1
             && let Some(l) = cfg.period
         {
             // one period back without a branch (a trajectory crosses the border at
-            // random steps); further periods are rare
+            // random steps); more periods are rare and reduced exactly by fmod
             x[0] -= l * f64::from(u8::from(x[0] >= l));
             if x[0] >= l {
-                x[0] -= l * libm::floor(x[0] / l);
+                x[0] = libm::fmod(x[0], l);
             }
         }
-        if !x.iter().all(|v| v.is_finite()) {
-            return Err(Error::NotFinite {
-                name: "position after a step",
+        if let Some(&bad) = x.iter().find(|v| !v.is_finite()) {
+            return Err(Error::InvalidRate {
+                name: "position after a step (the velocity overflowed)",
+                value: bad,
             });
         }
         tr.x = x;
@@ -856,6 +884,13 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Scheme for Ba
         };
         // steps run over the snapped span [s0, e]; the time reached is the caller's t
         let (s0, e) = (Self::snap(dt, t0), Self::snap(dt, t));
+        if e / dt > MAX_STEP_INDEX {
+            return Err(Error::OutOfRange {
+                name: "t / dt (the grid index must stay below 2^52 to move the clock)",
+                value: e / dt,
+                range: "[0, 2^52]",
+            });
+        }
         let k0 = Self::first_grid(dt, s0);
         if budget.is_unlimited() {
             // LANES trajectories step side by side: their chains (the velocity waits
@@ -929,6 +964,10 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Scheme for Ba
                 first = false;
                 now = end;
                 self.time = if now >= e { t } else { now };
+            }
+            if now >= e {
+                // (also when t snaps onto the grid point the batch stands at)
+                self.time = t;
             }
         }
         rep.time = self.time;
@@ -1016,27 +1055,58 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> crate::checkp
             return Err(bad("invalid trajectory ids"));
         }
         crate::scheme::check_time(time).map_err(|_| bad("invalid time"))?;
+        if Self::snap(cfg.dt, time) / cfg.dt > MAX_STEP_INDEX {
+            return Err(bad("a time beyond 2^52 steps"));
+        }
         let mut totals = read_report(r)?;
         totals.removed = r.u64()?;
         totals.bounces = r.u64()?;
-        let recs = r.u64s()?;
-        r.finish()?;
+        if totals.time.is_nan() || totals.time > time {
+            return Err(bad("totals after the time"));
+        }
         let w = Layout::<D>::W;
-        if recs.len() != self.n * w {
+        if r.u64()? != (self.n * w) as u64 {
             return Err(bad("records of the wrong length"));
         }
-        for rec in recs.chunks_exact(w) {
+        // read into the copy half of the workspace (no allocation), check, then swap in
+        let (recs, snap) = self.ws.as_mut()[..2 * self.n * w].split_at_mut(self.n * w);
+        for v in snap.iter_mut() {
+            *v = r.u64()?;
+        }
+        r.finish()?;
+        let horizon = Self::snap(cfg.dt, time) + cfg.dt;
+        for rec in snap.chunks_exact(w) {
             let t = Traj::<D>::load(rec);
+            let stopped = t.stopped(wall);
+            // a mirrored position may sit within rounding of the wall
+            let r2 = dot(&t.x, &t.x);
+            let placed = if D == 1 {
+                if stopped {
+                    t.x[0] == 0.0
+                } else {
+                    cfg.check_start(&t.x, &t.u).is_ok()
+                }
+            } else {
+                r2 >= cfg.radius * cfg.radius * (1.0 - 1e-9)
+                    && t.u.iter().all(|v| v.is_finite())
+                    && match cfg.bound {
+                        VelocityBound::None => true,
+                        VelocityBound::Clamp(v) | VelocityBound::Reflect(v) => {
+                            t.u.iter().all(|c| c.abs() <= v)
+                        }
+                    }
+            };
             let ok = t.x.iter().chain(&t.u).all(|v| v.is_finite())
+                && placed
                 && t.rng.parts() != [0; 4]
-                && (t.first == f64::INFINITY || (t.first >= 0.0 && t.first <= time))
+                && (t.first == f64::INFINITY || (t.first >= 0.0 && t.first <= horizon))
                 && (t.hits == 0) == (t.first == f64::INFINITY)
                 && (wall == Wall::Specular || t.hits <= 1);
             if !ok {
                 return Err(bad("an invalid trajectory record"));
             }
         }
-        self.ws.as_mut()[..self.n * w].copy_from_slice(&recs);
+        recs.copy_from_slice(snap);
         self.cfg = cfg;
         self.key = key;
         self.first_id = first_id;

@@ -25,7 +25,7 @@
 //! let (lo, hi) = rr.ci95();
 //! assert!(lo < rr.mean && rr.mean < hi);
 //! assert!(hits.mean() > 1.0 && hits.mean() < 1.3); // the paper: 1.14 hits per trajectory
-//! //! ```
+//! ```
 
 use super::{Batch, Config, Drift, VelocityBound, Wall};
 use crate::error::Result;

@@ -397,3 +397,77 @@ fn cos_2pi_matches_libm() {
     assert!(paper::cos_2pi(f64::NAN).is_nan());
     assert!(paper::cos_2pi(f64::INFINITY).is_nan());
 }
+
+/// Found by review: a budgeted call to a target that snaps onto the grid point the
+/// batch stands at reaches it (a host looping `while time() < t` would spin); a target
+/// beyond 2^52 steps is an error, not a hang; a huge velocity outside a ball is an
+/// error, not a pass through the ball.
+#[test]
+fn edge_targets_and_velocities_are_handled() {
+    let cfg = Config::line(0.1, 1.0, Wall::Specular).unwrap();
+    let mut b = Batch::new(cfg, Scalar(|_, _, _| 0.0), 4, ([1.0], [0.0]), &mut rng()).unwrap();
+    b.advance_to(0.3, &mut rng()).unwrap();
+    let t = 3.0 * 0.1; // 0.30000000000000004
+    let rep = b
+        .advance_within(t, &mut Budget::work(100), &mut rng())
+        .unwrap();
+    assert!(!rep.interrupted);
+    assert_eq!(b.time(), t);
+    assert!(matches!(
+        b.advance_to(1e300, &mut rng()),
+        Err(Error::OutOfRange { .. })
+    ));
+    assert_eq!(b.time(), t);
+    let ball = Config::<3>::ball(1.0, 0.1, 0.0, Wall::Specular).unwrap();
+    let zero = Field(|_, _: &[f64; 3], _: &[f64; 3]| [0.0; 3]);
+    let mut fast = Batch::new(
+        ball,
+        zero,
+        1,
+        ([3.0, 0.0, 0.0], [-1e200, 0.0, 0.0]),
+        &mut rng(),
+    )
+    .unwrap();
+    assert!(fast.advance_to(1.0, &mut rng()).is_err());
+    assert_eq!(fast.positions().next().unwrap(), [3.0, 0.0, 0.0]);
+}
+
+/// Found by review: a crafted checkpoint (a position outside the domain, a time beyond
+/// 2^52 steps) is refused and the batch is unchanged.
+#[test]
+fn crafted_checkpoints_are_refused() {
+    let cfg = paper::config(Wall::Specular, 0.1, paper::Choices::default()).unwrap();
+    let mut b = Batch::with_starts(cfg, paper::PaperDrift, 3, 9, 0, |_| ([0.5], [-1.5])).unwrap();
+    b.advance_to(1.0, &mut rng()).unwrap();
+    let before = b.records().to_vec();
+    let mut w = crate::checkpoint::Writer::new(&mut []);
+    b.save(&mut w);
+    let n = w.needed();
+    let mut buf = vec![0u8; n];
+    let mut w = crate::checkpoint::Writer::new(&mut buf);
+    b.save(&mut w);
+    // the layout: header (3), D, n, dt, sigma, wall, radius, period, bound kind and
+    // value, key, first id, time, report (7), removed, bounces, length, records
+    let words = |buf: &[u8]| -> Vec<u64> {
+        buf.chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let put =
+        |buf: &mut [u8], i: usize, v: u64| buf[8 * i..8 * i + 8].copy_from_slice(&v.to_le_bytes());
+    assert_eq!(words(&buf)[14], 1.0f64.to_bits(), "time at word 14");
+    let rec0 = 3 + 12 + 7 + 2 + 1;
+    let mut outside = buf.clone();
+    put(&mut outside, rec0, (-0.5f64).to_bits());
+    let mut late = buf.clone();
+    put(&mut late, 14, 1e300f64.to_bits());
+    put(&mut late, 15, 1e300f64.to_bits());
+    for bad in [outside, late] {
+        let mut r = crate::checkpoint::Reader::new(&bad);
+        assert!(b.restore(&mut r).is_err());
+        assert_eq!(b.records(), &before[..]);
+    }
+    let mut r = crate::checkpoint::Reader::new(&buf);
+    b.restore(&mut r).unwrap();
+    assert_eq!(b.records(), &before[..]);
+}
