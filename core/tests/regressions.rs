@@ -278,3 +278,26 @@ fn a_particle_list_beyond_memory_is_a_capacity_error() {
         Err(Error::Capacity { .. })
     ));
 }
+
+/// A random case of the event-driven no-panic property test ran for over 15 minutes in
+/// CI (2026-12-03): sizes up to 1e300 with the additive kernel and fragmentation give
+/// rates near 1e300, so a step of 0.05 holds ~1e298 events — no limit-free call ends.
+/// Such a call is what a budget is for: it returns `interrupted` after its work, with
+/// the scheme consistent and still running.
+#[test]
+fn astronomical_rates_are_bounded_by_a_budget() {
+    use coagula_core::kernel::BinaryUniform;
+    use coagula_core::scheme::Budget;
+    use coagula_core::scheme::eventflow::{Dsa, Mfa};
+    let (k, f) = (Coagulation::additive(), BinaryUniform::new(0.5).unwrap());
+    let mut rng = Pcg64Mcg::new(8);
+    let mut mfa = Mfa::new(k, f, &[1e100, 1.0, 3.0], 1e100).unwrap();
+    let rep = mfa
+        .advance_within(0.05, &mut Budget::work(100_000), &mut rng)
+        .unwrap();
+    assert!(rep.interrupted && rep.time < 0.05 && rep.proposals >= 100_000);
+    let mut dsa = Dsa::new(k, f, &[1e100, 1.0, 3.0], 1.0, 30).unwrap();
+    let rep = dsa.advance_within(0.05, &mut Budget::work(100_000), &mut rng);
+    // (or a capacity error: fragments fill the 30 slots)
+    assert!(rep.is_err() || rep.unwrap().interrupted);
+}
