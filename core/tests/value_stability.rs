@@ -243,3 +243,56 @@ fn event_driven_schemes_are_value_stable() {
     );
     assert!(failures.is_empty(), "{failures}");
 }
+
+/// Langevin batches: the paper's problem (specular and absorbing, 1-D) and a 3-D ball
+/// with friction, 500 trajectories under key 42; the pin hashes every position,
+/// velocity and hit count.
+#[test]
+fn langevin_batches_are_value_stable() {
+    use coagula_core::langevin::{Batch, Config, Friction, Wall, paper};
+    let mut failures = String::new();
+    let mut rng = Pcg64Mcg::seed_from_u64(42);
+    let state = |xs: Vec<u64>| fnv(xs);
+    for (name, wall, want) in [
+        (
+            "langevin specular",
+            Wall::Specular,
+            (563, 32000, 0, 0, 1364375592708310675),
+        ),
+        (
+            "langevin absorbing",
+            Wall::Absorbing,
+            (146, 28312, 0, 0, 4005323854573415476),
+        ),
+    ] {
+        let mut b = paper::batch(wall, 0.05, paper::Choices::default(), 500, 42, 0).unwrap();
+        let rep = b.advance_to(paper::T, &mut rng).unwrap();
+        let mut words: Vec<u64> = b
+            .positions()
+            .chain(b.velocities())
+            .map(|x| x[0].to_bits())
+            .collect();
+        words.extend(b.hits());
+        check(name, pin(rep, state(words)), want, &mut failures);
+    }
+    let cfg = Config::<3>::ball(1.0, 0.02, 1.0, Wall::Specular).unwrap();
+    let mut b = Batch::with_starts(cfg, Friction { rate: 1.0 }, 500, 42, 0, |_| {
+        ([1.5, 0.0, 0.0], [-1.0, 0.0, 0.0])
+    })
+    .unwrap();
+    let rep = b.advance_to(1.0, &mut rng).unwrap();
+    let mut words: Vec<u64> = b
+        .positions()
+        .chain(b.velocities())
+        .flatten()
+        .map(f64::to_bits)
+        .collect();
+    words.extend(b.hits());
+    check(
+        "langevin 3-D ball",
+        pin(rep, state(words)),
+        (252, 25000, 0, 0, 11814231682642413468),
+        &mut failures,
+    );
+    assert!(failures.is_empty(), "{failures}");
+}

@@ -51,6 +51,28 @@ fn checkpoint_restore_seeds_are_current() {
 }
 
 #[test]
+fn langevin_restore_corpus_and_regressions() {
+    let files = inputs("langevin_restore");
+    assert!(files.len() >= 24, "{} inputs", files.len());
+    for f in files {
+        fuzz::langevin_restore(&std::fs::read(&f).unwrap());
+    }
+}
+
+/// The committed Langevin seeds are checkpoints of today's format.
+#[test]
+fn langevin_restore_seeds_are_current() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/langevin_restore");
+    for (name, data) in fuzz::langevin_seeds() {
+        let committed = std::fs::read(dir.join(&name)).unwrap_or_default();
+        assert!(
+            committed == data,
+            "{name} is stale: regenerate with `cargo run --bin seed_corpus corpus/langevin_restore langevin` in fuzz/"
+        );
+    }
+}
+
+#[test]
 fn call_sequence_corpus_and_regressions() {
     let files = inputs("call_sequence");
     assert!(files.len() >= 10, "{} inputs", files.len());

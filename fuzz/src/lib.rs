@@ -203,3 +203,144 @@ pub fn seeds() -> Vec<(String, Vec<u8>)> {
 
 #[path = "call_sequence.rs"]
 pub mod call_sequence;
+
+/// Langevin batches of the `langevin_restore` target: dim 1 (the paper's problem with
+/// its border and bound) or 3 (a ball with friction), specular or absorbing.
+pub const LANGEVIN_KINDS: usize = 4;
+
+/// A small Langevin batch of kind `k` (8 trajectories).
+///
+/// # Safety
+/// Returns a live handle the caller frees.
+pub unsafe fn small_langevin(k: usize) -> *mut coag_langevin {
+    unsafe {
+        let mut c = std::mem::zeroed::<coag_langevin_config>();
+        assert_eq!(
+            coag_langevin_default_config(&mut c, std::mem::size_of::<coag_langevin_config>()),
+            COAG_OK
+        );
+        c.wall = if k.is_multiple_of(2) {
+            COAG_WALL_SPECULAR
+        } else {
+            COAG_WALL_ABSORBING
+        };
+        c.dt = 0.05;
+        let (x, u): (Vec<f64>, Vec<f64>) = if k < 2 {
+            c.drift = COAG_DRIFT_MAFTEI2016;
+            c.period = 1.0;
+            c.bound_kind = COAG_BOUND_REFLECT;
+            c.bound = 10.0;
+            (vec![0.5], vec![-1.5])
+        } else {
+            c.dim = 3;
+            c.radius = 1.0;
+            c.drift = COAG_DRIFT_FRICTION;
+            c.friction_rate = 1.0;
+            (vec![1.5, 0.0, 0.0], vec![-1.0, 0.0, 0.0])
+        };
+        let mut h = null_mut();
+        assert_eq!(
+            coag_langevin_new(&c, 8, x.as_ptr(), u.as_ptr(), 3, 0, &mut h),
+            COAG_OK
+        );
+        h
+    }
+}
+
+/// A Langevin batch's checkpoint.
+///
+/// # Safety
+/// `h` live.
+pub unsafe fn langevin_checkpoint(h: *const coag_langevin) -> Vec<u8> {
+    unsafe {
+        let mut n = 0;
+        assert_eq!(coag_langevin_checkpoint_size(h, &mut n), COAG_OK);
+        let mut b = vec![0u8; n];
+        let mut w = 0;
+        assert_eq!(coag_langevin_save(h, b.as_mut_ptr(), n, &mut w), COAG_OK);
+        b.truncate(w);
+        b
+    }
+}
+
+/// Restore from arbitrary bytes into a Langevin batch: refused (`COAG_BAD_CHECKPOINT`)
+/// with the batch unchanged, or accepted as a state that steps on (at most 1000 steps
+/// of the restored dt, read from the checkpoint) to a status, with finite positions and
+/// velocities. The first byte picks the kind and whether to reseal.
+pub fn langevin_restore(data: &[u8]) {
+    let Some((&mode, rest)) = data.split_first() else {
+        return;
+    };
+    let mut buf = rest.to_vec();
+    if mode & 1 == 1 {
+        reseal(&mut buf);
+    }
+    unsafe {
+        let h = small_langevin(usize::from(mode >> 1) % LANGEVIN_KINDS);
+        let before = langevin_checkpoint(h);
+        match coag_langevin_restore(h, buf.as_ptr(), buf.len()) {
+            COAG_OK => {
+                // dt is word 5 (after the header's three words, D and n)
+                let dt = f64::from_le_bytes(buf[40..48].try_into().unwrap());
+                assert!(dt > 0.0 && dt.is_finite(), "restored dt {dt}");
+                let (mut t, mut dim, mut n) = (0.0, 0usize, 0u64);
+                assert_eq!(coag_langevin_info(h, &mut t, &mut dim, &mut n), COAG_OK);
+                assert!(t.is_finite() && t >= 0.0 && n == 8, "time {t}, n {n}");
+                let st = coag_langevin_advance_to(h, t + (1000.0 * dt).min(0.5), null_mut());
+                assert!(
+                    is_status(st),
+                    "advance after restore: {st}: {}",
+                    last_error()
+                );
+                let mut x = vec![0.0; 8 * dim];
+                let mut u = vec![0.0; 8 * dim];
+                assert_eq!(
+                    coag_langevin_state(
+                        h,
+                        x.as_mut_ptr(),
+                        u.as_mut_ptr(),
+                        null_mut(),
+                        null_mut(),
+                        8
+                    ),
+                    COAG_OK
+                );
+                assert!(
+                    x.iter().chain(&u).all(|v| v.is_finite()),
+                    "state {x:?} {u:?}"
+                );
+            }
+            COAG_BAD_CHECKPOINT => {
+                assert_eq!(
+                    langevin_checkpoint(h),
+                    before,
+                    "a refused restore changed the batch"
+                );
+            }
+            other => panic!("restore returned {other}: {}", last_error()),
+        }
+        coag_langevin_free(h);
+    }
+}
+
+/// The seed inputs of `langevin_restore`: every kind fresh and at t = 0.3 and 1, as
+/// written and resealed.
+pub fn langevin_seeds() -> Vec<(String, Vec<u8>)> {
+    let mut out = Vec::new();
+    for kind in 0..LANGEVIN_KINDS {
+        unsafe {
+            let h = small_langevin(kind);
+            for (step, t) in [0.0, 0.3, 1.0].into_iter().enumerate() {
+                assert_eq!(coag_langevin_advance_to(h, t, null_mut()), COAG_OK);
+                let ck = langevin_checkpoint(h);
+                for reseal in 0..2u8 {
+                    let mut data = vec![(kind as u8) << 1 | reseal];
+                    data.extend_from_slice(&ck);
+                    out.push((format!("seed-{kind}-{step}-{reseal}"), data));
+                }
+            }
+            coag_langevin_free(h);
+        }
+    }
+    out
+}
