@@ -747,7 +747,7 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Batch<D, Dr, 
                     .unwrap_or(f64::NAN),
             });
         }
-        tr.hits += 1;
+        tr.hits = tr.hits.saturating_add(1); // (restored counts may stand anywhere)
         if tr.first == f64::INFINITY {
             tr.first = (t + s).min(t + h);
         }
