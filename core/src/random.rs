@@ -456,11 +456,25 @@ mod tests {
     /// message is the table to paste into `ziggurat_table.rs`).
     #[test]
     fn ziggurat_tables_are_the_libm_computation() {
-        let (x, f) = Ziggurat::compute();
+        let computed = Ziggurat::compute();
+        check_tables(
+            "ziggurat",
+            computed,
+            (&ziggurat_table::X, &ziggurat_table::F),
+        );
+    }
+
+    /// Panics unless `computed` equals the constant `tables` bit for bit, with the
+    /// tables to paste in the message.
+    fn check_tables(
+        name: &str,
+        (x, f): ([f64; 257], [f64; 257]),
+        tables: (&[f64; 257], &[f64; 257]),
+    ) {
         let same = |a: &[f64; 257], b: &[f64; 257]| {
             a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
         };
-        if !same(&x, &ziggurat_table::X) || !same(&f, &ziggurat_table::F) {
+        if !same(&x, tables.0) || !same(&f, tables.1) {
             let mut out = alloc::string::String::new();
             for (name, t) in [("X", &x), ("F", &f)] {
                 out.push_str(&alloc::format!(
@@ -474,7 +488,7 @@ mod tests {
                 }
                 out.push_str("];\n");
             }
-            panic!("ziggurat tables differ from libm's:\n{out}");
+            panic!("{name} tables differ from libm's:\n{out}");
         }
     }
 
@@ -524,25 +538,11 @@ mod tests {
     fn normal_tables_are_the_libm_computation() {
         let (x, f) = NormalZiggurat::compute();
         assert!(x[255] > 0.0 && x[255] < x[254], "last layer {}", x[255]);
-        let same = |a: &[f64; 257], b: &[f64; 257]| {
-            a.iter().zip(b).all(|(p, q)| p.to_bits() == q.to_bits())
-        };
-        if !same(&x, &normal_table::X) || !same(&f, &normal_table::F) {
-            let mut out = alloc::string::String::new();
-            for (name, t) in [("X", &x), ("F", &f)] {
-                out.push_str(&alloc::format!(
-                    "pub(super) static {name}: [f64; 257] = [\n"
-                ));
-                for v in t.iter() {
-                    out.push_str(&alloc::format!(
-                        "    f64::from_bits(0x{:016x}),\n",
-                        v.to_bits()
-                    ));
-                }
-                out.push_str("];\n");
-            }
-            panic!("normal ziggurat tables differ from libm's:\n{out}");
-        }
+        check_tables(
+            "normal ziggurat",
+            (x, f),
+            (&normal_table::X, &normal_table::F),
+        );
     }
 
     /// The normal ziggurat's first four moments and its tail probabilities (both signs,

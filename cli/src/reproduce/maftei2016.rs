@@ -16,7 +16,9 @@
 //! the number of threads. `--quick` runs 1/128 of the trajectories.
 
 use coagula_core::langevin::kernel::{FirstHits, first_hit_kernel, smoluchowski};
-use coagula_core::langevin::{Estimate, Friction, VelocityBound, Wall, paper, richardson_romberg};
+use coagula_core::langevin::{
+    Drift, Estimate, Friction, VelocityBound, Wall, paper, richardson_romberg,
+};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::Scheme;
 use plotters::prelude::*;
@@ -81,15 +83,7 @@ fn run_on(
             steps: rep.proposals,
         })
     };
-    let chunks = n.div_ceil(CHUNK);
-    let parts: Vec<Run> = if parallel {
-        (0..chunks)
-            .into_par_iter()
-            .map(one)
-            .collect::<Result<_, String>>()?
-    } else {
-        (0..chunks).map(one).collect::<Result<_, String>>()?
-    };
+    let parts = over_chunks(parallel, n.div_ceil(CHUNK), one)?;
     // merged in chunk order: the same bits for any number of threads
     Ok(parts.iter().fold(Run::default(), |mut a, p| {
         a.f.merge(&p.f);
@@ -98,6 +92,20 @@ fn run_on(
         a.steps += p.steps;
         a
     }))
+}
+
+/// `one(c)` for the chunks `c = 0..chunks`, on all threads or on this one, the results
+/// in chunk order.
+fn over_chunks<T: Send>(
+    parallel: bool,
+    chunks: u64,
+    one: impl Fn(u64) -> Result<T, String> + Sync + Send,
+) -> Result<Vec<T>, String> {
+    if parallel {
+        (0..chunks).into_par_iter().map(one).collect()
+    } else {
+        (0..chunks).map(one).collect()
+    }
 }
 
 /// `coagula bench langevin`: trajectory-steps per second, one thread against all.
@@ -154,15 +162,7 @@ pub fn bench(n: u64, dt: f64, repeat: u32) -> Result<(), String> {
     for _ in 0..repeat {
         for (i, par) in [false, true].into_iter().enumerate() {
             let start = Instant::now();
-            let chunks = n.div_ceil(CHUNK);
-            let parts: Vec<(Replicas, u64)> = if par {
-                (0..chunks)
-                    .into_par_iter()
-                    .map(one)
-                    .collect::<Result<_, String>>()?
-            } else {
-                (0..chunks).map(one).collect::<Result<_, String>>()?
-            };
+            let parts = over_chunks(par, n.div_ceil(CHUNK), one)?;
             best[i] = best[i].min(start.elapsed().as_secs_f64());
             res[i] = parts.iter().fold((Replicas::new(), 0), |(mut r, s), p| {
                 r.merge(&p.0);
@@ -179,6 +179,35 @@ pub fn bench(n: u64, dt: f64, repeat: u32) -> Result<(), String> {
         res[0] == res[1]
     );
     Ok(())
+}
+
+/// The first-hit kernel of `p` on all threads: chunks of 2^14 trajectories with ids
+/// `c · 2^14..` under `seed`, merged in chunk order (the same bits for any number of
+/// threads). The per-trajectory statistics and the hits in the window.
+fn kernel_on_threads<const D: usize, Dr: Drift<D> + Sync>(
+    p: &FirstHits,
+    drift: &Dr,
+    seed: u64,
+) -> Result<(Replicas, u64), String> {
+    let (n, chunk) = (p.trajectories, 1u64 << 14);
+    let parts: Vec<(Replicas, u64)> = (0..n.div_ceil(chunk))
+        .into_par_iter()
+        .map(|c| {
+            let share = FirstHits {
+                trajectories: chunk.min(n - c * chunk),
+                ..*p
+            };
+            first_hit_kernel::<D, _>(&share, drift, seed, c * chunk)
+                .map(|k| (k.replicas, k.hits))
+                .map_err(err)
+        })
+        .collect::<Result<_, String>>()?;
+    Ok(parts
+        .iter()
+        .fold((Replicas::new(), 0), |(mut a, h), (r, k)| {
+            a.merge(r);
+            (a, h + k)
+        }))
 }
 
 /// Weighted least squares of `y = a + b x + c x²` (weights 1/se²): `(a, se(a))`.
@@ -526,25 +555,7 @@ fn kernel(n: u64) -> Result<(), String> {
             velocity_sd: (d / tau).sqrt(),
             trajectories: n,
         };
-        let chunk = 1u64 << 14;
-        let parts: Vec<(Replicas, u64)> = (0..n.div_ceil(chunk))
-            .into_par_iter()
-            .map(|c| {
-                let share = FirstHits {
-                    trajectories: chunk.min(n - c * chunk),
-                    ..p
-                };
-                first_hit_kernel::<3, _>(&share, &Friction { rate: 1.0 / tau }, 31, c * chunk)
-                    .map(|k| (k.replicas, k.hits))
-                    .map_err(err)
-            })
-            .collect::<Result<_, String>>()?;
-        let (rep, hits) = parts
-            .iter()
-            .fold((Replicas::new(), 0), |(mut a, h), (r, k)| {
-                a.merge(r);
-                (a, h + k)
-            });
+        let (rep, hits) = kernel_on_threads::<3, _>(&p, &Friction { rate: 1.0 / tau }, 31)?;
         // the fit: sqrt(D tau)/R <= 0.2, each tau once
         if tau <= 0.04 && (frac == 10.0 || tau < 0.01) {
             fit.push((
@@ -608,10 +619,9 @@ pub fn cases(quick: bool) -> Result<Vec<crate::validate::Case>, String> {
     };
     // (ids 0..n of one key per case; chunks merge in order)
     let batches = |make: &(dyn Fn(u64, u64) -> Result<Vec<[f64; 3]>, String> + Sync)| -> Result<[Replicas; 3], String> {
-        let parts: Vec<Vec<[f64; 3]>> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| make(c * CHUNK, CHUNK.min(n - c * CHUNK)))
-            .collect::<Result<_, String>>()?;
+        let parts = over_chunks(true, n.div_ceil(CHUNK), |c| {
+            make(c * CHUNK, CHUNK.min(n - c * CHUNK))
+        })?;
         let mut out = [Replicas::new(); 3];
         for v in parts.iter().flatten() {
             for k in 0..3 {
@@ -684,58 +694,21 @@ pub fn cases(quick: bool) -> Result<Vec<crate::validate::Case>, String> {
         velocity_sd: 1.0,
         trajectories: n,
     };
-    let chunk = 1u64 << 14;
-    let merged = |parts: Vec<Replicas>| {
-        parts.iter().fold(Replicas::new(), |mut a, r| {
-            a.merge(r);
-            a
-        })
-    };
-    let k3: Vec<Replicas> = (0..n.div_ceil(chunk))
-        .into_par_iter()
-        .map(|c| {
-            let share = FirstHits {
-                trajectories: chunk.min(n - c * chunk),
-                ..p
-            };
-            first_hit_kernel::<3, _>(
-                &share,
-                &Field(|_, _: &[f64; 3], _: &[f64; 3]| [0.0; 3]),
-                3,
-                c * chunk,
-            )
-            .map(|k| k.replicas)
-            .map_err(err)
-        })
-        .collect::<Result<_, String>>()?;
+    let (k3, _) =
+        kernel_on_threads::<3, _>(&p, &Field(|_, _: &[f64; 3], _: &[f64; 3]| [0.0; 3]), 3)?;
     out.push(case(
         "kernel-free-flight-3d",
         "first-hit kernel vs pi R^2 <|v|>",
         free_flight(3, 0.5, 1.0),
-        &merged(k3),
+        &k3,
     ));
-    let k2: Vec<Replicas> = (0..n.div_ceil(chunk))
-        .into_par_iter()
-        .map(|c| {
-            let share = FirstHits {
-                trajectories: chunk.min(n - c * chunk),
-                ..p
-            };
-            first_hit_kernel::<2, _>(
-                &share,
-                &Field(|_, _: &[f64; 2], _: &[f64; 2]| [0.0; 2]),
-                4,
-                c * chunk,
-            )
-            .map(|k| k.replicas)
-            .map_err(err)
-        })
-        .collect::<Result<_, String>>()?;
+    let (k2, _) =
+        kernel_on_threads::<2, _>(&p, &Field(|_, _: &[f64; 2], _: &[f64; 2]| [0.0; 2]), 4)?;
     out.push(case(
         "kernel-free-flight-2d",
         "first-hit kernel vs 2 R <|v|>",
         free_flight(2, 0.5, 1.0),
-        &merged(k2),
+        &k2,
     ));
     Ok(out)
 }
@@ -820,32 +793,15 @@ pub fn first_hits_scenario(name: &str, text: &str, json: bool) -> Result<(), Str
         shear: s.shear,
     };
     let start = Instant::now();
-    let chunk = 1u64 << 14;
-    let n = s.trajectories;
-    if n == 0 {
+    if s.trajectories == 0 {
         return bad("trajectories must be at least 1");
     }
-    let parts: Vec<(Replicas, u64)> = (0..n.div_ceil(chunk))
-        .into_par_iter()
-        .map(|c| {
-            let share = FirstHits {
-                trajectories: chunk.min(n - c * chunk),
-                ..p
-            };
-            let k = match s.dim {
-                2 => first_hit_kernel::<2, _>(&share, &drift, s.seed, c * chunk),
-                3 => first_hit_kernel::<3, _>(&share, &drift, s.seed, c * chunk),
-                d => return Err(format!("{name}: first-hits.dim = {d} (2 or 3)")),
-            };
-            k.map(|k| (k.replicas, k.hits)).map_err(err)
-        })
-        .collect::<Result<_, String>>()?;
-    let (rep, hits) = parts
-        .iter()
-        .fold((Replicas::new(), 0), |(mut a, h), (r, k)| {
-            a.merge(r);
-            (a, h + k)
-        });
+    let n = s.trajectories;
+    let (rep, hits) = match s.dim {
+        2 => kernel_on_threads::<2, _>(&p, &drift, s.seed)?,
+        3 => kernel_on_threads::<3, _>(&p, &drift, s.seed)?,
+        d => return Err(format!("{name}: first-hits.dim = {d} (2 or 3)")),
+    };
     let e = Estimate::of(&rep);
     let (lo, hi) = e.ci95();
     let brownian = if s.dim == 3 && s.diffusivity > 0.0 {
