@@ -261,6 +261,7 @@ pub(crate) mod tag {
     pub const DSA: u64 = 7;
     pub const DSA_COUNTS: u64 = 8;
     pub const LANGEVIN: u64 = 9;
+    pub const THERMAL: u64 = 10;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

@@ -24,5 +24,7 @@ mod no_panic;
 mod regime_sweep;
 #[path = "regressions.rs"]
 mod regressions;
+#[path = "thermal.rs"]
+mod thermal;
 #[path = "value_stability.rs"]
 mod value_stability;

@@ -1053,7 +1053,9 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         outcome: &Outcome,
         pop: &Population,
     ) -> Result<()> {
-        let Outcome::Merge { size } = *outcome;
+        let Outcome::Merge { size } = *outcome else {
+            return Ok(());
+        };
         if size > self.m {
             // the fallible part first (new buckets' factors), so an error changes nothing
             self.reserve_m(2 * self.m, pop.memory_budget)?;
@@ -1064,8 +1066,9 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
 
     #[inline(always)]
     fn apply(&mut self, c: &Candidate<Loc>, outcome: &Outcome) {
-        let Outcome::Merge { size } = *outcome;
-        self.merge(c, size);
+        if let Outcome::Merge { size } = *outcome {
+            self.merge(c, size);
+        }
     }
 
     #[cold]

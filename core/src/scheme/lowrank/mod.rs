@@ -57,13 +57,15 @@ pub mod bound;
 pub mod bucketed;
 pub mod proposal;
 pub mod rule;
+pub mod thermal;
 pub mod tree;
 pub mod trees;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
 pub use bucketed::{BucketedEngine, MAX_PARTICLES};
 pub use proposal::{Candidate, ProposalEngine};
-pub use rule::{Coagulate, EventRule, Outcome, SPOT_CHECK};
+pub use rule::{Coagulate, EventRule, Outcome, Reweighed, SPOT_CHECK};
+pub use thermal::{Collide, TemperatureMc, Thermal};
 pub use tree::TreeEngine;
 pub use trees::{BinaryTree, ProposalTree, WideTree};
 
@@ -192,6 +194,11 @@ where
         volume: f64,
         bytes: usize,
     ) -> Result<Self> {
+        if Rl::REWEIGHS && !E::REWEIGHS {
+            return Err(Error::Unsupported {
+                what: "this event rule moves the bound's factors: use the per-size tree engine",
+            });
+        }
         let pop = Population::new(counts, volume)?.with_memory_budget(bytes);
         let engine = E::build(&kernel, counts, &pop)?;
         Ok(LowRankMc {
@@ -242,6 +249,11 @@ where
     /// `i = 1..=M`.
     pub fn counts(&self) -> Cow<'_, [u64]> {
         self.engine.counts()
+    }
+
+    /// The kernel (for a rule with per-size state, e.g. temperatures: that state).
+    pub fn kernel(&self) -> &K {
+        &self.kernel
     }
 
     /// The simulation volume V.
@@ -367,12 +379,27 @@ where
             rep.rejections += 1;
             return Ok(false);
         };
-        let Outcome::Merge { size } = outcome;
-        self.pop.check_size(size)?;
-        self.engine.prepare(&self.kernel, &outcome, &self.pop)?;
-        self.engine.apply(&c, &outcome);
-        self.pop.n -= 1;
-        if self.pop.doubling_due() {
+        if Rl::REWEIGHS {
+            let engine = &self.engine;
+            self.rule
+                .plan(&mut self.kernel, (c.x, c.y), &outcome, &|s| engine.count(s))?;
+        }
+        let merged = match outcome {
+            Outcome::Merge { size } => {
+                self.pop.check_size(size)?;
+                self.engine.prepare(&self.kernel, &outcome, &self.pop)?;
+                self.engine.apply(&c, &outcome);
+                self.pop.n -= 1;
+                true
+            }
+            Outcome::Bounce => false,
+        };
+        if Rl::REWEIGHS {
+            for s in self.rule.commit(&mut self.kernel) {
+                self.engine.reweigh(&self.kernel, s);
+            }
+        }
+        if merged && self.pop.doubling_due() {
             self.pop.double();
             self.engine.double(&self.pop);
             rep.doublings += 1;
@@ -537,7 +564,7 @@ where
     /// same kernel.
     fn save(&self, w: &mut Writer) {
         use crate::checkpoint::{header, save_report};
-        header(w, E::TAG);
+        header(w, Rl::TAG.unwrap_or(E::TAG));
         w.u64(R as u64);
         w.u64(self.engine.max_size());
         w.u64(self.pop.size_limit);
@@ -547,13 +574,14 @@ where
         w.f64(self.time);
         self.clock.save(w);
         save_report(w, &self.totals);
+        self.rule.save(&self.kernel, w);
         self.engine.save(w);
     }
 
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
         use crate::checkpoint::{check_header, read_report};
         let bad = |what| Error::Checkpoint { what };
-        check_header(r, E::TAG)?;
+        check_header(r, Rl::TAG.unwrap_or(E::TAG))?;
         if r.u64()? != R as u64 {
             return Err(bad("different rank"));
         }
@@ -579,7 +607,8 @@ where
             size_limit,
             memory_budget: self.pop.memory_budget,
         };
-        let engine = E::load(&self.kernel, m, &pop, r)?;
+        let kernel = self.rule.load(&self.kernel, r)?;
+        let engine = E::load(kernel.as_ref().unwrap_or(&self.kernel), m, &pop, r)?;
         r.finish()?;
         // no particle past the size limit (the constructors' check)
         let mut largest = 0;
@@ -603,6 +632,9 @@ where
         };
         if !consistent {
             return Err(bad("the clock does not match the engine's rate"));
+        }
+        if let Some(kernel) = kernel {
+            self.kernel = kernel;
         }
         self.engine = engine;
         self.pop = pop;

@@ -108,6 +108,20 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// two proposals leaves; a crafted checkpoint that claims otherwise is refused).
     fn rate_now(&self) -> Option<f64>;
 
+    /// Whether [`reweigh`](Self::reweigh) and [`count`](Self::count) are supported
+    /// (needed by rules that move factors, [`EventRule::REWEIGHS`](super::EventRule::REWEIGHS)).
+    const REWEIGHS: bool = false;
+
+    /// The number of size-`size` particles (only called when [`REWEIGHS`](Self::REWEIGHS)).
+    fn count(&self, _size: u64) -> u64 {
+        0
+    }
+
+    /// Re-reads the factors of `size` from `kernel` (whose per-size state changed) and
+    /// updates the proposal weights; the factors were validated by the rule (only
+    /// called when [`REWEIGHS`](Self::REWEIGHS), for a size within [`max_size`](Self::max_size)).
+    fn reweigh<K: CoagulationKernel>(&mut self, _kernel: &K, _size: u64) {}
+
     /// Writes the engine's state after the scheme's common fields.
     fn save(&self, w: &mut Writer);
 

@@ -4,10 +4,17 @@
 //!
 //! [`Coagulate`] is plain coagulation (Osinsky 2023): accept with `K/(Â + Âᵀ)`,
 //! squeezed with the kernel's acceptance floor ρ (`K ≥ ρ (Â + Âᵀ)`, so a uniform below
-//! `ρ · low` accepts without evaluating K), and merge the pair. The temperature-
-//! dependent scheme and DSMC are further rules over the same engines.
+//! `ρ · low` accepts without evaluating K), and merge the pair.
+//!
+//! A rule may also carry per-size state in its kernel and change the bound's factors
+//! after an event ([`EventRule::REWEIGHS`]): the temperature-dependent scheme
+//! ([`thermal`](super::thermal)) keeps a partial temperature per size, lets a collision
+//! bounce ([`Outcome::Bounce`]) or merge, and moves the factor rows of the sizes whose
+//! temperature changed. Such a rule runs on an engine that can reweigh a size (the
+//! per-size trees).
 
 use super::proposal::Candidate;
+use crate::checkpoint::{Reader, Writer};
 use crate::error::Result;
 use crate::kernel::{CoagulationKernel, bounded_rate};
 use crate::random::open_unit;
@@ -28,7 +35,14 @@ pub enum Outcome {
         /// The merged size.
         size: u64,
     },
+    /// The two particles collide and separate (no count changes; a rule with per-size
+    /// state may change it).
+    Bounce,
 }
+
+/// The sizes whose bound factors a rule changed after an event (at most three: the
+/// pair and the merged size).
+pub type Reweighed = heapless::Vec<u64, 3>;
 
 /// Decides proposals (see the module docs).
 pub trait EventRule<K>: Sized {
@@ -49,6 +63,45 @@ pub trait EventRule<K>: Sized {
         spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>>;
+
+    /// Whether the rule changes the bound's factors after events (then the engine must
+    /// support [`ProposalEngine::reweigh`](super::ProposalEngine::reweigh); a scheme
+    /// refuses the pair otherwise).
+    const REWEIGHS: bool = false;
+
+    /// The checkpoint tag of a scheme with this rule, when it differs from the
+    /// engine's (the rule's state is part of the checkpoint).
+    const TAG: Option<u64> = None;
+
+    /// The fallible part of an accepted event, before anything changes: `count(s)` is
+    /// the number of size-s particles before the event. A rule with per-size state
+    /// computes and validates its new state here (and reserves memory in `kernel`,
+    /// which must not change what the kernel computes); the event is refused on error.
+    fn plan(
+        &mut self,
+        _kernel: &mut K,
+        _c: (u64, u64),
+        _outcome: &Outcome,
+        _count: &dyn Fn(u64) -> u64,
+    ) -> Result<()> {
+        Ok(())
+    }
+
+    /// Installs what [`plan`](Self::plan) computed, after the engine applied the event;
+    /// returns the sizes whose factors changed (the scheme reweighs them).
+    fn commit(&mut self, _kernel: &mut K) -> Reweighed {
+        Reweighed::new()
+    }
+
+    /// Writes the rule's per-size state (in the checkpoint, before the engine).
+    fn save(&self, _kernel: &K, _w: &mut Writer) {}
+
+    /// Reads state written by [`save`](Self::save): `Some(kernel)` is `kernel` with the
+    /// restored state, which the engine is then validated against and the scheme
+    /// installs on success; `None` when the rule has no state.
+    fn load(&self, _kernel: &K, _r: &mut Reader) -> Result<Option<K>> {
+        Ok(None)
+    }
 }
 
 /// Plain coagulation: accept with `K/(Â + Âᵀ)`, merge.

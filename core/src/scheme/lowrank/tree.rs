@@ -240,7 +240,9 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         outcome: &Outcome,
         pop: &Population,
     ) -> Result<()> {
-        let Outcome::Merge { size } = *outcome;
+        let Outcome::Merge { size } = *outcome else {
+            return Ok(());
+        };
         if size > self.m as u64 {
             self.grow(kernel, 2 * self.m, pop.memory_budget)?;
         }
@@ -249,7 +251,9 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
 
     #[inline]
     fn apply(&mut self, c: &Candidate<(usize, usize)>, outcome: &Outcome) {
-        let Outcome::Merge { size } = *outcome;
+        let Outcome::Merge { size } = *outcome else {
+            return;
+        };
         let (i, j) = c.at;
         if i == j {
             self.change(i, -2);
@@ -258,6 +262,43 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
             self.change(j, -1);
         }
         self.change(size as usize - 1, 1);
+    }
+
+    const REWEIGHS: bool = true;
+
+    #[inline]
+    fn count(&self, size: u64) -> u64 {
+        usize::try_from(size - 1)
+            .ok()
+            .and_then(|i| self.counts.get(i))
+            .copied()
+            .unwrap_or(0)
+    }
+
+    fn reweigh<K: CoagulationKernel>(&mut self, kernel: &K, size: u64) {
+        let idx = (size - 1) as usize;
+        if idx >= self.m {
+            return;
+        }
+        let (mut a, mut b) = ([0.0; R], [0.0; R]);
+        kernel.factors(size as f64, &mut a, &mut b);
+        let new = [a, b];
+        let n = self.counts[idx] as f64;
+        let mut delta = [[0.0; R]; 2];
+        for p in 0..2 {
+            for k in 0..R {
+                delta[p][k] = (new[p][k] - self.fab[idx][p][k]) * n;
+            }
+        }
+        self.fab[idx] = new;
+        if self.counts[idx] > 0 {
+            let leaf = if T::NEEDS_LEAF {
+                self.leaf_value(idx)
+            } else {
+                [[0.0; R]; 2]
+            };
+            self.tree.add(idx, &delta, &leaf);
+        }
     }
 
     fn double(&mut self, _pop: &Population) {
