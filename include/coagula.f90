@@ -44,6 +44,16 @@ module coagula
      type(c_ptr) :: drift_user_data
   end type coag_langevin_config
 
+  ! temperature-dependent low-rank MC (Osinsky 2023 §4); fill with coag_thermal_default_config
+  integer(c_int32_t), parameter :: COAG_THERMAL_BALLISTIC = 0, COAG_THERMAL_MODEL = 1
+  integer(c_int32_t), parameter :: COAG_THERMAL_LOWRANK = 0, COAG_THERMAL_REJECTION = 1
+  type, bind(c) :: coag_thermal_config
+     integer(c_size_t) :: struct_size
+     integer(c_int32_t) :: kernel, engine
+     real(c_double) :: restitution, barrier, barrier_exponent, model_c, model_gamma
+     integer(c_int64_t) :: size_limit, seed, stream
+  end type coag_thermal_config
+
   ! a first-hit kernel estimation; set struct_size = c_sizeof(it)
   type, bind(c) :: coag_first_hits
      integer(c_size_t) :: struct_size
@@ -215,6 +225,84 @@ module coagula
        real(c_double), intent(out) :: mean, std_error
        integer(c_int64_t), intent(out) :: hits
        integer(c_int32_t) :: coag_first_hit_kernel
+     end function
+     function coag_thermal_default_config(out, size) bind(c, name="coag_thermal_default_config")
+       import :: coag_thermal_config, c_size_t, c_int32_t
+       type(coag_thermal_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_thermal_default_config
+     end function
+     ! counts(i) particles of size i at temperature temperatures(i), i = 1..len
+     function coag_thermal_new(config, counts, temperatures, len, volume, out) bind(c, name="coag_thermal_new")
+       import :: coag_thermal_config, c_int64_t, c_double, c_size_t, c_ptr, c_int32_t
+       type(coag_thermal_config), intent(in) :: config
+       integer(c_int64_t), intent(in) :: counts(*)
+       real(c_double), intent(in) :: temperatures(*)
+       integer(c_size_t), value :: len
+       real(c_double), value :: volume
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_thermal_new
+     end function
+     subroutine coag_thermal_free(h) bind(c, name="coag_thermal_free")
+       import :: c_ptr
+       type(c_ptr), value :: h
+     end subroutine
+     function coag_thermal_advance_to(h, t, report) bind(c, name="coag_thermal_advance_to")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: h
+       real(c_double), value :: t
+       type(c_ptr), value :: report
+       integer(c_int32_t) :: coag_thermal_advance_to
+     end function
+     ! time, particles, volume, max_size: c_loc of the variables, or c_null_ptr
+     function coag_thermal_info(h, time, particles, volume, max_size) bind(c, name="coag_thermal_info")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: h, time, particles, volume, max_size
+       integer(c_int32_t) :: coag_thermal_info
+     end function
+     ! moment (of order m), mean_temperature, energy: c_loc or c_null_ptr
+     function coag_thermal_observe(h, m, moment, mean_temperature, energy) bind(c, name="coag_thermal_observe")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: h
+       real(c_double), value :: m
+       type(c_ptr), value :: moment, mean_temperature, energy
+       integer(c_int32_t) :: coag_thermal_observe
+     end function
+     ! counts (int64), temperatures (double), len = max_size of coag_thermal_info: c_loc or c_null_ptr
+     function coag_thermal_state(h, counts, temperatures, len) bind(c, name="coag_thermal_state")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h, counts, temperatures
+       integer(c_size_t), value :: len
+       integer(c_int32_t) :: coag_thermal_state
+     end function
+     function coag_thermal_checkpoint_size(h, out) bind(c, name="coag_thermal_checkpoint_size")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_thermal_checkpoint_size
+     end function
+     function coag_thermal_save(h, buf, n, written) bind(c, name="coag_thermal_save")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(out) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: written
+       integer(c_int32_t) :: coag_thermal_save
+     end function
+     function coag_thermal_restore(h, buf, n) bind(c, name="coag_thermal_restore")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(in) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_int32_t) :: coag_thermal_restore
+     end function
+     ! number, mean_temperature: c_loc or c_null_ptr
+     function coag_thermal_model_exact(c, gamma, n0, t0, t, number, mean_temperature) &
+          bind(c, name="coag_thermal_model_exact")
+       import :: c_ptr, c_double, c_int32_t
+       real(c_double), value :: c, gamma, n0, t0, t
+       type(c_ptr), value :: number, mean_temperature
+       integer(c_int32_t) :: coag_thermal_model_exact
      end function
      function coag_kernel_new_constant(k0, out) bind(c, name="coag_kernel_new_constant")
        import :: c_double, c_ptr, c_int32_t

@@ -248,6 +248,26 @@
 #define COAG_SAMPLER_GROUPS 2
 
 /*
+ The paper's ballistic kernels (restitution ε, barrier a, exponent λ).
+ */
+#define COAG_THERMAL_BALLISTIC 0
+
+/*
+ The model family with a closed form (constants c, γ; `coag_thermal_model_exact`).
+ */
+#define COAG_THERMAL_MODEL 1
+
+/*
+ Low-rank Monte Carlo on per-size trees (the default).
+ */
+#define COAG_THERMAL_LOWRANK 0
+
+/*
+ Acceptance–rejection on uniform pairs (the baseline).
+ */
+#define COAG_THERMAL_REJECTION 1
+
+/*
  Opaque fragmentation handle (`coag_fragmentation` in C).
  */
 typedef struct coag_fragmentation coag_fragmentation;
@@ -266,6 +286,11 @@ typedef struct coag_langevin coag_langevin;
  Opaque simulation handle (`coag_sim` in C).
  */
 typedef struct coag_sim coag_sim;
+
+/*
+ Opaque handle of a temperature-dependent simulation (`coag_thermal` in C).
+ */
+typedef struct coag_thermal coag_thermal;
 
 /*
  `K(x, y)` from C.
@@ -680,6 +705,57 @@ typedef int32_t (*coag_cancel_callback)(void *user_data);
  A host callback returning 64 uniformly random bits per call.
  */
 typedef uint64_t (*coag_rng_callback)(void *user_data);
+
+/*
+ A temperature-dependent simulation's configuration. Fill it with
+ `coag_thermal_default_config`, which sets `struct_size`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_thermal_config)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   `COAG_THERMAL_BALLISTIC` or `COAG_THERMAL_MODEL`.
+   */
+  int32_t kernel;
+  /*
+   `COAG_THERMAL_LOWRANK` or `COAG_THERMAL_REJECTION`.
+   */
+  int32_t engine;
+  /*
+   Ballistic: restitution coefficient ε ∈ (0, 1].
+   */
+  double restitution;
+  /*
+   Ballistic: aggregation barrier a ≥ 0.
+   */
+  double barrier;
+  /*
+   Ballistic: barrier exponent λ (finite).
+   */
+  double barrier_exponent;
+  /*
+   Model: the constant c > 0.
+   */
+  double model_c;
+  /*
+   Model: the exponent γ ≥ 0.
+   */
+  double model_gamma;
+  /*
+   Largest particle size allowed (0: the library's default).
+   */
+  uint64_t size_limit;
+  /*
+   The random stream: the seed policy's `(seed, stream)`.
+   */
+  uint64_t seed;
+  /*
+   See `seed`.
+   */
+  uint64_t stream;
+} coag_thermal_config;
 
 #ifdef __cplusplus
 extern "C" {
@@ -1429,6 +1505,106 @@ int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
  `sim` NULL or live; `out` NULL or writable.
  */
 int32_t coag_sim_clone(const coag_sim *sim, coag_sim **out);
+
+/*
+ Writes the default configuration (the paper's ballistic kernels ε = 0.99, a = 0.1,
+ λ = 0.4, the low-rank engine, seed 0) into `out`, a struct of `size` bytes.
+
+ # Safety
+ `out` must be NULL or valid for writing `size` bytes.
+ */
+int32_t coag_thermal_default_config(coag_thermal_config *out, size_t size);
+
+/*
+ A simulation from `counts[i − 1] = N_i` particles of size i at partial temperatures
+ `temperatures[i − 1] = T_i` (finite, ≥ 0), `len` entries each, in volume `volume`
+ (number densities `N_i / V`). Free with `coag_thermal_free`.
+
+ # Safety
+ Pointers must be NULL or valid; `counts` and `temperatures` hold `len` values.
+ */
+int32_t coag_thermal_new(const coag_thermal_config *config, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_thermal **out);
+
+/*
+ Frees a simulation (NULL is a no-op).
+
+ # Safety
+ `h` must be NULL or a live handle, not used afterwards.
+ */
+void coag_thermal_free(coag_thermal *h);
+
+/*
+ Advances to time `t`; `report` (may be NULL) gets the call's totals (`events`
+ counts collisions, `bounces` those that bounced). On error (a capacity, a kernel
+ rate that is not finite) the simulation is as before the failing event.
+
+ # Safety
+ `h` a live handle used by this thread alone; `report` NULL or valid.
+ */
+int32_t coag_thermal_advance_to(coag_thermal *h, double t, coag_step_report *report);
+
+/*
+ The time, the number of simulation particles, the volume and the largest size the
+ state arrays cover (`coag_thermal_state`'s `len`); any out pointer may be NULL.
+
+ # Safety
+ `h` a live handle; out pointers NULL or writable.
+ */
+int32_t coag_thermal_info(const coag_thermal *h, double *time, uint64_t *particles, double *volume, size_t *max_size);
+
+/*
+ The moment `Σ i^m N_i / V` (`m` finite), the mean temperature `Σ N_i T_i / N` and
+ the energy density `Σ N_i T_i / V`; any out pointer may be NULL.
+
+ # Safety
+ `h` a live handle; out pointers NULL or writable.
+ */
+int32_t coag_thermal_observe(const coag_thermal *h, double m, double *moment, double *mean_temperature, double *energy);
+
+/*
+ Copies the state: `counts[i − 1] = N_i` and `temperatures[i − 1] = T_i` for
+ `i = 1..=len`, where `len` must be the `max_size` of `coag_thermal_info`. Either
+ array may be NULL.
+
+ # Safety
+ `h` a live handle; each non-null array valid for `len` values.
+ */
+int32_t coag_thermal_state(const coag_thermal *h, uint64_t *counts, double *temperatures, size_t len);
+
+/*
+ Bytes a checkpoint of the simulation needs now.
+
+ # Safety
+ `h` a live handle; `out` writable.
+ */
+int32_t coag_thermal_checkpoint_size(const coag_thermal *h, size_t *out);
+
+/*
+ Saves the simulation (state, temperatures, clock, random stream) into `buf`;
+ `written` (may be NULL) gets the bytes used.
+
+ # Safety
+ `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
+ */
+int32_t coag_thermal_save(const coag_thermal *h, uint8_t *buf, size_t len, size_t *written);
+
+/*
+ Restores a checkpoint of a simulation with the same configuration (kernel, its
+ parameters, engine); on error the simulation is unchanged.
+
+ # Safety
+ `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
+ */
+int32_t coag_thermal_restore(coag_thermal *h, const uint8_t *buf, size_t len);
+
+/*
+ The model family's closed form from `n_1(0) = n0`, `T_1(0) = t0` (c > 0, γ ≥ 0):
+ the number density `N(t)` and the mean temperature at time `t ≥ 0`.
+
+ # Safety
+ Out pointers writable (either may be NULL).
+ */
+int32_t coag_thermal_model_exact(double c, double gamma, double n0, double t0, double t, double *number, double *mean_temperature);
 
 #ifdef __cplusplus
 }  // extern "C"

@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "coagula.h"
@@ -49,6 +50,9 @@ struct SimFree {
 };
 struct LangevinFree {
     void operator()(coag_langevin *h) const noexcept { coag_langevin_free(h); }
+};
+struct ThermalFree {
+    void operator()(coag_thermal *h) const noexcept { coag_thermal_free(h); }
 };
 }  // namespace detail
 
@@ -484,6 +488,102 @@ inline Estimate first_hit_kernel(const coag_first_hits &p, std::uint64_t seed, s
     check(coag_first_hit_kernel(&p, seed, first_id, &e.mean, &e.std_error, &e.count));
     return e;
 }
+
+inline coag_thermal_config thermal_default_config() {
+    coag_thermal_config c;
+    check(coag_thermal_default_config(&c, sizeof c));
+    return c;
+}
+
+/// The model family's closed form (coag_thermal_model_exact): {N(t), mean temperature}.
+inline std::pair<double, double> thermal_model_exact(double c, double gamma, double n0, double t0, double t) {
+    double n, tm;
+    check(coag_thermal_model_exact(c, gamma, n0, t0, t, &n, &tm));
+    return {n, tm};
+}
+
+/// Temperature-dependent low-rank Monte Carlo (Osinsky 2023 §4).
+class Thermal {
+  public:
+    /// counts[i-1] = N_i particles of size i at temperature temperatures[i-1], in volume v.
+    static Thermal make(const coag_thermal_config &c, const std::vector<std::uint64_t> &counts,
+                        const std::vector<double> &temperatures, double volume) {
+        if (counts.size() != temperatures.size()) check(COAG_INVALID_ARGUMENT);
+        coag_thermal *h = nullptr;
+        check(coag_thermal_new(&c, counts.data(), temperatures.data(), counts.size(), volume, &h));
+        return Thermal(h);
+    }
+    coag_step_report advance_to(double t) {
+        coag_step_report r;
+        check(coag_step_report_init(&r, sizeof r));
+        check(coag_thermal_advance_to(h_.get(), t, &r));
+        return r;
+    }
+    double time() const {
+        double t;
+        check(coag_thermal_info(h_.get(), &t, nullptr, nullptr, nullptr));
+        return t;
+    }
+    std::uint64_t particles() const {
+        std::uint64_t n;
+        check(coag_thermal_info(h_.get(), nullptr, &n, nullptr, nullptr));
+        return n;
+    }
+    double volume() const {
+        double v;
+        check(coag_thermal_info(h_.get(), nullptr, nullptr, &v, nullptr));
+        return v;
+    }
+    /// sum i^m N_i / V.
+    double moment(double m) const {
+        double v;
+        check(coag_thermal_observe(h_.get(), m, &v, nullptr, nullptr));
+        return v;
+    }
+    /// sum N_i T_i / N.
+    double mean_temperature() const {
+        double v;
+        check(coag_thermal_observe(h_.get(), 0.0, nullptr, &v, nullptr));
+        return v;
+    }
+    /// sum N_i T_i / V.
+    double energy() const {
+        double v;
+        check(coag_thermal_observe(h_.get(), 0.0, nullptr, nullptr, &v));
+        return v;
+    }
+    /// counts[i-1] = N_i for i = 1..max size.
+    std::vector<std::uint64_t> counts() const {
+        std::vector<std::uint64_t> c(max_size());
+        check(coag_thermal_state(h_.get(), c.data(), nullptr, c.size()));
+        return c;
+    }
+    /// temperatures[i-1] = T_i for i = 1..max size.
+    std::vector<double> temperatures() const {
+        std::vector<double> t(max_size());
+        check(coag_thermal_state(h_.get(), nullptr, t.data(), t.size()));
+        return t;
+    }
+    std::vector<std::uint8_t> checkpoint() const {
+        std::size_t n = 0;
+        check(coag_thermal_checkpoint_size(h_.get(), &n));
+        std::vector<std::uint8_t> buf(n);
+        check(coag_thermal_save(h_.get(), buf.data(), buf.size(), &n));
+        buf.resize(n);
+        return buf;
+    }
+    void restore(const std::vector<std::uint8_t> &buf) { check(coag_thermal_restore(h_.get(), buf.data(), buf.size())); }
+    coag_thermal *get() const noexcept { return h_.get(); }
+
+  private:
+    explicit Thermal(coag_thermal *h) : h_(h) {}
+    std::size_t max_size() const {
+        std::size_t m;
+        check(coag_thermal_info(h_.get(), nullptr, nullptr, nullptr, &m));
+        return m;
+    }
+    std::unique_ptr<coag_thermal, detail::ThermalFree> h_;
+};
 
 }  // namespace coagula
 

@@ -265,6 +265,32 @@ enum BenchKind {
         #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..))]
         repeat: u32,
     },
+    /// The temperature-dependent low-rank MC against acceptance-rejection on the
+    /// paper's ballistic model (Osinsky 2023, table 4): seconds to reach each t, side
+    /// by side with the paper's, and collisions per second against the paper's.
+    Temperature {
+        /// Initial monomers of the full-scale rows (the paper's 1e7).
+        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
+        n0: u64,
+        /// Times of the full-scale rows (comma-separated, increasing; empty skips).
+        #[arg(long, value_delimiter = ',', default_value = "1e3,1e4", value_parser = positive_f64)]
+        times: Vec<f64>,
+        /// Initial monomers of the scaled rows.
+        #[arg(long, default_value_t = 1 << 18, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
+        scaled_n0: u64,
+        /// Times of the scaled rows (comma-separated, increasing; empty skips).
+        #[arg(long, value_delimiter = ',', default_value = "1e5,1e6", value_parser = positive_f64)]
+        scaled_times: Vec<f64>,
+        /// Wall-clock budget of one run in seconds (cells beyond it print "-").
+        #[arg(long, default_value_t = 1800.0, value_parser = positive_f64)]
+        budget: f64,
+        /// Alternating rounds of both methods (the fastest of each cell is kept).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
+        /// Seed of the random streams.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
@@ -562,6 +588,39 @@ fn main() -> ExitCode {
                 },
         } => {
             return match reproduce::maftei2016::bench(trajectories, dt, repeat) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+        Command::Bench {
+            which:
+                BenchKind::Temperature {
+                    n0,
+                    times,
+                    scaled_n0,
+                    scaled_times,
+                    budget,
+                    repeat,
+                    seed,
+                },
+        } => {
+            let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]);
+            if !increasing(&times) || !increasing(&scaled_times) {
+                eprintln!("error: --times and --scaled-times must increase");
+                return ExitCode::FAILURE;
+            }
+            return match reproduce::osinsky2023::bench(
+                n0,
+                &times,
+                scaled_n0,
+                &scaled_times,
+                budget,
+                repeat,
+                seed,
+            ) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");

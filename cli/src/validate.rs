@@ -137,11 +137,15 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
     let mode = if quick { "quick" } else { "full" };
     let mut out = Vec::new();
     let selected = |name: &str| only.is_none_or(|p| name.starts_with(p));
-    // the Langevin cases are computed in code (a trajectory batch is not a population
-    // scenario): `maftei2016/...`
+    // cases computed in code (a trajectory batch, a scheme with per-size temperatures
+    // are not population scenarios): `maftei2016/...`, `osinsky2023/temperature/...`
+    let coded = |prefix: &str| only.is_none_or(|p| prefix.starts_with(p) || p.starts_with(prefix));
     const LANGEVIN: &str = "maftei2016/";
-    let langevin = only.is_none_or(|p| LANGEVIN.starts_with(p) || p.starts_with(LANGEVIN));
+    const TEMPERATURE: &str = "osinsky2023/temperature/";
+    let langevin = coded(LANGEVIN);
+    let temperature = coded(TEMPERATURE);
     if !langevin
+        && !temperature
         && !file
             .case
             .iter()
@@ -191,8 +195,14 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
             run_case(&name, spec, &overrides, &mut out)?;
         }
     }
+    let mut cases = Vec::new();
     if langevin {
-        let mut cases = crate::reproduce::maftei2016::cases(quick)?;
+        cases.extend(crate::reproduce::maftei2016::cases(quick)?);
+    }
+    if temperature {
+        cases.extend(crate::reproduce::osinsky2023::cases(quick)?);
+    }
+    if langevin || temperature {
         cases.retain(|c| selected(&c.case));
         if cases.is_empty() && out.is_empty() {
             return Err(format!(

@@ -262,6 +262,7 @@ pub(crate) mod tag {
     pub const DSA_COUNTS: u64 = 8;
     pub const LANGEVIN: u64 = 9;
     pub const THERMAL: u64 = 10;
+    pub const UNIFORM: u64 = 11;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

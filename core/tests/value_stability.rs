@@ -296,3 +296,45 @@ fn langevin_batches_are_value_stable() {
     );
     assert!(failures.is_empty(), "{failures}");
 }
+
+#[test]
+fn temperature_schemes_are_value_stable() {
+    use coagula_core::kernel::temperature::{Ballistic, Model};
+    use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Thermal};
+    let mut failures = String::new();
+    // counts and temperature bits
+    macro_rules! run {
+        ($s:expr) => {{
+            let mut s = $s;
+            let mut rng = Pcg64Mcg::seed_from_u64(42);
+            let rep = s.advance_to(30.0, &mut rng).unwrap();
+            let mut words: Vec<u64> = s.counts().to_vec();
+            words.extend(s.kernel().temperatures().iter().map(|t| t.to_bits()));
+            (pin(rep, fnv(words)), rep.bounces)
+        }};
+    }
+    let ballistic = Thermal::new(Ballistic::new(0.9, 0.5, 0.4).unwrap(), &[1.0, 0.5]).unwrap();
+    let model = Thermal::new(Model::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
+    for (name, got, want) in [
+        (
+            "temperature low-rank, ballistic",
+            run!(TemperatureMc::<_>::new(ballistic.clone(), &[1500, 500], 2000.0).unwrap()),
+            ((29987, 40117, 10130, 5, 11799343273566508897), 24865),
+        ),
+        (
+            "temperature rejection, ballistic",
+            run!(TemperatureRejection::new(ballistic, &[1500, 500], 2000.0).unwrap()),
+            ((29928, 182457, 152529, 5, 4335032559574439556), 24761),
+        ),
+        (
+            "temperature low-rank, model",
+            run!(TemperatureMc::<_>::new(model, &[2000], 2000.0).unwrap()),
+            ((6148, 8722, 2574, 3, 13565433818158184155), 3073),
+        ),
+    ] {
+        if got != want {
+            failures.push_str(&format!("{name}: got {got:?}, pinned {want:?}\n"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}

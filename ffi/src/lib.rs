@@ -28,10 +28,12 @@ mod kernel;
 mod langevin;
 mod rng;
 mod sim;
+mod thermal;
 
 pub use kernel::*;
 pub use langevin::*;
 pub use sim::*;
+pub use thermal::*;
 
 use coagula_core::Error;
 use std::cell::RefCell;

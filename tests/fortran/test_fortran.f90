@@ -104,6 +104,16 @@ program test_fortran
   real(c_double), allocatable :: sizes(:)
   integer :: r, h, nfail, nchecks
   integer, parameter :: reps = 32
+  ! temperature-dependent MC
+  type(coag_thermal_config) :: thc
+  type(c_ptr) :: th
+  real(c_double), target :: tm, tn_exact, tt_exact, tmean, ttime, tvol
+  integer(c_int64_t), target :: tparts
+  integer(c_size_t), target :: tmax
+  integer(c_int64_t), allocatable, target :: tcounts(:)
+  real(c_double), allocatable, target :: ttemps(:)
+  integer(c_int8_t), allocatable :: tck(:)
+  integer(c_size_t) :: tnck, tnw
   ! Langevin
   type(coag_langevin_config) :: lgc
   type(coag_first_hits) :: fh
@@ -320,6 +330,42 @@ program test_fortran
   call coag_sim_free(sim)
   call coag_fragmentation_free(f)
   call coag_kernel_free(k)
+  ! temperature-dependent MC: the model family (c = 1, gamma = 1/2) against its closed
+  ! form over 32 replicas (Student t, 6.07 SE), then state, checkpoint and restore
+  call ok(coag_thermal_model_exact(1.0_c_double, 0.5_c_double, 1.0_c_double, 1.0_c_double, &
+       4.0_c_double, c_loc(tn_exact), c_loc(tt_exact)))
+  s1 = 0.0_c_double
+  s2 = 0.0_c_double
+  do r = 1, reps
+     call ok(coag_thermal_default_config(thc, c_sizeof(thc)))
+     thc%kernel = COAG_THERMAL_MODEL
+     thc%model_gamma = 0.5_c_double
+     thc%seed = 41
+     thc%stream = r
+     call ok(coag_thermal_new(thc, [20000_c_int64_t], [1.0_c_double], 1_c_size_t, 20000.0_c_double, th))
+     call ok(coag_thermal_advance_to(th, 4.0_c_double, c_null_ptr))
+     call ok(coag_thermal_observe(th, 0.0_c_double, c_loc(tm), c_loc(tmean), c_null_ptr))
+     s1 = s1 + tm
+     s2 = s2 + tm * tm
+     if (r < reps) call coag_thermal_free(th)
+  end do
+  mean = s1 / reps
+  se = sqrt((s2 / reps - mean * mean) * reps / (reps - 1) / reps)
+  call check(abs(mean - tn_exact) < 6.07_c_double * se, "thermal model N(4)")
+  call ok(coag_thermal_info(th, c_loc(ttime), c_loc(tparts), c_loc(tvol), c_loc(tmax)))
+  call check(abs(ttime - 4.0_c_double) < 1e-15_c_double .and. tparts > 0 .and. tvol > 0.0_c_double, &
+       "thermal info")
+  allocate(tcounts(tmax), ttemps(tmax))
+  call ok(coag_thermal_state(th, c_loc(tcounts), c_loc(ttemps), tmax))
+  call check(sum(tcounts) == tparts .and. all(ttemps >= 0.0_c_double), "thermal state")
+  call ok(coag_thermal_checkpoint_size(th, tnck))
+  allocate(tck(tnck))
+  call ok(coag_thermal_save(th, tck, tnck, tnw))
+  call ok(coag_thermal_advance_to(th, 6.0_c_double, c_null_ptr))
+  call ok(coag_thermal_restore(th, tck, tnw))
+  call ok(coag_thermal_info(th, c_loc(ttime), c_null_ptr, c_null_ptr, c_null_ptr))
+  call check(abs(ttime - 4.0_c_double) < 1e-15_c_double, "thermal restore")
+  call coag_thermal_free(th)
   ! Langevin batches: b = 0 outside the unit ball keeps E|U|^2 = |u0|^2 + 3 T (4.89 SE)
   call ok(coag_langevin_default_config(lgc, c_sizeof(lgc)))
   lgc%dim = 3

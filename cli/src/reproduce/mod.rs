@@ -4,3 +4,4 @@
 pub mod eibeck2000;
 pub mod lecot2019;
 pub mod maftei2016;
+pub mod osinsky2023;

@@ -42,11 +42,46 @@
 //! assert!(r.collision <= bound);
 //! ```
 
+use super::coagulation::cbrt;
 use crate::error::{Error, Result};
-use libm::{cbrt, exp, pow, sqrt};
+use libm::{exp, log, pow, sqrt};
 
 /// `sqrt(π/2)`.
 const SQRT_HALF_PI: f64 = 1.253_314_137_315_500_3;
+
+/// Sizes whose cube roots are tabulated (the sizes of most collisions).
+const CBRT_TABLE: usize = 1024;
+
+/// `CUBE_ROOTS[i] = i^{1/3}` for `i < CBRT_TABLE`, computed at compile time by Newton's
+/// method from an integer first guess (the tests compare it with `libm::cbrt`).
+static CUBE_ROOTS: [f64; CBRT_TABLE] = {
+    let mut t = [0.0; CBRT_TABLE];
+    let mut i = 1;
+    while i < CBRT_TABLE {
+        let x = i as f64;
+        let mut y = 1.0;
+        while (y + 1.0) * (y + 1.0) * (y + 1.0) <= x {
+            y += 1.0;
+        }
+        let mut k = 0;
+        while k < 60 {
+            y -= (y * y * y - x) / (3.0 * y * y);
+            k += 1;
+        }
+        t[i] = y;
+        i += 1;
+    }
+    t
+};
+
+/// `i^{1/3}` of a size: from the table below [`CBRT_TABLE`].
+#[inline]
+fn size_cbrt(i: u64) -> f64 {
+    match CUBE_ROOTS.get(i as usize) {
+        Some(&c) if i > 0 => c,
+        _ => cbrt(i as f64),
+    }
+}
 
 /// The rates of one pair `(i, T_i), (j, T_j)`: per unit of `n_i n_j` (each unordered
 /// pair of an i- and a j-cluster in volume V collides at rate `collision / V`).
@@ -71,6 +106,12 @@ pub struct PairRates {
 pub trait TemperatureKernel {
     /// The rates of the pair `(i, T_i), (j, T_j)` (sizes ≥ 1, temperatures ≥ 0).
     fn rates(&self, i: u64, ti: f64, j: u64, tj: f64) -> PairRates;
+
+    /// `C_ij` alone (what a proposal's acceptance needs; the other rates are needed
+    /// only for accepted pairs). Must equal `rates(i, ti, j, tj).collision`.
+    fn collision(&self, i: u64, ti: f64, j: u64, tj: f64) -> f64 {
+        self.rates(i, ti, j, tj).collision
+    }
 
     /// The factors of size `i` at temperature `t` of the proposal bound
     /// `A(i, j) = Σ_k a_k(i, T_i) b_k(j)`, with `A(i, j) + A(j, i) ≥ C_ij` for all
@@ -123,12 +164,29 @@ impl Ballistic {
 
     /// The aggregation barrier `W_ij = a (i^{1/3} j^{1/3})^λ / (i^{1/3} + j^{1/3})^λ`.
     pub fn barrier(&self, i: u64, j: u64) -> f64 {
-        let (ci, cj) = (cbrt(i as f64), cbrt(j as f64));
-        self.a * pow(ci * cj / (ci + cj), self.lambda)
+        self.barrier_of(size_cbrt(i), size_cbrt(j))
+    }
+
+    /// The barrier from the cube roots of the sizes (`z^λ` as `e^{λ ln z}`: within a
+    /// few ulp of `pow`, at half its cost).
+    #[inline]
+    fn barrier_of(&self, ci: f64, cj: f64) -> f64 {
+        self.a * exp(self.lambda * log(ci * cj / (ci + cj)))
     }
 }
 
 impl TemperatureKernel for Ballistic {
+    #[inline]
+    fn collision(&self, i: u64, ti: f64, j: u64, tj: f64) -> f64 {
+        let (x, y) = (i as f64, j as f64);
+        let s2 = ti / x + tj / y;
+        if s2.is_nan() || s2 <= 0.0 {
+            return 0.0;
+        }
+        let d = size_cbrt(i) + size_cbrt(j);
+        SQRT_HALF_PI * d * d * sqrt(s2)
+    }
+
     fn rates(&self, i: u64, ti: f64, j: u64, tj: f64) -> PairRates {
         let (x, y) = (i as f64, j as f64);
         let s2 = ti / x + tj / y;
@@ -136,10 +194,11 @@ impl TemperatureKernel for Ballistic {
             // both species at rest: nothing collides
             return PairRates::default();
         }
-        let d = cbrt(x) + cbrt(y);
+        let (ci, cj) = (size_cbrt(i), size_cbrt(j));
+        let d = ci + cj;
         let c = SQRT_HALF_PI * d * d * sqrt(s2);
         let mu = x * y / (x + y);
-        let q = self.barrier(i, j) / (self.eps * self.eps * mu * s2);
+        let q = self.barrier_of(ci, cj) / (self.eps * self.eps * mu * s2);
         // f = e^{−q}(1 + q), g = e^{−q}(1 + q + q²/2); q = inf gives 0, not 0·inf
         let (f, g) = if q.is_finite() {
             let e = exp(-q);
@@ -179,7 +238,7 @@ impl TemperatureKernel for Ballistic {
     /// `sqrt(θ_i + θ_j) ≤ sqrt(θ_i) + sqrt(θ_j)`.
     fn factors(&self, i: u64, t: f64, a: &mut [f64; 3], b: &mut [f64; 3]) {
         let x = i as f64;
-        let ci = cbrt(x);
+        let ci = size_cbrt(i);
         let w = SQRT_HALF_PI * sqrt(t / x);
         *a = [w * ci * ci, 2.0 * w * ci, w];
         *b = [1.0, ci, ci * ci];
@@ -342,6 +401,79 @@ pub fn rhs<K: TemperatureKernel + ?Sized>(
     Ok(())
 }
 
+/// Integrates the population equations (module docs) for sizes `1..=n.len()` (clusters
+/// past the last size are dropped) from `t0` to `t1` by the classical Runge–Kutta
+/// method with steps of at most `h`, in place: `n[k − 1] = n_k`, `e[k − 1] = n_k T_k`.
+/// For comparing a Monte Carlo run with its equations; the step and the truncation
+/// are the caller's to check (halve h, double the sizes). Errors: lengths differ, `h`
+/// or the interval not finite and positive (an empty interval does nothing).
+///
+/// ```
+/// use coagula_core::kernel::temperature::{Model, integrate};
+/// let m = Model::new(1.0, 0.5).unwrap();
+/// let (mut n, mut e) = (vec![0.0; 200], vec![0.0; 200]);
+/// (n[0], e[0]) = (1.0, 1.0);
+/// integrate(&m, &mut n, &mut e, 0.0, 1.0, 0.01).unwrap();
+/// let exact = m.exact(1.0, 1.0, 1.0);
+/// let number: f64 = n.iter().sum();
+/// assert!((number - exact.number()).abs() < 1e-9);
+/// ```
+pub fn integrate<K: TemperatureKernel + ?Sized>(
+    kernel: &K,
+    n: &mut [f64],
+    e: &mut [f64],
+    t0: f64,
+    t1: f64,
+    h: f64,
+) -> Result<()> {
+    let l = n.len();
+    if e.len() != l {
+        return Err(Error::BufferLength {
+            name: "e",
+            expected: l,
+            got: e.len(),
+        });
+    }
+    crate::error::positive("step h", h)?;
+    crate::error::finite("start time", t0)?;
+    crate::error::finite("end time", t1)?;
+    if t1 <= t0 {
+        return Ok(());
+    }
+    let steps = libm::ceil((t1 - t0) / h).max(1.0);
+    if steps > 1e12 {
+        return Err(Error::OutOfRange {
+            name: "steps of the deterministic solve",
+            value: steps,
+            range: "(0, 1e12]",
+        });
+    }
+    let h = (t1 - t0) / steps;
+    let mut k = alloc::vec![[alloc::vec![0.0; l], alloc::vec![0.0; l]]; 4];
+    let (mut sn, mut se) = (alloc::vec![0.0; l], alloc::vec![0.0; l]);
+    for _ in 0..steps as u64 {
+        for stage in 0..4 {
+            let w = [0.0, 0.5, 0.5, 1.0][stage] * h;
+            for q in 0..l {
+                let (dn, de) = if stage == 0 {
+                    (0.0, 0.0)
+                } else {
+                    (k[stage - 1][0][q], k[stage - 1][1][q])
+                };
+                sn[q] = n[q] + w * dn;
+                se[q] = e[q] + w * de;
+            }
+            let [kn, ke] = &mut k[stage];
+            rhs(kernel, &sn, &se, kn, ke)?;
+        }
+        for q in 0..l {
+            n[q] += h / 6.0 * (k[0][0][q] + 2.0 * k[1][0][q] + 2.0 * k[2][0][q] + k[3][0][q]);
+            e[q] += h / 6.0 * (k[0][1][q] + 2.0 * k[1][1][q] + 2.0 * k[2][1][q] + k[3][1][q]);
+        }
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -459,6 +591,33 @@ mod tests {
                 assert_relative_eq!(total, s.number(), max_relative = 1e-9);
                 let mean_t: f64 = e.iter().sum::<f64>() / total;
                 assert_relative_eq!(mean_t, s.mean_temperature(), max_relative = 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn tabulated_cube_roots_and_the_fast_paths_are_exact_enough() {
+        for i in 1..(CBRT_TABLE as u64 + 10) {
+            let (got, want) = (size_cbrt(i), libm::cbrt(i as f64));
+            assert!(
+                (got - want).abs() <= f64::EPSILON * want,
+                "cbrt({i}): {got} vs {want}"
+            );
+        }
+        let k = Ballistic::paper();
+        for (i, j) in [(1, 1), (2, 7), (30, 1000), (5000, 3)] {
+            for (ti, tj) in [(1.0, 0.5), (0.0, 2.0), (3.0, 0.0)] {
+                let r = k.rates(i, ti, j, tj);
+                assert_eq!(k.collision(i, ti, j, tj).to_bits(), r.collision.to_bits());
+                let want = 0.1
+                    * pow(
+                        cbrt(i as f64) * cbrt(j as f64) / (cbrt(i as f64) + cbrt(j as f64)),
+                        0.4,
+                    );
+                assert!(
+                    (k.barrier(i, j) / want - 1.0).abs() < 1e-14,
+                    "barrier({i}, {j})"
+                );
             }
         }
     }

@@ -60,14 +60,16 @@ pub mod rule;
 pub mod thermal;
 pub mod tree;
 pub mod trees;
+pub mod uniform;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
 pub use bucketed::{BucketedEngine, MAX_PARTICLES};
 pub use proposal::{Candidate, ProposalEngine};
 pub use rule::{Coagulate, EventRule, Outcome, Reweighed, SPOT_CHECK};
-pub use thermal::{Collide, TemperatureMc, Thermal};
+pub use thermal::{Collide, TemperatureMc, TemperatureRejection, Thermal};
 pub use tree::TreeEngine;
 pub use trees::{BinaryTree, ProposalTree, WideTree};
+pub use uniform::UniformEngine;
 
 use super::clock::Batch;
 use super::population::Population;
@@ -343,6 +345,11 @@ where
         self.set_counts(&dense, volume)
     }
 
+    /// The checkpoint tag: the engine's, and the rule's above it when it has state.
+    fn tag() -> u64 {
+        Rl::TAG.map_or(E::TAG, |t| (t << 8) | E::TAG)
+    }
+
     /// The mean waiting time between proposals and whether proposals happen at all,
     /// after the engine's refresh.
     #[inline]
@@ -392,7 +399,10 @@ where
                 self.pop.n -= 1;
                 true
             }
-            Outcome::Bounce => false,
+            Outcome::Bounce => {
+                rep.bounces += 1;
+                false
+            }
         };
         if Rl::REWEIGHS {
             for s in self.rule.commit(&mut self.kernel) {
@@ -564,7 +574,7 @@ where
     /// same kernel.
     fn save(&self, w: &mut Writer) {
         use crate::checkpoint::{header, save_report};
-        header(w, Rl::TAG.unwrap_or(E::TAG));
+        header(w, Self::tag());
         w.u64(R as u64);
         w.u64(self.engine.max_size());
         w.u64(self.pop.size_limit);
@@ -581,7 +591,7 @@ where
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
         use crate::checkpoint::{check_header, read_report};
         let bad = |what| Error::Checkpoint { what };
-        check_header(r, Rl::TAG.unwrap_or(E::TAG))?;
+        check_header(r, Self::tag())?;
         if r.u64()? != R as u64 {
             return Err(bad("different rank"));
         }

@@ -46,7 +46,7 @@
 use super::proposal::{Candidate, ProposalEngine};
 use super::rule::{EventRule, Outcome, Reweighed};
 use super::trees::WideTree;
-use super::{LowRankMc, TreeEngine};
+use super::{LowRankMc, TreeEngine, UniformEngine};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
@@ -60,14 +60,25 @@ use rand_core::Rng;
 /// `T` is the tree layout ([`WideTree`] or [`BinaryTree`](super::BinaryTree)).
 pub type TemperatureMc<TK, T = WideTree<3>> = LowRankMc<Thermal<TK>, 3, TreeEngine<3, T>, Collide>;
 
+/// The temperature-dependent scheme on the acceptance–rejection engine (uniform pairs,
+/// one bound `2 max A` for all): the baseline that [`TemperatureMc`] is timed against.
+pub type TemperatureRejection<TK> = LowRankMc<Thermal<TK>, 3, UniformEngine<3>, Collide>;
+
 /// A temperature kernel with the partial temperatures of every size: the collision
 /// kernel at the current temperatures (see the module docs).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Thermal<TK> {
     model: TK,
     /// `temps[i − 1] = T_i`; sizes past the end are at temperature 0.
     temps: Vec<f64>,
+    /// The factors the rule validated for the sizes an event changes, keyed by size
+    /// and temperature bits, so that the engine's reweighing that follows does not
+    /// evaluate them again (a pure cache: a miss evaluates the model).
+    recent: heapless::Vec<Recent, 3>,
 }
+
+/// A cached factor row: size, temperature bits, `a`, `b`.
+type Recent = (u64, u64, [f64; 3], [f64; 3]);
 
 impl<TK: TemperatureKernel> Thermal<TK> {
     /// The kernels `model` with `temperatures[i − 1] = T_i` (finite, ≥ 0; sizes past
@@ -77,7 +88,11 @@ impl<TK: TemperatureKernel> Thermal<TK> {
         let mut temps = Vec::new();
         try_reserve(&mut temps, temperatures.len())?;
         temps.extend_from_slice(temperatures);
-        Ok(Thermal { model, temps })
+        Ok(Thermal {
+            model,
+            temps,
+            recent: heapless::Vec::new(),
+        })
     }
 
     /// The kernels.
@@ -134,7 +149,11 @@ impl<TK: TemperatureKernel> CoagulationKernel for Thermal<TK> {
     fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
         let (mut fa, mut fb) = ([0.0; 3], [0.0; 3]);
         let i = x as u64;
-        self.model.factors(i, self.temperature(i), &mut fa, &mut fb);
+        let t = self.temperature(i);
+        match self.recent.iter().find(|r| r.0 == i && r.1 == t.to_bits()) {
+            Some(r) => (fa, fb) = (r.2, r.3),
+            None => self.model.factors(i, t, &mut fa, &mut fb),
+        }
         a[..3].copy_from_slice(&fa);
         b[..3].copy_from_slice(&fb);
     }
@@ -160,9 +179,9 @@ fn invalid(name: &'static str, value: f64) -> Error {
 }
 
 impl Collide {
-    /// Validates the rates of an accepted pair against the bound.
-    fn check(r: &PairRates, bound: f64) -> Result<()> {
-        let c = r.collision;
+    /// Validates a collision rate against the bound.
+    #[inline]
+    fn check_collision(c: f64, bound: f64) -> Result<()> {
         if !(c >= 0.0 && c.is_finite()) {
             return Err(invalid("temperature kernel: collision rate", c));
         }
@@ -173,6 +192,13 @@ impl Collide {
                 bound,
             });
         }
+        Ok(())
+    }
+
+    /// Validates the rates of an accepted pair against the bound.
+    fn check(r: &PairRates, bound: f64) -> Result<()> {
+        let c = r.collision;
+        Self::check_collision(c, bound)?;
         for (name, v) in [
             ("temperature kernel: aggregation rate", r.aggregation),
             ("temperature kernel: restitution rate", r.restitution),
@@ -210,12 +236,16 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
         rng: &mut G,
     ) -> Result<Option<Outcome>> {
         let (bound, _) = bounds();
-        let r = kernel.rates(c.x, c.y);
-        Self::check(&r, bound)?;
+        let (tx, ty) = (kernel.temperature(c.x), kernel.temperature(c.y));
+        let cxy = kernel.model.collision(c.x, tx, c.y, ty);
+        Self::check_collision(cxy, bound)?;
         let u = bound * open_unit(rng);
-        if u > r.collision {
+        if u > cxy {
             return Ok(None);
         }
+        // the other rates only for an accepted pair
+        let r = kernel.model.rates(c.x, tx, c.y, ty);
+        Self::check(&r, bound)?;
         self.rates = r;
         // given acceptance, u is uniform on (0, C]: a bounce with probability C^res / C
         Ok(Some(if u <= r.restitution {
@@ -286,6 +316,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
                 }
             }
         }
+        kernel.recent.clear();
         for &(s, t) in &self.pending {
             if !t.is_finite() {
                 return Err(invalid("temperature update", t));
@@ -295,6 +326,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
             if let Some(&v) = a.iter().chain(&b).find(|v| !(**v >= 0.0 && v.is_finite())) {
                 return Err(invalid("low-rank factor", v));
             }
+            let _ = kernel.recent.push((s, t.to_bits(), a, b));
         }
         Ok(())
     }
@@ -326,14 +358,15 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
         Ok(Some(Thermal {
             model: kernel.model.clone(),
             temps,
+            recent: heapless::Vec::new(),
         }))
     }
 }
 
-impl<TK, T> TemperatureMc<TK, T>
+impl<TK, E> LowRankMc<Thermal<TK>, 3, E, Collide>
 where
     TK: TemperatureKernel + Clone,
-    TreeEngine<3, T>: ProposalEngine<3>,
+    E: ProposalEngine<3>,
 {
     /// The partial temperature of size `size`.
     pub fn temperature(&self, size: u64) -> f64 {
