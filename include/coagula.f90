@@ -54,6 +54,15 @@ module coagula
      integer(c_int64_t) :: size_limit, seed, stream
   end type coag_thermal_config
 
+  ! low-rank DSMC (Osinsky 2023 §5); fill with coag_dsmc_default_config
+  integer(c_int32_t), parameter :: COAG_DSMC_LOWRANK = 0, COAG_DSMC_REJECTION = 1
+  type, bind(c) :: coag_dsmc_config
+     integer(c_size_t) :: struct_size
+     integer(c_int32_t) :: engine
+     real(c_double) :: restitution, stick_speed
+     integer(c_int64_t) :: seed, stream
+  end type coag_dsmc_config
+
   ! a first-hit kernel estimation; set struct_size = c_sizeof(it)
   type, bind(c) :: coag_first_hits
      integer(c_size_t) :: struct_size
@@ -303,6 +312,85 @@ module coagula
        real(c_double), value :: c, gamma, n0, t0, t
        type(c_ptr), value :: number, mean_temperature
        integer(c_int32_t) :: coag_thermal_model_exact
+     end function
+     function coag_dsmc_default_config(out, size) bind(c, name="coag_dsmc_default_config")
+       import :: coag_dsmc_config, c_size_t, c_int32_t
+       type(coag_dsmc_config), intent(out) :: out
+       integer(c_size_t), value :: size
+       integer(c_int32_t) :: coag_dsmc_default_config
+     end function
+     ! sizes(p) and velocities(3p-2:3p), p = 1..n
+     function coag_dsmc_new(config, sizes, velocities, n, volume, out) bind(c, name="coag_dsmc_new")
+       import :: coag_dsmc_config, c_int64_t, c_double, c_size_t, c_ptr, c_int32_t
+       type(coag_dsmc_config), intent(in) :: config
+       integer(c_int64_t), intent(in) :: sizes(*)
+       real(c_double), intent(in) :: velocities(*)
+       integer(c_size_t), value :: n
+       real(c_double), value :: volume
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_dsmc_new
+     end function
+     function coag_dsmc_new_maxwellian(config, counts, temperatures, len, volume, out) &
+          bind(c, name="coag_dsmc_new_maxwellian")
+       import :: coag_dsmc_config, c_int64_t, c_double, c_size_t, c_ptr, c_int32_t
+       type(coag_dsmc_config), intent(in) :: config
+       integer(c_int64_t), intent(in) :: counts(*)
+       real(c_double), intent(in) :: temperatures(*)
+       integer(c_size_t), value :: len
+       real(c_double), value :: volume
+       type(c_ptr), intent(out) :: out
+       integer(c_int32_t) :: coag_dsmc_new_maxwellian
+     end function
+     subroutine coag_dsmc_free(h) bind(c, name="coag_dsmc_free")
+       import :: c_ptr
+       type(c_ptr), value :: h
+     end subroutine
+     function coag_dsmc_advance_to(h, t, report) bind(c, name="coag_dsmc_advance_to")
+       import :: c_ptr, c_double, c_int32_t
+       type(c_ptr), value :: h
+       real(c_double), value :: t
+       type(c_ptr), value :: report
+       integer(c_int32_t) :: coag_dsmc_advance_to
+     end function
+     ! time, particles, volume: c_loc of the variables, or c_null_ptr
+     function coag_dsmc_info(h, time, particles, volume) bind(c, name="coag_dsmc_info")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: h, time, particles, volume
+       integer(c_int32_t) :: coag_dsmc_info
+     end function
+     ! momentum (3 doubles), energy, mean_temperature: c_loc or c_null_ptr
+     function coag_dsmc_observe(h, momentum, energy, mean_temperature) bind(c, name="coag_dsmc_observe")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: h, momentum, energy, mean_temperature
+       integer(c_int32_t) :: coag_dsmc_observe
+     end function
+     ! sizes (n int64), velocities (3n doubles): c_loc or c_null_ptr
+     function coag_dsmc_particles(h, sizes, velocities, n) bind(c, name="coag_dsmc_particles")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h, sizes, velocities
+       integer(c_size_t), value :: n
+       integer(c_int32_t) :: coag_dsmc_particles
+     end function
+     function coag_dsmc_checkpoint_size(h, out) bind(c, name="coag_dsmc_checkpoint_size")
+       import :: c_ptr, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_size_t), intent(out) :: out
+       integer(c_int32_t) :: coag_dsmc_checkpoint_size
+     end function
+     function coag_dsmc_save(h, buf, n, written) bind(c, name="coag_dsmc_save")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(out) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_size_t), intent(out) :: written
+       integer(c_int32_t) :: coag_dsmc_save
+     end function
+     function coag_dsmc_restore(h, buf, n) bind(c, name="coag_dsmc_restore")
+       import :: c_ptr, c_int8_t, c_size_t, c_int32_t
+       type(c_ptr), value :: h
+       integer(c_int8_t), intent(in) :: buf(*)
+       integer(c_size_t), value :: n
+       integer(c_int32_t) :: coag_dsmc_restore
      end function
      function coag_kernel_new_constant(k0, out) bind(c, name="coag_kernel_new_constant")
        import :: c_double, c_ptr, c_int32_t

@@ -116,6 +116,16 @@
 #define COAG_EXACT_COAG_FRAG 4
 
 /*
+ Low-rank DSMC on per-size trees (the default).
+ */
+#define COAG_DSMC_LOWRANK 0
+
+/*
+ Acceptance–rejection on uniform pairs (the baseline).
+ */
+#define COAG_DSMC_REJECTION 1
+
+/*
  Specular reflection at the wall.
  */
 #define COAG_WALL_SPECULAR 0
@@ -268,6 +278,11 @@
 #define COAG_THERMAL_REJECTION 1
 
 /*
+ Opaque handle of a DSMC simulation (`coag_dsmc` in C).
+ */
+typedef struct coag_dsmc coag_dsmc;
+
+/*
  Opaque fragmentation handle (`coag_fragmentation` in C).
  */
 typedef struct coag_fragmentation coag_fragmentation;
@@ -291,6 +306,87 @@ typedef struct coag_sim coag_sim;
  Opaque handle of a temperature-dependent simulation (`coag_thermal` in C).
  */
 typedef struct coag_thermal coag_thermal;
+
+/*
+ A DSMC simulation's configuration. Fill it with `coag_dsmc_default_config`, which
+ sets `struct_size`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_dsmc_config)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   `COAG_DSMC_LOWRANK` or `COAG_DSMC_REJECTION`.
+   */
+  int32_t engine;
+  /*
+   Restitution coefficient ε ∈ (0, 1].
+   */
+  double restitution;
+  /*
+   Collisions whose normal relative speed is below this aggregate (≥ 0; 0: never,
+   the paper's test).
+   */
+  double stick_speed;
+  /*
+   The random stream: the seed policy's `(seed, stream)`.
+   */
+  uint64_t seed;
+  /*
+   See `seed`.
+   */
+  uint64_t stream;
+} coag_dsmc_config;
+
+/*
+ What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
+ `coag_step_report_init`) before passing it; the library writes the fields that fit.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_step_report)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Time reached.
+   */
+  double time;
+  /*
+   Accepted events (coagulations and break-ups).
+   */
+  uint64_t events;
+  /*
+   Proposals, accepted or not.
+   */
+  uint64_t proposals;
+  /*
+   Proposals rejected by thinning.
+   */
+  uint64_t rejections;
+  /*
+   Proposals where the kernel exceeded its declared bound: always 0 except for the
+   event-driven schemes without `strict_bound` (elsewhere, and with it, a kernel
+   above its bound is an error, `COAG_INVALID_RATE`).
+   */
+  uint64_t bound_violations;
+  /*
+   Probabilities above 1 that were clipped (time-driven scheme).
+   */
+  uint64_t clipped;
+  /*
+   Particle-number doublings.
+   */
+  uint64_t doublings;
+  /*
+   Particles that left the system (0 for the schemes that keep every particle).
+   */
+  uint64_t removed;
+  /*
+   Collisions that bounced instead of merging (0 for pure coagulation).
+   */
+  uint64_t bounces;
+} coag_step_report;
 
 /*
  `K(x, y)` from C.
@@ -442,55 +538,6 @@ typedef struct {
    */
   void *drift_user_data;
 } coag_langevin_config;
-
-/*
- What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
- `coag_step_report_init`) before passing it; the library writes the fields that fit.
- */
-typedef struct {
-  /*
-   `sizeof(coag_step_report)` as the caller compiled it.
-   */
-  size_t struct_size;
-  /*
-   Time reached.
-   */
-  double time;
-  /*
-   Accepted events (coagulations and break-ups).
-   */
-  uint64_t events;
-  /*
-   Proposals, accepted or not.
-   */
-  uint64_t proposals;
-  /*
-   Proposals rejected by thinning.
-   */
-  uint64_t rejections;
-  /*
-   Proposals where the kernel exceeded its declared bound: always 0 except for the
-   event-driven schemes without `strict_bound` (elsewhere, and with it, a kernel
-   above its bound is an error, `COAG_INVALID_RATE`).
-   */
-  uint64_t bound_violations;
-  /*
-   Probabilities above 1 that were clipped (time-driven scheme).
-   */
-  uint64_t clipped;
-  /*
-   Particle-number doublings.
-   */
-  uint64_t doublings;
-  /*
-   Particles that left the system (0 for the schemes that keep every particle).
-   */
-  uint64_t removed;
-  /*
-   Collisions that bounced instead of merging (0 for pure coagulation).
-   */
-  uint64_t bounces;
-} coag_step_report;
 
 /*
  An observable `f(x, u)` for `coag_langevin_mean`.
@@ -798,6 +845,104 @@ int32_t coag_exact_moment(int32_t solution, uint32_t m, double t, double *out);
  `out` must be NULL or valid for writing one `double`.
  */
 int32_t coag_exact_density(int32_t solution, uint64_t k, double t, double *out);
+
+/*
+ Writes the default configuration (low-rank, ε = 0.99, no sticking, seed 0) into
+ `out`, a struct of `size` bytes.
+
+ # Safety
+ `out` must be NULL or valid for writing `size` bytes.
+ */
+int32_t coag_dsmc_default_config(coag_dsmc_config *out, size_t size);
+
+/*
+ A simulation of `n` particles of sizes `sizes[p] ≥ 1` with velocities
+ `velocities[3p .. 3p + 3]` (finite) in volume `volume`. Free with `coag_dsmc_free`.
+
+ # Safety
+ Pointers must be NULL or valid; `sizes` holds `n` values, `velocities` `3n`.
+ */
+int32_t coag_dsmc_new(const coag_dsmc_config *config, const uint64_t *sizes, const double *velocities, size_t n, double volume, coag_dsmc **out);
+
+/*
+ A simulation of `counts[i − 1]` particles of size i with Maxwellian velocities at
+ temperature `temperatures[i − 1]` (each component normal with variance `T_i / i`,
+ drawn from the configuration's stream), `len` entries each, in volume `volume`.
+
+ # Safety
+ Pointers must be NULL or valid; `counts` and `temperatures` hold `len` values.
+ */
+int32_t coag_dsmc_new_maxwellian(const coag_dsmc_config *config, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_dsmc **out);
+
+/*
+ Frees a simulation (NULL is a no-op).
+
+ # Safety
+ `h` must be NULL or a live handle, not used afterwards.
+ */
+void coag_dsmc_free(coag_dsmc *h);
+
+/*
+ Advances to time `t`; `report` (may be NULL) gets the call's totals (`events`:
+ collisions, `bounces`: those that did not aggregate).
+
+ # Safety
+ `h` a live handle used by this thread alone; `report` NULL or valid.
+ */
+int32_t coag_dsmc_advance_to(coag_dsmc *h, double t, coag_step_report *report);
+
+/*
+ The time, the number of particles and the volume; any out pointer may be NULL.
+
+ # Safety
+ `h` a live handle; out pointers NULL or writable.
+ */
+int32_t coag_dsmc_info(const coag_dsmc *h, double *time, uint64_t *particles, double *volume);
+
+/*
+ The total momentum `Σ m V` (3 doubles), the kinetic energy density `Σ m |V|²/2 / V`
+ and the granular temperature `Σ m |V|² / (3N)`; any out pointer may be NULL.
+
+ # Safety
+ `h` a live handle; `momentum` NULL or valid for 3 doubles; others NULL or writable.
+ */
+int32_t coag_dsmc_observe(const coag_dsmc *h, double *momentum, double *energy, double *mean_temperature);
+
+/*
+ Copies the particles, by size then in the library's order: `sizes` (`n`) and
+ `velocities` (`3n`), where `n` must be the particle count of `coag_dsmc_info`.
+ Either array may be NULL.
+
+ # Safety
+ `h` a live handle; each non-null array valid for its length.
+ */
+int32_t coag_dsmc_particles(const coag_dsmc *h, uint64_t *sizes, double *velocities, size_t n);
+
+/*
+ Bytes a checkpoint of the simulation needs now.
+
+ # Safety
+ `h` a live handle; `out` writable.
+ */
+int32_t coag_dsmc_checkpoint_size(const coag_dsmc *h, size_t *out);
+
+/*
+ Saves the simulation (particles, clock, random stream) into `buf`; `written` (may
+ be NULL) gets the bytes used.
+
+ # Safety
+ `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
+ */
+int32_t coag_dsmc_save(const coag_dsmc *h, uint8_t *buf, size_t len, size_t *written);
+
+/*
+ Restores a checkpoint of a simulation with the same configuration (engine,
+ restitution, sticking); on error the simulation is unchanged.
+
+ # Safety
+ `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
+ */
+int32_t coag_dsmc_restore(coag_dsmc *h, const uint8_t *buf, size_t len);
 
 /*
  Constant kernel `K = k0` (k0 > 0).

@@ -54,6 +54,9 @@ struct LangevinFree {
 struct ThermalFree {
     void operator()(coag_thermal *h) const noexcept { coag_thermal_free(h); }
 };
+struct DsmcFree {
+    void operator()(coag_dsmc *h) const noexcept { coag_dsmc_free(h); }
+};
 }  // namespace detail
 
 /// A coagulation kernel.
@@ -583,6 +586,90 @@ class Thermal {
         return m;
     }
     std::unique_ptr<coag_thermal, detail::ThermalFree> h_;
+};
+
+inline coag_dsmc_config dsmc_default_config() {
+    coag_dsmc_config c;
+    check(coag_dsmc_default_config(&c, sizeof c));
+    return c;
+}
+
+/// Low-rank DSMC (Osinsky 2023 §5): particles with 3-D velocities.
+class Dsmc {
+  public:
+    /// Particles of sizes[p] with velocities[3p..3p+3], in volume v.
+    static Dsmc make(const coag_dsmc_config &c, const std::vector<std::uint64_t> &sizes,
+                     const std::vector<double> &velocities, double volume) {
+        if (velocities.size() != 3 * sizes.size()) check(COAG_INVALID_ARGUMENT);
+        coag_dsmc *h = nullptr;
+        check(coag_dsmc_new(&c, sizes.data(), velocities.data(), sizes.size(), volume, &h));
+        return Dsmc(h);
+    }
+    /// counts[i-1] Maxwellian particles of size i at temperature temperatures[i-1].
+    static Dsmc maxwellian(const coag_dsmc_config &c, const std::vector<std::uint64_t> &counts,
+                           const std::vector<double> &temperatures, double volume) {
+        if (counts.size() != temperatures.size()) check(COAG_INVALID_ARGUMENT);
+        coag_dsmc *h = nullptr;
+        check(coag_dsmc_new_maxwellian(&c, counts.data(), temperatures.data(), counts.size(), volume, &h));
+        return Dsmc(h);
+    }
+    coag_step_report advance_to(double t) {
+        coag_step_report r;
+        check(coag_step_report_init(&r, sizeof r));
+        check(coag_dsmc_advance_to(h_.get(), t, &r));
+        return r;
+    }
+    double time() const {
+        double t;
+        check(coag_dsmc_info(h_.get(), &t, nullptr, nullptr));
+        return t;
+    }
+    std::uint64_t particles() const {
+        std::uint64_t n;
+        check(coag_dsmc_info(h_.get(), nullptr, &n, nullptr));
+        return n;
+    }
+    double volume() const {
+        double v;
+        check(coag_dsmc_info(h_.get(), nullptr, nullptr, &v));
+        return v;
+    }
+    std::vector<double> momentum() const {
+        std::vector<double> p(3);
+        check(coag_dsmc_observe(h_.get(), p.data(), nullptr, nullptr));
+        return p;
+    }
+    double energy() const {
+        double e;
+        check(coag_dsmc_observe(h_.get(), nullptr, &e, nullptr));
+        return e;
+    }
+    double mean_temperature() const {
+        double t;
+        check(coag_dsmc_observe(h_.get(), nullptr, nullptr, &t));
+        return t;
+    }
+    /// The particles' sizes and velocities (3 per particle).
+    std::pair<std::vector<std::uint64_t>, std::vector<double>> state() const {
+        std::vector<std::uint64_t> s(particles());
+        std::vector<double> v(3 * s.size());
+        check(coag_dsmc_particles(h_.get(), s.data(), v.data(), s.size()));
+        return {s, v};
+    }
+    std::vector<std::uint8_t> checkpoint() const {
+        std::size_t n = 0;
+        check(coag_dsmc_checkpoint_size(h_.get(), &n));
+        std::vector<std::uint8_t> buf(n);
+        check(coag_dsmc_save(h_.get(), buf.data(), buf.size(), &n));
+        buf.resize(n);
+        return buf;
+    }
+    void restore(const std::vector<std::uint8_t> &buf) { check(coag_dsmc_restore(h_.get(), buf.data(), buf.size())); }
+    coag_dsmc *get() const noexcept { return h_.get(); }
+
+  private:
+    explicit Dsmc(coag_dsmc *h) : h_(h) {}
+    std::unique_ptr<coag_dsmc, detail::DsmcFree> h_;
 };
 
 }  // namespace coagula

@@ -18,7 +18,7 @@ san="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal; do
+for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal test_dsmc; do
     gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
         "tests/c/$t.c" "$lib" $libs -o "$out/$t"
     "$out/$t"
@@ -37,7 +37,7 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 # library); test_hostile in its quick mode (smaller work limits, fewer crafted
 # checkpoints: the same checks).
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal; do
+    for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal test_dsmc; do
         gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
         COAG_TEST_QUICK=1 valgrind -q --error-exitcode=99 --leak-check=full \

@@ -291,6 +291,25 @@ enum BenchKind {
         #[arg(long, default_value_t = 1)]
         seed: u64,
     },
+    /// Low-rank DSMC against acceptance-rejection on the paper's workload (Osinsky
+    /// 2023, tables 5-6: N_k ~ exp(-a (k-1)), a = 0.1 and 0.01, eps = 0.99).
+    Dsmc {
+        /// Particles (about; the paper's tables are read as 1e5, the default is 1e6).
+        #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(100..=1u64 << 32))]
+        particles: u64,
+        /// Times (comma-separated, increasing).
+        #[arg(long, value_delimiter = ',', default_value = "1,10,100", value_parser = positive_f64)]
+        times: Vec<f64>,
+        /// Wall-clock budget of one run in seconds (cells beyond it print "-").
+        #[arg(long, default_value_t = 900.0, value_parser = positive_f64)]
+        budget: f64,
+        /// Alternating rounds of both methods (the fastest of each cell is kept).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
+        /// Seed of the random streams.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
@@ -588,6 +607,29 @@ fn main() -> ExitCode {
                 },
         } => {
             return match reproduce::maftei2016::bench(trajectories, dt, repeat) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+        Command::Bench {
+            which:
+                BenchKind::Dsmc {
+                    particles,
+                    times,
+                    budget,
+                    repeat,
+                    seed,
+                },
+        } => {
+            if !times.windows(2).all(|w| w[0] < w[1]) {
+                eprintln!("error: --times must increase");
+                return ExitCode::FAILURE;
+            }
+            return match reproduce::osinsky2023::bench_dsmc(particles, &times, budget, repeat, seed)
+            {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");

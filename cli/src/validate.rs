@@ -144,8 +144,11 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
     const TEMPERATURE: &str = "osinsky2023/temperature/";
     let langevin = coded(LANGEVIN);
     let temperature = coded(TEMPERATURE);
+    const DSMC: &str = "osinsky2023/dsmc/";
+    let dsmc = coded(DSMC);
     if !langevin
         && !temperature
+        && !dsmc
         && !file
             .case
             .iter()
@@ -202,7 +205,10 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
     if temperature {
         cases.extend(crate::reproduce::osinsky2023::cases(quick)?);
     }
-    if langevin || temperature {
+    if dsmc {
+        cases.extend(crate::reproduce::osinsky2023::dsmc_cases(quick)?);
+    }
+    if langevin || temperature || dsmc {
         cases.retain(|c| selected(&c.case));
         if cases.is_empty() && out.is_empty() {
             return Err(format!(

@@ -263,6 +263,7 @@ pub(crate) mod tag {
     pub const LANGEVIN: u64 = 9;
     pub const THERMAL: u64 = 10;
     pub const UNIFORM: u64 = 11;
+    pub const DSMC: u64 = 12;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

@@ -225,6 +225,28 @@ fn short<S: Scheme>(
     s.advance_within(t, &mut Budget::work(200_000), rng)
 }
 
+/// Saves `s`, changes byte `flip` to `value` and restores: a refusal must leave the
+/// state (`state(s)`) unchanged, an acceptance a scheme that runs a short step.
+/// Returns whether a refusal left the state unchanged.
+fn bent_restore<S: Scheme + Checkpoint>(
+    s: &mut S,
+    flip: usize,
+    value: u8,
+    rng: &mut Pcg64Mcg,
+    state: impl Fn(&S) -> Vec<u64>,
+) -> bool {
+    let mut buf = vec![0u8; s.checkpoint_len()];
+    let n = s.save_to(&mut buf).unwrap();
+    buf[flip % n] = value;
+    let before = state(s);
+    if s.restore_from(&buf[..n]).is_err() {
+        return state(s) == before;
+    }
+    let t = s.time() + 0.05;
+    let _ = short(s, t, rng);
+    true
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(256))]
 
@@ -531,29 +553,11 @@ proptest! {
             if let Ok(mut s) = TemperatureMc::<_>::new(k.clone(), &counts[..len], volume) && small {
                 ran += 1;
                 let _ = short(&mut s, t, &mut rng);
-                let mut buf = vec![0u8; s.checkpoint_len()];
-                let n = s.save_to(&mut buf).unwrap();
-                buf[flip % n] = value;
-                let before = s.counts().to_vec();
-                if s.restore_from(&buf[..n]).is_err() {
-                    prop_assert_eq!(&before, &s.counts().to_vec());
-                } else {
-                    let t = s.time() + 0.05;
-                    let _ = short(&mut s, t, &mut rng);
-                }
+                prop_assert!(bent_restore(&mut s, flip, value, &mut rng, |s| s.counts().to_vec()));
             }
             if let Ok(mut s) = TemperatureRejection::new(k, &counts[..len], volume) && small {
                 let _ = short(&mut s, t, &mut rng);
-                let mut buf = vec![0u8; s.checkpoint_len()];
-                let n = s.save_to(&mut buf).unwrap();
-                buf[flip % n] = value;
-                let before = s.counts().to_vec();
-                if s.restore_from(&buf[..n]).is_err() {
-                    prop_assert_eq!(&before, &s.counts().to_vec());
-                } else {
-                    let t = s.time() + 0.05;
-                    let _ = short(&mut s, t, &mut rng);
-                }
+                prop_assert!(bent_restore(&mut s, flip, value, &mut rng, |s| s.counts().to_vec()));
             }
         }
         if let Ok(m) = Model::new(params[0], params[1])
@@ -566,6 +570,47 @@ proptest! {
         // (how many cases reached a run: printed with --nocapture)
         if ran > 0 {
             println!("ran");
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// DSMC (both engines) under arbitrary restitution, sticking threshold, particles
+    /// (sizes, velocities), volumes and times, and checkpoints with one byte changed:
+    /// a constructor fails or gives a scheme that runs a short step; a refused restore
+    /// changes nothing.
+    #[test]
+    fn dsmc_never_panics(
+        parts in proptest::collection::vec(
+            (prop_oneof![1 => Just(0u64), 8 => 1u64..6, 1 => any::<u64>()],
+             proptest::collection::vec(prop_oneof![1 => any_real(), 8 => -3.0f64..3.0], 3)),
+            0..40,
+        ),
+        eps in prop_oneof![1 => any_real(), 4 => 0.01f64..1.0],
+        stick in prop_oneof![1 => any_real(), 2 => 0.0f64..1.0],
+        volume in prop_oneof![1 => any_real(), 3 => 1.0f64..1000.0],
+        t in any_real(),
+        flip in any::<usize>(),
+        value in any::<u8>(),
+    ) {
+        use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc, StickBelow};
+        let sizes: Vec<u64> = parts.iter().map(|p| p.0).collect();
+        let vel: Vec<[f64; 3]> = parts.iter().map(|p| [p.1[0], p.1[1], p.1[2]]).collect();
+        let mut rng = Pcg64Mcg::new(11);
+        let t = if t.is_finite() { t.clamp(-1.0, 5.0) } else { t };
+        if let Ok(gas) = Gas::from_particles(eps, StickBelow { speed: stick.abs() }, &sizes, &vel) {
+            macro_rules! exercise {
+                ($s:expr) => {
+                    if let Ok(mut s) = $s {
+                        let _ = short(&mut s, t, &mut rng);
+                        prop_assert!(bent_restore(&mut s, flip, value, &mut rng, |s| s.counts().to_vec()));
+                    }
+                };
+            }
+            exercise!(LowRankDsmc::new_gas(gas.clone(), volume));
+            exercise!(RejectionDsmc::new_gas(gas, volume));
         }
     }
 }

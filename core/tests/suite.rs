@@ -10,6 +10,8 @@ mod common;
 mod checkpoint;
 #[path = "conformance.rs"]
 mod conformance;
+#[path = "dsmc.rs"]
+mod dsmc;
 #[path = "finite_n.rs"]
 mod finite_n;
 #[path = "fuzz_findings.rs"]

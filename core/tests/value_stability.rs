@@ -338,3 +338,45 @@ fn temperature_schemes_are_value_stable() {
     }
     assert!(failures.is_empty(), "{failures}");
 }
+
+#[test]
+fn dsmc_is_value_stable() {
+    use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc, StickBelow};
+    let mut failures = String::new();
+    let mut rng = Pcg64Mcg::seed_from_u64(42);
+    let gas = Gas::maxwellian(0.9, &[600, 200, 60], &[1.0, 1.0, 2.0], &mut rng)
+        .unwrap()
+        .with_sticking(StickBelow { speed: 0.2 });
+    macro_rules! run {
+        ($s:expr) => {{
+            let mut s = $s;
+            let mut rng = Pcg64Mcg::seed_from_u64(42);
+            let rep = s.advance_to(5.0, &mut rng).unwrap();
+            let mut words = Vec::new();
+            for size in 1..=s.max_size() as u64 {
+                for v in s.kernel().velocities(size) {
+                    words.push(size);
+                    words.extend(v.iter().map(|c| c.to_bits()));
+                }
+            }
+            (pin(rep, fnv(words)), rep.bounces)
+        }};
+    }
+    for (name, got, want) in [
+        (
+            "dsmc low-rank",
+            run!(LowRankDsmc::new_gas(gas.clone(), 8600.0).unwrap()),
+            ((1593, 5606, 4013, 0, 15405051243404219424), 1576),
+        ),
+        (
+            "dsmc rejection",
+            run!(RejectionDsmc::new_gas(gas, 8600.0).unwrap()),
+            ((1597, 10492, 8895, 0, 11115214061261210712), 1572),
+        ),
+    ] {
+        if got != want {
+            failures.push_str(&format!("{name}: got {got:?}, pinned {want:?}\n"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}

@@ -24,12 +24,14 @@
 #![allow(non_camel_case_types)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
+mod dsmc;
 mod kernel;
 mod langevin;
 mod rng;
 mod sim;
 mod thermal;
 
+pub use dsmc::*;
 pub use kernel::*;
 pub use langevin::*;
 pub use sim::*;

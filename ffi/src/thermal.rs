@@ -261,23 +261,8 @@ pub unsafe extern "C" fn coag_thermal_advance_to(
     t: f64,
     report: *mut coag_step_report,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: forwarded contract.
-        let h = unsafe { handle_mut(h, "h") }?;
-        if !report.is_null() {
-            // validate the report before the run
-            // SAFETY: non-null; valid (contract).
-            unsafe { write_report(report, Default::default()) }?;
-        }
-        let rng = &mut h.rng;
-        let rep =
-            with_scheme!(&mut h.inner, s => s.advance_within(t, &mut Budget::unlimited(), rng))?;
-        if !report.is_null() {
-            // SAFETY: as above.
-            unsafe { write_report(report, rep) }?;
-        }
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { framed_advance(h, t, report) }
 }
 
 /// The time, the number of simulation particles, the volume and the largest size the
@@ -398,7 +383,161 @@ pub unsafe extern "C" fn coag_thermal_state(
 
 /// Bytes before the scheme's checkpoint: the configuration's fingerprint and the
 /// random stream's state.
-const HEAD: usize = 8 + 32;
+pub(crate) const HEAD: usize = 8 + 32;
+
+/// A handle whose checkpoint is framed: a fingerprint of its configuration and its
+/// random stream, then the scheme's own checkpoint.
+pub(crate) trait Framed {
+    /// The configuration's fingerprint.
+    fn print(&self) -> u64;
+    /// The handle's stream.
+    fn stream(&self) -> &Generator;
+    /// Replaces the handle's stream.
+    fn set_stream(&mut self, g: Generator);
+    /// The scheme's checkpoint length.
+    fn scheme_len(&self) -> usize;
+    /// Saves the scheme into `buf`.
+    fn save_scheme(&self, buf: &mut [u8]) -> coagula_core::Result<usize>;
+    /// Restores the scheme from `buf` (unchanged on error).
+    fn restore_scheme(&mut self, buf: &[u8]) -> coagula_core::Result<()>;
+    /// Advances the scheme to `t` on the handle's stream.
+    fn advance(&mut self, t: f64) -> coagula_core::Result<coagula_core::scheme::StepReport>;
+}
+
+/// `coag_*_advance_to` of a framed handle: `report` (may be NULL) is validated before
+/// the run and gets its totals.
+///
+/// # Safety
+/// `h` NULL or a live handle used by this thread alone; `report` NULL or valid.
+pub(crate) unsafe fn framed_advance<H: Framed>(
+    h: *mut H,
+    t: f64,
+    report: *mut coag_step_report,
+) -> i32 {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let h = unsafe { handle_mut(h, "h") }?;
+        if !report.is_null() {
+            // SAFETY: non-null; valid (contract).
+            unsafe { write_report(report, Default::default()) }?;
+        }
+        let rep = h.advance(t)?;
+        if !report.is_null() {
+            // SAFETY: as above.
+            unsafe { write_report(report, rep) }?;
+        }
+        Ok(())
+    })
+}
+
+/// `coag_*_checkpoint_size` of a framed handle.
+///
+/// # Safety
+/// `h` NULL or a live handle; `out` NULL or writable.
+pub(crate) unsafe fn framed_size<H: Framed>(h: *const H, out: *mut usize) -> i32 {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let h = unsafe { handle(h, "h") }?;
+        non_null(out, "out")?;
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, h.scheme_len() + HEAD) };
+        Ok(())
+    })
+}
+
+/// `coag_*_save` of a framed handle.
+///
+/// # Safety
+/// `h` NULL or a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
+pub(crate) unsafe fn framed_save<H: Framed>(
+    h: *const H,
+    buf: *mut u8,
+    len: usize,
+    written: *mut usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let h = unsafe { handle(h, "h") }?;
+        // SAFETY: as above.
+        let b = unsafe { slice_mut(buf, len, "buf") }?;
+        if b.len() < HEAD {
+            return fail(COAG_BUFFER_TOO_SMALL, format!("buf of {len} bytes"));
+        }
+        let (front, rest) = b.split_at_mut(HEAD);
+        let n = h.save_scheme(rest)?;
+        front[..8].copy_from_slice(&h.print().to_le_bytes());
+        for (k, w) in h.stream().parts().iter().enumerate() {
+            front[8 + 8 * k..16 + 8 * k].copy_from_slice(&w.to_le_bytes());
+        }
+        if !written.is_null() {
+            // SAFETY: non-null; writable (contract).
+            unsafe { write(written, HEAD + n) };
+        }
+        Ok(())
+    })
+}
+
+/// `coag_*_restore` of a framed handle: the fingerprint must match; on error the
+/// handle is unchanged.
+///
+/// # Safety
+/// `h` NULL or a live handle used by this thread alone; `buf` valid for `len` bytes.
+pub(crate) unsafe fn framed_restore<H: Framed>(h: *mut H, buf: *const u8, len: usize) -> i32 {
+    guard(|| {
+        // SAFETY: forwarded contract.
+        let h = unsafe { handle_mut(h, "h") }?;
+        // SAFETY: as above.
+        let b = unsafe { slice(buf, len, "buf") }?;
+        if b.len() < HEAD {
+            return fail(crate::COAG_BAD_CHECKPOINT, "checkpoint too short");
+        }
+        let word = |i: usize| {
+            let mut w = [0u8; 8];
+            w.copy_from_slice(&b[8 * i..8 * i + 8]);
+            u64::from_le_bytes(w)
+        };
+        if word(0) != h.print() {
+            return fail(
+                crate::COAG_BAD_CHECKPOINT,
+                "checkpoint of another configuration (kernel, parameters or engine)",
+            );
+        }
+        let rng = Generator::from_parts([word(1), word(2), word(3), word(4)]).ok_or_else(|| {
+            Fail(
+                crate::COAG_BAD_CHECKPOINT,
+                "invalid random stream state".into(),
+            )
+        })?;
+        h.restore_scheme(&b[HEAD..])?;
+        h.set_stream(rng);
+        Ok(())
+    })
+}
+
+impl Framed for coag_thermal {
+    fn print(&self) -> u64 {
+        self.print
+    }
+    fn stream(&self) -> &Generator {
+        &self.rng
+    }
+    fn set_stream(&mut self, g: Generator) {
+        self.rng = g;
+    }
+    fn scheme_len(&self) -> usize {
+        with_scheme!(&self.inner, s => s.checkpoint_len())
+    }
+    fn save_scheme(&self, buf: &mut [u8]) -> coagula_core::Result<usize> {
+        with_scheme!(&self.inner, s => s.save_to(buf))
+    }
+    fn restore_scheme(&mut self, buf: &[u8]) -> coagula_core::Result<()> {
+        with_scheme!(&mut self.inner, s => s.restore_from(buf))
+    }
+    fn advance(&mut self, t: f64) -> coagula_core::Result<coagula_core::scheme::StepReport> {
+        let rng = &mut self.rng;
+        with_scheme!(&mut self.inner, s => s.advance_within(t, &mut Budget::unlimited(), rng))
+    }
+}
 
 /// Bytes a checkpoint of the simulation needs now.
 ///
@@ -409,15 +548,8 @@ pub unsafe extern "C" fn coag_thermal_checkpoint_size(
     h: *const coag_thermal,
     out: *mut usize,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: forwarded contract.
-        let h = unsafe { handle(h, "h") }?;
-        non_null(out, "out")?;
-        let n = with_scheme!(&h.inner, s => s.checkpoint_len()) + HEAD;
-        // SAFETY: checked non-null; writable (contract).
-        unsafe { write(out, n) };
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { framed_size(h, out) }
 }
 
 /// Saves the simulation (state, temperatures, clock, random stream) into `buf`;
@@ -432,27 +564,8 @@ pub unsafe extern "C" fn coag_thermal_save(
     len: usize,
     written: *mut usize,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: forwarded contract.
-        let h = unsafe { handle(h, "h") }?;
-        // SAFETY: as above.
-        let b = unsafe { slice_mut(buf, len, "buf") }?;
-        let head = HEAD;
-        if b.len() < head {
-            return fail(COAG_BUFFER_TOO_SMALL, format!("buf of {len} bytes"));
-        }
-        let (front, rest) = b.split_at_mut(head);
-        let n = with_scheme!(&h.inner, s => s.save_to(rest))?;
-        front[..8].copy_from_slice(&h.print.to_le_bytes());
-        for (k, w) in h.rng.parts().iter().enumerate() {
-            front[8 + 8 * k..16 + 8 * k].copy_from_slice(&w.to_le_bytes());
-        }
-        if !written.is_null() {
-            // SAFETY: non-null; writable (contract).
-            unsafe { write(written, head + n) };
-        }
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { framed_save(h, buf, len, written) }
 }
 
 /// Restores a checkpoint of a simulation with the same configuration (kernel, its
@@ -466,40 +579,8 @@ pub unsafe extern "C" fn coag_thermal_restore(
     buf: *const u8,
     len: usize,
 ) -> i32 {
-    guard(|| {
-        // SAFETY: forwarded contract.
-        let h = unsafe { handle_mut(h, "h") }?;
-        // SAFETY: as above.
-        let b = unsafe { slice(buf, len, "buf") }?;
-        let head = HEAD;
-        if b.len() < head {
-            return fail(crate::COAG_BAD_CHECKPOINT, "checkpoint too short");
-        }
-        let mut pb = [0u8; 8];
-        pb.copy_from_slice(&b[..8]);
-        let print = u64::from_le_bytes(pb);
-        if print != h.print {
-            return fail(
-                crate::COAG_BAD_CHECKPOINT,
-                "checkpoint of another configuration (kernel, parameters or engine)",
-            );
-        }
-        let mut parts = [0u64; 4];
-        for (k, w) in parts.iter_mut().enumerate() {
-            let mut bytes = [0u8; 8];
-            bytes.copy_from_slice(&b[8 + 8 * k..16 + 8 * k]);
-            *w = u64::from_le_bytes(bytes);
-        }
-        let rng = Generator::from_parts(parts).ok_or_else(|| {
-            Fail(
-                crate::COAG_BAD_CHECKPOINT,
-                "invalid random stream state".into(),
-            )
-        })?;
-        with_scheme!(&mut h.inner, s => s.restore_from(&b[head..]))?;
-        h.rng = rng;
-        Ok(())
-    })
+    // SAFETY: forwarded contract.
+    unsafe { framed_restore(h, buf, len) }
 }
 
 /// The model family's closed form from `n_1(0) = n0`, `T_1(0) = t0` (c > 0, γ ≥ 0):

@@ -192,6 +192,28 @@ int main() {
               "thermal bits");
         CHECK(a.particles() > 0 && a.volume() == 30000.0 && a.moment(1.0) > 0 && a.energy() > 0, "thermal obs");
     }
+    // DSMC: elastic collisions conserve momentum and energy; a checkpoint continues
+    // bit for bit
+    {
+        auto c = coagula::dsmc_default_config();
+        c.restitution = 1.0;
+        auto a = coagula::Dsmc::maxwellian(c, {300, 100}, {1.0, 2.0}, 4000.0);
+        auto b = coagula::Dsmc::make(c, {1, 2}, {1.0, 0.0, 0.0, -1.0, 0.0, 0.0}, 10.0);
+        auto p0 = a.momentum();
+        double e0 = a.energy();
+        a.advance_to(10.0);
+        auto cp = a.checkpoint();
+        auto p1 = a.momentum();
+        CHECK(std::fabs(p1[0] - p0[0]) < 1e-9 && std::fabs(a.energy() - e0) < 1e-12 * e0, "dsmc conservation");
+        a.advance_to(20.0);
+        auto s1 = a.state();
+        auto a2 = coagula::Dsmc::maxwellian(c, {300, 100}, {1.0, 2.0}, 4000.0);
+        a2.restore(cp);
+        a2.advance_to(20.0);
+        CHECK(a2.state() == s1 && a2.time() == 20.0 && a2.particles() == 400 && a2.volume() == 4000.0,
+              "dsmc bits");
+        CHECK(a.mean_temperature() > 0 && b.particles() == 2, "dsmc obs");
+    }
     // Langevin batches: b = 0 outside the unit ball keeps E|U|^2 = |u0|^2 + 3 T
     // (4.89 SE), caller memory and a checkpoint continue bit for bit, errors throw
     {

@@ -114,6 +114,13 @@ program test_fortran
   real(c_double), allocatable, target :: ttemps(:)
   integer(c_int8_t), allocatable :: tck(:)
   integer(c_size_t) :: tnck, tnw
+  ! DSMC
+  type(coag_dsmc_config) :: dsc
+  type(c_ptr) :: ds
+  real(c_double), target :: dp0(3), dp1(3), de0, de1, dtime
+  integer(c_int64_t), target :: dn
+  integer(c_int64_t), allocatable, target :: dsizes(:)
+  real(c_double), allocatable, target :: dvel(:)
   ! Langevin
   type(coag_langevin_config) :: lgc
   type(coag_first_hits) :: fh
@@ -366,6 +373,32 @@ program test_fortran
   call ok(coag_thermal_info(th, c_loc(ttime), c_null_ptr, c_null_ptr, c_null_ptr))
   call check(abs(ttime - 4.0_c_double) < 1e-15_c_double, "thermal restore")
   call coag_thermal_free(th)
+  ! DSMC: elastic collisions conserve momentum and energy; a checkpoint restores
+  call ok(coag_dsmc_default_config(dsc, c_sizeof(dsc)))
+  dsc%restitution = 1.0_c_double
+  call ok(coag_dsmc_new_maxwellian(dsc, [300_c_int64_t, 100_c_int64_t], [1.0_c_double, 2.0_c_double], &
+       2_c_size_t, 4000.0_c_double, ds))
+  call ok(coag_dsmc_observe(ds, c_loc(dp0), c_loc(de0), c_null_ptr))
+  call ok(coag_dsmc_advance_to(ds, 20.0_c_double, c_null_ptr))
+  call ok(coag_dsmc_observe(ds, c_loc(dp1), c_loc(de1), c_null_ptr))
+  call check(maxval(abs(dp1 - dp0)) < 1e-9_c_double .and. abs(de1 - de0) < 1e-12_c_double * de0, &
+       "dsmc conservation")
+  call ok(coag_dsmc_info(ds, c_loc(dtime), c_loc(dn), c_null_ptr))
+  allocate(dsizes(dn), dvel(3 * dn))
+  call ok(coag_dsmc_particles(ds, c_loc(dsizes), c_loc(dvel), int(dn, c_size_t)))
+  call check(sum(dsizes) == 500 .and. dn == 400, "dsmc particles")
+  call ok(coag_dsmc_checkpoint_size(ds, tnck))
+  deallocate(tck)
+  allocate(tck(tnck))
+  call ok(coag_dsmc_save(ds, tck, tnck, tnw))
+  call ok(coag_dsmc_advance_to(ds, 30.0_c_double, c_null_ptr))
+  call ok(coag_dsmc_restore(ds, tck, tnw))
+  call ok(coag_dsmc_info(ds, c_loc(dtime), c_null_ptr, c_null_ptr))
+  call check(abs(dtime - 20.0_c_double) < 1e-15_c_double, "dsmc restore")
+  call coag_dsmc_free(ds)
+  call ok(coag_dsmc_new(dsc, [1_c_int64_t, 2_c_int64_t], [1.0_c_double, 0.0_c_double, 0.0_c_double, &
+       -1.0_c_double, 0.0_c_double, 0.0_c_double], 2_c_size_t, 10.0_c_double, ds))
+  call coag_dsmc_free(ds)
   ! Langevin batches: b = 0 outside the unit ball keeps E|U|^2 = |u0|^2 + 3 T (4.89 SE)
   call ok(coag_langevin_default_config(lgc, c_sizeof(lgc)))
   lgc%dim = 3

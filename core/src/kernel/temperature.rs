@@ -76,7 +76,7 @@ static CUBE_ROOTS: [f64; CBRT_TABLE] = {
 
 /// `i^{1/3}` of a size: from the table below [`CBRT_TABLE`].
 #[inline]
-fn size_cbrt(i: u64) -> f64 {
+pub(crate) fn size_cbrt(i: u64) -> f64 {
     match CUBE_ROOTS.get(i as usize) {
         Some(&c) if i > 0 => c,
         _ => cbrt(i as f64),

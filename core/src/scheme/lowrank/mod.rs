@@ -55,6 +55,7 @@
 
 pub mod bound;
 pub mod bucketed;
+pub mod dsmc;
 pub mod proposal;
 pub mod rule;
 pub mod thermal;
@@ -201,6 +202,7 @@ where
                 what: "this event rule moves the bound's factors: use the per-size tree engine",
             });
         }
+        Rl::check_counts(&kernel, counts)?;
         let pop = Population::new(counts, volume)?.with_memory_budget(bytes);
         let engine = E::build(&kernel, counts, &pop)?;
         Ok(LowRankMc {
@@ -294,6 +296,7 @@ where
     /// reference kept. Errors (rank differs, invalid factors) leave the scheme
     /// unchanged.
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        Rl::check_counts(&kernel, &self.engine.counts())?;
         let engine = E::build(&kernel, &self.engine.counts(), &self.pop)?;
         self.rule = Rl::for_kernel(&kernel);
         self.kernel = kernel;
@@ -314,6 +317,7 @@ where
                 capacity: usize::try_from(self.pop.size_limit).unwrap_or(usize::MAX),
             });
         }
+        Rl::check_counts(&self.kernel, counts)?;
         let fresh = Population {
             size_limit: self.pop.size_limit,
             memory_budget: self.pop.memory_budget,
@@ -408,8 +412,11 @@ where
             for s in self.rule.commit(&mut self.kernel) {
                 self.engine.reweigh(&self.kernel, s);
             }
+            if self.rule.refactor_due() {
+                self.engine.refactor(&self.kernel);
+            }
         }
-        if merged && self.pop.doubling_due() {
+        if Rl::DOUBLES && merged && self.pop.doubling_due() {
             self.pop.double();
             self.engine.double(&self.pop);
             rep.doublings += 1;
@@ -620,6 +627,8 @@ where
         let kernel = self.rule.load(&self.kernel, r)?;
         let engine = E::load(kernel.as_ref().unwrap_or(&self.kernel), m, &pop, r)?;
         r.finish()?;
+        Rl::check_counts(kernel.as_ref().unwrap_or(&self.kernel), &engine.counts())
+            .map_err(|_| bad("the counts do not match the rule's state"))?;
         // no particle past the size limit (the constructors' check)
         let mut largest = 0;
         engine.for_each_count(&mut |s, _| largest = s);

@@ -122,6 +122,10 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// called when [`REWEIGHS`](Self::REWEIGHS), for a size within [`max_size`](Self::max_size)).
     fn reweigh<K: CoagulationKernel>(&mut self, _kernel: &K, _size: u64) {}
 
+    /// Re-reads every size's factors from `kernel` and rebuilds the proposal weights
+    /// (only called when [`REWEIGHS`](Self::REWEIGHS)).
+    fn refactor<K: CoagulationKernel>(&mut self, _kernel: &K) {}
+
     /// Writes the engine's state after the scheme's common fields.
     fn save(&self, w: &mut Writer);
 

@@ -93,6 +93,24 @@ pub trait EventRule<K>: Sized {
         Reweighed::new()
     }
 
+    /// Whether every factor row must be re-read from the kernel now (after
+    /// [`commit`](Self::commit); e.g. per-size maxima recomputed from scratch): the
+    /// scheme then calls [`ProposalEngine::refactor`](super::ProposalEngine::refactor).
+    fn refactor_due(&mut self) -> bool {
+        false
+    }
+
+    /// Whether the scheme doubles its particles when half are gone (Osinsky §2). A rule
+    /// whose particles carry more than a size (DSMC's velocities) says no: copies would
+    /// not be independent.
+    const DOUBLES: bool = true;
+
+    /// Checks that `counts` (`N_i` at index `i − 1`) agree with the state the kernel
+    /// carries (DSMC: one velocity per particle); called wherever the counts are set.
+    fn check_counts(_kernel: &K, _counts: &[u64]) -> Result<()> {
+        Ok(())
+    }
+
     /// Writes the rule's per-size state (in the checkpoint, before the engine).
     fn save(&self, _kernel: &K, _w: &mut Writer) {}
 

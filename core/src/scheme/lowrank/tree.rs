@@ -301,6 +301,15 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         }
     }
 
+    fn refactor<K: CoagulationKernel>(&mut self, kernel: &K) {
+        for (i, f) in self.fab.iter_mut().enumerate() {
+            let (mut a, mut b) = ([0.0; R], [0.0; R]);
+            kernel.factors((i + 1) as f64, &mut a, &mut b);
+            *f = [a, b];
+        }
+        self.rebuild();
+    }
+
     fn double(&mut self, _pop: &Population) {
         for c in &mut self.counts {
             *c *= 2;

@@ -283,6 +283,16 @@ impl<const R: usize> ProposalEngine<R> for UniformEngine<R> {
         }
     }
 
+    fn refactor<K: CoagulationKernel>(&mut self, kernel: &K) {
+        for (i, f) in self.fab.iter_mut().enumerate() {
+            let (mut a, mut b) = ([0.0; R], [0.0; R]);
+            kernel.factors((i + 1) as f64, &mut a, &mut b);
+            *f = [a, b];
+        }
+        self.max = Self::occupied_max(&self.counts, &self.fab);
+        self.since = 0;
+    }
+
     fn counts(&self) -> Cow<'_, [u64]> {
         Cow::Borrowed(&self.counts)
     }

@@ -1,0 +1,406 @@
+//! Low-rank DSMC (Osinsky 2023 §5; `scheme::lowrank::dsmc`): every collision conserves
+//! momentum and loses `(1 − ε²)` of its normal relative kinetic energy, to rounding;
+//! the waiting time to the first collision from a fixed state has the exact mean
+//! `1/R`, `R = Σ_{k<l} π (R_k + R_l)² |V_k − V_l| / V`; elastic collisions keep a
+//! Maxwellian and equilibrate partial temperatures; Haff's law; the low-rank and the
+//! acceptance–rejection engines agree; checkpoints, bad input.
+
+use crate::common::z_max;
+use coagula_core::Error;
+use coagula_core::checkpoint::Checkpoint;
+use coagula_core::observe::Replicas;
+use coagula_core::scheme::lowrank::dsmc::{
+    Collisions, Gas, LowRankDsmc, NeverStick, RejectionDsmc, StickBelow, Sticking,
+};
+use coagula_core::scheme::lowrank::{BinaryTree, WideTree};
+use coagula_core::scheme::lowrank::{LowRankMc, ProposalEngine, TreeEngine, UniformEngine};
+use coagula_core::scheme::{Budget, Scheme};
+use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::{Rng, SeedableRng};
+
+type On<S, E> = LowRankMc<Gas<S>, 3, E, Collisions>;
+
+fn rng(seed: u64) -> Pcg64Mcg {
+    Pcg64Mcg::seed_from_u64(seed.wrapping_mul(0x9e37_79b9) ^ 0xd5)
+}
+
+/// All particles as (size, velocity), in the scheme's order.
+fn particles<S: Sticking + Clone, E: ProposalEngine<3>>(s: &On<S, E>) -> Vec<(u64, [f64; 3])> {
+    let mut out = Vec::new();
+    for size in 1..=s.max_size() as u64 {
+        for v in s.kernel().velocities(size) {
+            out.push((size, *v));
+        }
+    }
+    out
+}
+
+/// Every event, one at a time: a bounce changes two particles, conserves momentum to
+/// rounding and changes the energy by exactly `−(1 − ε²) μ (g·e)²/2`, where `e` is
+/// the direction of the first particle's change and `g` the relative velocity before;
+/// a merge conserves mass and momentum. On both engines, with sticking on.
+#[test]
+fn every_collision_conserves_momentum_and_loses_its_share() {
+    check_events::<TreeEngine<3, BinaryTree<3>>>();
+    check_events::<UniformEngine<3>>();
+}
+
+fn check_events<E: ProposalEngine<3>>() {
+    let eps = 0.8;
+    let sizes: Vec<u64> = (0..400).map(|p| 1 + p % 5).collect();
+    let mut r0 = rng(1);
+    let vel: Vec<[f64; 3]> = (0..400)
+        .map(|_| {
+            let mut v = [0.0; 3];
+            for c in &mut v {
+                *c = 2.0 * (r0.next_u64() as f64 / u64::MAX as f64) - 1.0;
+            }
+            v
+        })
+        .collect();
+    let gas = Gas::from_particles(eps, StickBelow { speed: 0.05 }, &sizes, &vel).unwrap();
+    let mut s = On::<_, E>::new_gas(gas, 4000.0).unwrap();
+    let mut rng = rng(2);
+    let (mut bounces, mut merges) = (0, 0);
+    while bounces < 300 || merges < 3 {
+        let before = particles(&s);
+        let (p0, e0) = (s.momentum(), s.energy() * s.volume());
+        let mass0: u64 = before.iter().map(|p| p.0).sum();
+        let rep = s
+            .advance_within(1e9, &mut Budget::work(1), &mut rng)
+            .unwrap();
+        if rep.events == 0 {
+            continue;
+        }
+        let after = particles(&s);
+        let p1 = s.momentum();
+        let scale: f64 = before.iter().map(|p| p.0 as f64).sum::<f64>() * 2.0;
+        for k in 0..3 {
+            assert!(
+                (p1[k] - p0[k]).abs() < 1e-12 * scale,
+                "momentum {p0:?} -> {p1:?}"
+            );
+        }
+        if rep.bounces == 1 {
+            bounces += 1;
+            assert_eq!(before.len(), after.len());
+            let moved: Vec<usize> = (0..before.len())
+                .filter(|&i| before[i] != after[i])
+                .collect();
+            assert_eq!(moved.len(), 2, "a bounce changed {} particles", moved.len());
+            let (a, b) = (moved[0], moved[1]);
+            let (ma, mb) = (before[a].0 as f64, before[b].0 as f64);
+            let d: Vec<f64> = (0..3).map(|k| after[a].1[k] - before[a].1[k]).collect();
+            let dn = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+            let e: Vec<f64> = d.iter().map(|x| x / dn).collect();
+            let gn: f64 = (0..3)
+                .map(|k| (before[a].1[k] - before[b].1[k]) * e[k])
+                .sum();
+            let mu = ma * mb / (ma + mb);
+            let want = -(1.0 - eps * eps) * mu * gn * gn / 2.0;
+            let got = s.energy() * s.volume() - e0;
+            assert!(
+                (got - want).abs() < 1e-11 * e0,
+                "energy changed by {got}, share {want}"
+            );
+            // both changes lie along e (the second opposite to the first)
+            let d2: Vec<f64> = (0..3).map(|k| after[b].1[k] - before[b].1[k]).collect();
+            let cross = [
+                d[1] * d2[2] - d[2] * d2[1],
+                d[2] * d2[0] - d[0] * d2[2],
+                d[0] * d2[1] - d[1] * d2[0],
+            ];
+            assert!(cross.iter().all(|c| c.abs() < 1e-12 * (1.0 + dn * dn)));
+        } else {
+            merges += 1;
+            assert_eq!(after.len() + 1, before.len());
+            let mass1: u64 = after.iter().map(|p| p.0).sum();
+            assert_eq!(mass0, mass1, "mass");
+        }
+    }
+    assert_eq!(s.particles(), s.kernel().counts().iter().sum::<u64>());
+}
+
+/// From a fixed state of 24 particles of sizes 1–3, the time to the first collision is
+/// exponential with rate `R = Σ_{k<l} π (R_k + R_l)² |V_k − V_l| / V` (`R_k` = half
+/// the diameter `size^{1/3}`): its mean over 40 000 replicas matches `1/R` within the
+/// suite's threshold (SE 0.5 %). A factor N/(N − 1) in the pair count is 4 % (8 SE), a
+/// factor 2 in the direction's law or the cross-section 100 %.
+#[test]
+fn the_first_collision_comes_at_the_exact_rate() {
+    first_collision::<TreeEngine<3, WideTree<3>>>();
+    first_collision::<UniformEngine<3>>();
+}
+
+fn first_collision<E: ProposalEngine<3>>() {
+    let mut r0 = rng(3);
+    let gas = Gas::maxwellian(0.9, &[12, 8, 4], &[1.0, 2.0, 0.5], &mut r0).unwrap();
+    let volume = 500.0;
+    let parts: Vec<(u64, [f64; 3])> = {
+        let s = On::<NeverStick, E>::new_gas(gas.clone(), volume).unwrap();
+        particles(&s)
+    };
+    let mut rate = 0.0;
+    for (a, pa) in parts.iter().enumerate() {
+        for pb in &parts[a + 1..] {
+            let rr = ((pa.0 as f64).cbrt() + (pb.0 as f64).cbrt()) / 2.0;
+            let g = (0..3)
+                .map(|k| (pa.1[k] - pb.1[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            rate += std::f64::consts::PI * rr * rr * g / volume;
+        }
+    }
+    let reps = 40_000u64;
+    let mut st = Replicas::new();
+    let mut rng = rng(4);
+    for _ in 0..reps {
+        let mut s = On::<_, E>::new_gas(gas.clone(), volume).unwrap();
+        loop {
+            let rep = s
+                .advance_within(1e12, &mut Budget::work(1), &mut rng)
+                .unwrap();
+            if rep.events > 0 {
+                break;
+            }
+        }
+        st.push(s.time());
+    }
+    let zz = (st.mean() - 1.0 / rate) / st.std_error();
+    println!(
+        "first collision: {} ± {} vs 1/R = {} ({zz:+.2} SE)",
+        st.mean(),
+        st.std_error(),
+        1.0 / rate
+    );
+    assert!(zz.abs() < z_max(reps), "{zz:.1} SE");
+}
+
+/// Elastic collisions (ε = 1) from sizes 1–3 at partial temperatures 0.5, 1, 2: the
+/// energy is conserved to rounding, the partial temperatures equilibrate to the mean
+/// (within the replicas' threshold at t = 150, ~100 collisions per particle) and the
+/// velocity components stay Gaussian (kurtosis 3; a non-Maxwellian gas from wrong
+/// collision laws drifts away from it).
+#[test]
+fn elastic_collisions_equilibrate_a_maxwellian() {
+    let reps = 16u64;
+    let (mut t1, mut t3, mut kurt) = (Replicas::new(), Replicas::new(), Replicas::new());
+    let mut mean_t = 0.0;
+    for r in 0..reps {
+        let mut rng = rng(100 + r);
+        let gas = Gas::maxwellian(1.0, &[3000, 1500, 500], &[0.5, 1.0, 2.0], &mut rng).unwrap();
+        let mut s = LowRankDsmc::new_gas(gas, 5000.0 / 0.1).unwrap();
+        let e0 = s.energy();
+        mean_t = s.mean_temperature();
+        s.advance_to(150.0, &mut rng).unwrap();
+        assert!(
+            (s.energy() / e0 - 1.0).abs() < 1e-11,
+            "energy not conserved"
+        );
+        t1.push(s.temperature(1) / s.mean_temperature());
+        t3.push(s.temperature(3) / s.mean_temperature());
+        // kurtosis of the monomers' x components, scaled by their variance
+        let v = s.kernel().velocities(1);
+        let m2 = v.iter().map(|u| u[0] * u[0]).sum::<f64>() / v.len() as f64;
+        let m4 = v.iter().map(|u| u[0].powi(4)).sum::<f64>() / v.len() as f64;
+        kurt.push(m4 / (m2 * m2));
+    }
+    let z = z_max(reps);
+    for (name, st, want) in [
+        ("T1 / T", &t1, 1.0),
+        ("T3 / T", &t3, 1.0),
+        ("kurtosis", &kurt, 3.0),
+    ] {
+        let zz = (st.mean() - want) / st.std_error();
+        println!(
+            "{name}: {} ± {} vs {want} ({zz:+.2} SE)",
+            st.mean(),
+            st.std_error()
+        );
+        assert!(zz.abs() < z, "{name}: {zz:.1} SE");
+    }
+    assert!(
+        mean_t > 0.7 && mean_t < 1.0,
+        "initial mean temperature {mean_t}"
+    );
+}
+
+/// Haff's law for the homogeneous cooling of a monodisperse gas (unit mass and
+/// diameter, density 0.1, ε = 0.95): `T(t) = T0 / (1 + t/τ)²`,
+/// `τ = 3 / (2 sqrt(π) n σ² (1 − ε²) sqrt(T0))` with the first Sonine correction of the
+/// cooling rate, `1 + 3 a2/16`, `a2 = 16 (1 − ε)(1 − 2ε²)/(81 − 17ε + 30ε²(1 − ε))`
+/// (van Noije & Ernst 1998; −0.18 % here, 4.7 SE at t = τ without it), each replica
+/// against its own `T0`; 32 replicas of 10 000 particles at t = τ/4, τ/2, τ (3 checks).
+#[test]
+fn homogeneous_cooling_follows_haffs_law() {
+    let (eps, dens, n) = (0.95f64, 0.1, 10_000u64);
+    let tau1 = 3.0 / (2.0 * std::f64::consts::PI.sqrt() * dens * (1.0 - eps * eps));
+    let a2 = 16.0 * (1.0 - eps) * (1.0 - 2.0 * eps * eps)
+        / (81.0 - 17.0 * eps + 30.0 * eps * eps * (1.0 - eps));
+    let zeta = 1.0 + 3.0 * a2 / 16.0;
+    let fractions = [0.25, 0.5, 1.0];
+    let reps = 32u64;
+    let mut st = [Replicas::new(); 3];
+    for r in 0..reps {
+        let mut rng = rng(200 + r);
+        let gas = Gas::maxwellian(eps, &[n], &[1.0], &mut rng).unwrap();
+        let mut s = LowRankDsmc::new_gas(gas, n as f64 / dens).unwrap();
+        let t0 = s.mean_temperature();
+        for (i, f) in fractions.iter().enumerate() {
+            let t = f * tau1;
+            s.advance_to(t, &mut rng).unwrap();
+            let haff = t0 / (1.0 + zeta * t * t0.sqrt() / tau1).powi(2);
+            st[i].push(s.mean_temperature() / haff - 1.0);
+        }
+    }
+    let z = z_max(reps);
+    for (i, f) in fractions.iter().enumerate() {
+        let zz = st[i].mean() / st[i].std_error();
+        println!(
+            "t = {f} τ: T / Haff − 1 = {:.2e} ± {:.2e} ({zz:+.2} SE)",
+            st[i].mean(),
+            st[i].std_error()
+        );
+        assert!(zz.abs() < z, "t = {f} τ: {zz:.1} SE");
+    }
+}
+
+/// The paper's polydisperse workload (N_k ∝ e^{−0.1(k−1)}, all T_k = 1, ε = 0.99,
+/// density 0.1) on the low-rank and the acceptance–rejection engines: the mean
+/// temperature and the temperature of sizes 1 and 10 at t = 5 agree (two-sample z on
+/// 16 replicas each).
+#[test]
+fn low_rank_and_rejection_agree() {
+    let counts: Vec<u64> = (0..40)
+        .map(|k| (300.0 * (-0.1 * k as f64).exp()) as u64)
+        .collect();
+    let n: u64 = counts.iter().sum();
+    let temps = vec![1.0; counts.len()];
+    let reps = 16u64;
+    let run = |tree: bool, r: u64| -> [f64; 3] {
+        let mut rng = rng(300 + r + if tree { 0 } else { 1000 });
+        let gas = Gas::maxwellian(0.99, &counts, &temps, &mut rng).unwrap();
+        let v = n as f64 / 0.1;
+        let obs = |t: f64, m: f64, t1: f64, t10: f64| [m / t, t1 / t, t10 / t];
+        if tree {
+            let mut s = LowRankDsmc::new_gas(gas, v).unwrap();
+            let t = s.mean_temperature();
+            s.advance_to(5.0, &mut rng).unwrap();
+            obs(t, s.mean_temperature(), s.temperature(1), s.temperature(10))
+        } else {
+            let mut s = RejectionDsmc::new_gas(gas, v).unwrap();
+            let t = s.mean_temperature();
+            s.advance_to(5.0, &mut rng).unwrap();
+            obs(t, s.mean_temperature(), s.temperature(1), s.temperature(10))
+        }
+    };
+    let mut a = [Replicas::new(); 3];
+    let mut b = [Replicas::new(); 3];
+    for r in 0..reps {
+        for (k, x) in run(true, r).into_iter().enumerate() {
+            a[k].push(x);
+        }
+        for (k, x) in run(false, r).into_iter().enumerate() {
+            b[k].push(x);
+        }
+    }
+    let z = z_max(reps);
+    for (k, name) in ["T(5)/T(0)", "T1/T(0)", "T10/T(0)"].into_iter().enumerate() {
+        let se = (a[k].std_error().powi(2) + b[k].std_error().powi(2)).sqrt();
+        let zz = (a[k].mean() - b[k].mean()) / se;
+        println!(
+            "{name}: low-rank {} vs rejection {} ({zz:+.2} SE)",
+            a[k].mean(),
+            b[k].mean()
+        );
+        assert!(zz.abs() < z, "{name}: {zz:.1} SE");
+    }
+    assert!(a[0].mean() < 1.0, "the gas cools");
+}
+
+fn bits<S: Sticking + Clone, E: ProposalEngine<3>>(s: &On<S, E>) -> Vec<u64> {
+    let mut v: Vec<u64> = particles(s)
+        .iter()
+        .flat_map(|p| [p.0, p.1[0].to_bits(), p.1[1].to_bits(), p.1[2].to_bits()])
+        .collect();
+    v.push(s.time().to_bits());
+    v
+}
+
+/// A run split by a checkpoint equals the unbroken run, bit for bit, on both engines;
+/// the same seed gives the same bits; a corrupted checkpoint is refused and changes
+/// nothing.
+#[test]
+fn checkpoint_split_and_same_seed() {
+    split::<TreeEngine<3, WideTree<3>>>();
+    split::<UniformEngine<3>>();
+}
+
+fn split<E: ProposalEngine<3>>() {
+    let make = || {
+        let gas = Gas::maxwellian(0.9, &[600, 200, 50], &[1.0, 1.0, 1.0], &mut rng(5)).unwrap();
+        On::<NeverStick, E>::new_gas(gas, 8500.0).unwrap()
+    };
+    let mut a = make();
+    let mut ra = rng(6);
+    a.advance_to(3.0, &mut ra).unwrap();
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    a.save_to(&mut buf).unwrap();
+    let saved = ra.clone();
+    a.advance_to(12.0, &mut ra).unwrap();
+    let mut b = make();
+    b.restore_from(&buf).unwrap();
+    let mut rb = saved;
+    b.advance_to(12.0, &mut rb).unwrap();
+    assert_eq!(bits(&a), bits(&b));
+    let mut c = make();
+    c.advance_to(12.0, &mut rng(6)).unwrap();
+    assert_eq!(bits(&a), bits(&c), "same seed, same bits");
+    let mut d = make();
+    let before = bits(&d);
+    let mut bent = buf.clone();
+    let i = bent.len() / 2;
+    bent[i] ^= 0x40;
+    assert!(d.restore_from(&bent).is_err());
+    assert!(d.restore_from(&buf[..buf.len() - 3]).is_err());
+    assert_eq!(bits(&d), before);
+}
+
+/// Bad input is an error: ε outside (0, 1], NaN velocities, lengths that differ,
+/// size 0, counts that do not match the gas, a sticking probability outside [0, 1].
+#[test]
+fn bad_input_is_refused() {
+    let v = [[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]];
+    for eps in [0.0, -0.5, 1.5, f64::NAN] {
+        assert!(Gas::from_particles(eps, NeverStick, &[1, 1], &v).is_err());
+    }
+    assert!(Gas::from_particles(0.9, NeverStick, &[1, 1], &[[f64::NAN, 0.0, 0.0], v[1]]).is_err());
+    assert!(Gas::from_particles(0.9, NeverStick, &[1], &v).is_err());
+    assert!(Gas::from_particles(0.9, NeverStick, &[0, 1], &v).is_err());
+    assert!(Gas::maxwellian(0.9, &[10], &[1.0, 2.0], &mut rng(1)).is_err());
+    assert!(Gas::maxwellian(0.9, &[10], &[-1.0], &mut rng(1)).is_err());
+    let gas = Gas::from_particles(0.9, NeverStick, &[1, 1], &v).unwrap();
+    let r = LowRankDsmc::new(gas.clone(), &[3], 10.0);
+    assert!(matches!(r, Err(Error::Unsupported { .. })));
+    let mut s = LowRankDsmc::new_gas(gas, 10.0).unwrap();
+    assert!(s.set_counts(&[5], 10.0).is_err());
+    /// A model that returns 2.
+    #[derive(Clone, Copy)]
+    struct Bad;
+    impl Sticking for Bad {
+        fn probability(&self, _: u64, _: u64, _: f64) -> f64 {
+            2.0
+        }
+    }
+    let gas = Gas::from_particles(0.9, Bad, &[1, 1], &v).unwrap();
+    let mut s = LowRankDsmc::new_gas(gas, 10.0).unwrap();
+    let before = particles(&s);
+    let e = s.advance_to(1e6, &mut rng(2)).unwrap_err();
+    assert!(matches!(e, Error::InvalidRate { .. }), "{e}");
+    // (the clock stands at the last rejected proposal before the failing one)
+    assert_eq!(
+        particles(&s),
+        before,
+        "a refused collision changed the particles"
+    );
+}
