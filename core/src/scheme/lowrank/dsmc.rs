@@ -15,27 +15,33 @@
 //!
 //! It is the low-rank event loop with the rule [`Collisions`]:
 //!
-//! * **Bound.** A pair's rate integrated over `e` is `(π/4)(i^{1/3} + j^{1/3})² |V_k − V_l| / V`.
-//!   With `w_i ≥ max |V|` over the size-i particles,
-//!   `A_ij = (π/4) w_i (i^{1/3} + j^{1/3})²` (rank 3: `a = (π/4) w_i (i^{2/3}, 2 i^{1/3}, 1)`,
-//!   `b = (1, j^{1/3}, j^{2/3})`), and `A_ij + A_ji` bounds it since
-//!   `|V_k − V_l| ≤ w_i + w_j`. [`Gas`] is the kernel over the current maxima.
-//! * **Proposals.** The engine draws sizes at rate `(A + Aᵀ) N_i N_j / V`; the rule picks
-//!   two distinct particles of those sizes uniformly and accepts with the pair's rate
-//!   over the engine's bound (on the trees, `|V_k − V_l| ≥ U (w_i + w_j)`), then draws
-//!   the direction from its conditional law, density ∝ `|g·e|` (`cos θ = sqrt(U)`
-//!   from `ĝ`). The seed's eq. 42 draws `e` uniformly and accepts `|g·e| ≥ U (w_i + w_j)`
-//!   with the bound doubled: the same process, at half the acceptance.
-//! * **Maxima.** A particle that leaves a collision faster than its size's `w` raises it
-//!   (that size's factor row is rewritten, O(log M)); every `max(N, 1024)` collisions
-//!   all maxima are recomputed from the particles (O(N + M)), so a maximum left by a
-//!   particle that slowed down does not keep costing rejections.
+//! * **Speed classes.** The particles of a size are kept in classes of speed: class q
+//!   holds `|V|² ∈ [2^{q/2}, 2^{(q+1)/2})`, and `W_q = 2^{(q+1)/4}` bounds its speeds
+//!   within a factor `2^{1/4}`. A particle's bound `W_k` is its class's.
+//! * **Bound.** A pair's rate integrated over `e` is
+//!   `(π/4)(i^{1/3} + j^{1/3})² |V_k − V_l| / V ≤ (π/4)(i^{1/3} + j^{1/3})² (W_k + W_l) / V`.
+//!   Summed over the particles of sizes i and j that is `A_ij + A_ji` with
+//!   `A_ij = (π/4) (i^{1/3} + j^{1/3})² S_i N_j`, `S_i = Σ_k W_k` over size i: rank 3,
+//!   `a(i) = (π/4)(S_i/N_i)(i^{2/3}, 2 i^{1/3}, 1)`, `b(j) = (1, j^{1/3}, j^{2/3})`.
+//!   [`Gas`] is the kernel with these factors.
+//! * **Proposals (per-size trees).** The engine draws the first size from the `a`
+//!   weights (∝ `S_i`) and the second from the `b` weights (∝ `N_j`); the rule takes the
+//!   first particle ∝ `W_k` (a class ∝ `n_q W_q`, then uniformly in it) and the second
+//!   uniformly, so an unordered pair is proposed at rate ∝ `W_k + W_l`, and accepts with
+//!   `|V_k − V_l| / (W_k + W_l)` (about 0.6 for Maxwellian speeds; the seed's per-size
+//!   maxima give about 0.23 at 10^5 particles per size). The direction then comes from
+//!   its conditional law, density ∝ `|g·e|` (`cos θ = sqrt(U)` from `ĝ`); the seed's
+//!   eq. 42 draws `e` uniformly and accepts `|g·e|` against twice the bound: the same
+//!   process at half the acceptance.
+//! * **Acceptance–rejection engine** ([`RejectionDsmc`]): the factors use each size's
+//!   largest class bound instead of the mean (`a(i) = (π/4) max_k W_k (…)`), pairs are
+//!   uniform, and the rule accepts with the pair's rate over the engine's bound `2 max A`
+//!   (the seed's eq. 43 takes `2 max_i (i^{1/3} + M^{1/3})² max_k |V_k|`, at least as
+//!   large up to the class factor `2^{1/4}`).
+//! * Every collision moves its particles between classes as their speeds change (O(1))
+//!   and rewrites the factor rows of the sizes touched (O(log M)). No stale bound is
+//!   ever kept.
 //! * No particle doubling (its copies would not be independent).
-//!
-//! On the per-size tree engine this is the paper's low-rank DSMC ([`LowRankDsmc`]); on
-//! the acceptance–rejection engine ([`RejectionDsmc`]: uniform pairs, one bound
-//! `2 max A`) its baseline (the seed's eq. 43 takes `2 max_i (i^{1/3} + M^{1/3})² w_i`;
-//! the engine's separable maximum is at least that and at most ~1.5× larger).
 //!
 //! # Example
 //! ```
@@ -71,13 +77,6 @@ use rand_core::Rng;
 
 /// `π/4`.
 const QUARTER_PI: f64 = core::f64::consts::FRAC_PI_4;
-
-/// Collisions between recomputations of the speed maxima (at least; N if larger).
-const RECOMPUTE: u64 = 1024;
-
-/// A maximum is stored this much above the speed it covers, so that rounding in
-/// `|(V_k − V_l)·e|` never exceeds `w_i + w_j`.
-const MARGIN: f64 = 1.0 + 1e-12;
 
 /// The probability that a collision aggregates (see the module docs).
 pub trait Sticking {
@@ -117,18 +116,127 @@ pub type LowRankDsmc<S = NeverStick> = LowRankMc<Gas<S>, 3, TreeEngine<3, WideTr
 /// DSMC on the acceptance–rejection engine: the baseline.
 pub type RejectionDsmc<S = NeverStick> = LowRankMc<Gas<S>, 3, UniformEngine<3>, Collisions>;
 
-/// The particles' velocities by size, the restitution coefficient and the sticking
-/// model: the DSMC kernel (its factors are those of the current speed maxima).
+/// The particles' velocities by size and speed class, the restitution coefficient and
+/// the sticking model: the DSMC kernel (see the module docs).
 #[derive(Clone, Debug)]
 pub struct Gas<S = NeverStick> {
     restitution: f64,
     sticking: S,
-    /// `v[i − 1]`: the velocities of the size-i particles.
-    v: Vec<Vec<[f64; 3]>>,
-    /// `w[i − 1] ≥ max |V|` over them (0 for a size never held).
-    w: Vec<f64>,
-    /// Collisions since the maxima were recomputed.
-    since: u64,
+    /// `species[i − 1]`: the size-i particles.
+    species: Vec<Species>,
+    /// Factors from the mean class bound (the per-size trees draw the first particle ∝
+    /// its bound) rather than the largest (any engine).
+    weighted: bool,
+}
+
+/// The particles of one speed class.
+#[derive(Clone, Debug)]
+struct Class {
+    q: i32,
+    /// `2^{(q+1)/4}`, a little above (so that rounding never lets a speed pass it).
+    w: f64,
+    v: Vec<[f64; 3]>,
+}
+
+/// The particles of one size, by speed class.
+#[derive(Clone, Debug, Default)]
+struct Species {
+    classes: Vec<Class>,
+    /// Particles, `Σ_q n_q W_q`, and the largest bound of a non-empty class.
+    n: usize,
+    s: f64,
+    top: f64,
+}
+
+/// A little above 1: class bounds are rounded up by it.
+const MARGIN: f64 = 1.0 + 1e-12;
+
+/// The mantissa bits of √2.
+const SQRT2_MANTISSA: u64 = core::f64::consts::SQRT_2.to_bits() & ((1 << 52) - 1);
+
+/// The speed class of `v`: `q` with `|v|² ∈ [2^{q/2}, 2^{(q+1)/2})` (`i32::MIN` for
+/// `v = 0`), and its bound.
+fn class_of(v: &[f64; 3]) -> (i32, f64) {
+    let s = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+    if s <= 0.0 || !s.is_finite() {
+        return (i32::MIN, 0.0);
+    }
+    let bits = s.to_bits();
+    let field = ((bits >> 52) & 0x7ff) as i32;
+    let q = if field == 0 {
+        // subnormal |v|²: a speed below 1.5e-154
+        libm::floor(2.0 * libm::log2(s)) as i32
+    } else {
+        2 * (field - 1023) + i32::from(bits & ((1 << 52) - 1) >= SQRT2_MANTISSA)
+    };
+    (q, libm::exp2(f64::from(q + 1) / 4.0) * MARGIN)
+}
+
+impl Species {
+    /// Recomputes the counts and sums and drops empty classes.
+    fn refresh(&mut self) {
+        self.classes.retain(|c| !c.v.is_empty());
+        self.n = self.classes.iter().map(|c| c.v.len()).sum();
+        self.s = self.classes.iter().map(|c| c.v.len() as f64 * c.w).sum();
+        self.top = self.classes.iter().map(|c| c.w).fold(0.0, f64::max);
+    }
+
+    /// Reserves room for one more particle of class `q` (a new class if needed).
+    fn reserve(&mut self, q: i32) -> Result<()> {
+        match self.classes.iter_mut().find(|c| c.q == q) {
+            Some(c) => try_reserve(&mut c.v, 1),
+            None => try_reserve(&mut self.classes, 1),
+        }
+    }
+
+    /// Adds a particle (its class created if needed; room reserved by `reserve`).
+    fn insert(&mut self, v: [f64; 3]) {
+        let (q, w) = class_of(&v);
+        match self.classes.iter_mut().find(|c| c.q == q) {
+            Some(c) => c.v.push(v),
+            None => self.classes.push(Class {
+                q,
+                w,
+                v: alloc::vec![v],
+            }),
+        }
+    }
+
+    /// The particle at `global` in the order of the classes.
+    fn locate(&self, mut global: usize) -> (usize, usize) {
+        for (ci, c) in self.classes.iter().enumerate() {
+            if global < c.v.len() {
+                return (ci, global);
+            }
+            global -= c.v.len();
+        }
+        (self.classes.len() - 1, 0)
+    }
+
+    /// The global index of particle `(ci, idx)`.
+    fn global(&self, ci: usize, idx: usize) -> usize {
+        self.classes[..ci].iter().map(|c| c.v.len()).sum::<usize>() + idx
+    }
+
+    /// A particle drawn ∝ its class bound, from `t ∈ [0, S)`.
+    fn weighted(&self, t: f64) -> (usize, usize) {
+        let mut acc = 0.0;
+        let mut last = 0;
+        for (ci, c) in self.classes.iter().enumerate() {
+            if c.v.is_empty() {
+                continue;
+            }
+            let weight = c.v.len() as f64 * c.w;
+            if t < acc + weight {
+                let idx = ((t - acc) / c.w) as usize;
+                return (ci, idx.min(c.v.len() - 1));
+            }
+            acc += weight;
+            last = ci;
+        }
+        // (rounding past the last class)
+        (last, self.classes[last].v.len() - 1)
+    }
 }
 
 fn norm(v: &[f64; 3]) -> f64 {
@@ -207,7 +315,6 @@ impl<S: Sticking> Gas<S> {
                 got: velocities.len(),
             });
         }
-        let m = sizes.iter().copied().max().unwrap_or(0);
         if sizes.contains(&0) {
             return Err(Error::OutOfRange {
                 name: "particle size",
@@ -215,6 +322,7 @@ impl<S: Sticking> Gas<S> {
                 range: "[1, inf)",
             });
         }
+        let m = sizes.iter().copied().max().unwrap_or(0);
         let m = usize::try_from(m)
             .ok()
             .filter(|&m| m <= sizes.len().max(1 << 20))
@@ -222,35 +330,29 @@ impl<S: Sticking> Gas<S> {
                 name: "largest particle size of a DSMC gas (at most max(N, 2^20))",
                 capacity: sizes.len().max(1 << 20),
             })?;
-        let mut v: Vec<Vec<[f64; 3]>> = Vec::new();
-        try_reserve(&mut v, m)?;
-        v.resize(m, Vec::new());
+        let mut species: Vec<Species> = Vec::new();
+        try_reserve(&mut species, m)?;
+        species.resize(m, Species::default());
         for (&s, vel) in sizes.iter().zip(velocities) {
-            if vel.iter().any(|c| !c.is_finite()) {
+            if let Some(&bad) = vel.iter().find(|c| !c.is_finite()) {
                 return Err(Error::InvalidRate {
                     name: "particle velocity",
-                    value: vel
-                        .iter()
-                        .copied()
-                        .find(|c| !c.is_finite())
-                        .unwrap_or(f64::NAN),
+                    value: bad,
                 });
             }
-            let list = &mut v[s as usize - 1];
-            try_reserve(list, 1)?;
-            list.push(*vel);
+            let sp = &mut species[s as usize - 1];
+            sp.reserve(class_of(vel).0)?;
+            sp.insert(*vel);
         }
-        let mut gas = Gas {
+        for sp in &mut species {
+            sp.refresh();
+        }
+        Ok(Gas {
             restitution,
             sticking,
-            v,
-            w: Vec::new(),
-            since: 0,
-        };
-        try_reserve(&mut gas.w, m)?;
-        gas.w.resize(m, 0.0);
-        gas.recompute();
-        Ok(gas)
+            species,
+            weighted: false,
+        })
     }
 
     /// The same particles with another sticking model.
@@ -258,23 +360,23 @@ impl<S: Sticking> Gas<S> {
         Gas {
             restitution: self.restitution,
             sticking,
-            v: self.v,
-            w: self.w,
-            since: self.since,
+            species: self.species,
+            weighted: self.weighted,
         }
     }
 
     /// The counts `N_i` at index `i − 1`.
     pub fn counts(&self) -> Vec<u64> {
-        self.v.iter().map(|l| l.len() as u64).collect()
+        self.species.iter().map(|s| s.n as u64).collect()
     }
 
-    /// The velocities of the size-`size` particles.
-    pub fn velocities(&self, size: u64) -> &[[f64; 3]] {
+    /// The velocities of the size-`size` particles (by speed class).
+    pub fn velocities(&self, size: u64) -> impl Iterator<Item = &[f64; 3]> {
         usize::try_from(size.wrapping_sub(1))
             .ok()
-            .and_then(|i| self.v.get(i))
-            .map_or(&[], |l| l.as_slice())
+            .and_then(|i| self.species.get(i))
+            .into_iter()
+            .flat_map(|s| s.classes.iter().flat_map(|c| c.v.iter()))
     }
 
     /// The restitution coefficient.
@@ -282,26 +384,18 @@ impl<S: Sticking> Gas<S> {
         self.restitution
     }
 
-    /// The speed bound `w_size` of a size.
     #[inline]
-    fn w_of(&self, size: u64) -> f64 {
-        self.w.get(size as usize - 1).copied().unwrap_or(0.0)
+    fn species(&self, size: u64) -> Option<&Species> {
+        self.species
+            .get(usize::try_from(size.wrapping_sub(1)).ok()?)
     }
 
-    /// Recomputes every size's maximum from its particles.
-    fn recompute(&mut self) {
-        for (w, l) in self.w.iter_mut().zip(&self.v) {
-            *w = l.iter().map(norm).fold(0.0, f64::max) * MARGIN;
-        }
-    }
-
-    /// Total momentum `Σ m V` and kinetic energy `Σ m |V|²/2`, and the partial
-    /// temperature `m ⟨|V|²⟩/3` of size i.
+    /// Total momentum `Σ m V` and kinetic energy `Σ m |V|²/2`.
     fn totals(&self) -> ([f64; 3], f64) {
         let (mut p, mut e) = ([0.0; 3], 0.0);
-        for (i, l) in self.v.iter().enumerate() {
+        for (i, sp) in self.species.iter().enumerate() {
             let m = (i + 1) as f64;
-            for v in l {
+            for v in sp.classes.iter().flat_map(|c| c.v.iter()) {
                 for k in 0..3 {
                     p[k] += m * v[k];
                 }
@@ -313,12 +407,14 @@ impl<S: Sticking> Gas<S> {
 }
 
 impl<S: Sticking> CoagulationKernel for Gas<S> {
-    /// The bound `(π/4)(x^{1/3} + y^{1/3})² (w_x + w_y)` (the rate of a pair depends on
-    /// its velocities and a direction).
+    /// The bound `(π/4)(x^{1/3} + y^{1/3})² (w_x + w_y)` with `w` the factors' speed
+    /// (the rate of a pair depends on its velocities).
     fn rate(&self, x: f64, y: f64) -> f64 {
-        let (i, j) = (x as u64, y as u64);
-        let d = size_cbrt(i) + size_cbrt(j);
-        QUARTER_PI * d * d * (self.w_of(i) + self.w_of(j))
+        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+        let (mut a2, mut b2) = ([0.0; 3], [0.0; 3]);
+        self.factors(x, &mut a, &mut b);
+        self.factors(y, &mut a2, &mut b2);
+        (0..3).map(|k| a[k] * b2[k] + a2[k] * b[k]).sum()
     }
 
     fn rank(&self) -> usize {
@@ -328,7 +424,17 @@ impl<S: Sticking> CoagulationKernel for Gas<S> {
     fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
         let i = x as u64;
         let c = size_cbrt(i);
-        let w = QUARTER_PI * self.w_of(i);
+        let w = match self.species(i) {
+            Some(sp) if sp.n > 0 => {
+                if self.weighted {
+                    sp.s / sp.n as f64
+                } else {
+                    sp.top
+                }
+            }
+            _ => 0.0,
+        };
+        let w = QUARTER_PI * w;
         a[..3].copy_from_slice(&[w * c * c, 2.0 * w * c, w]);
         b[..3].copy_from_slice(&[1.0, c, c * c]);
     }
@@ -338,26 +444,26 @@ impl<S: Sticking> CoagulationKernel for Gas<S> {
     }
 }
 
+/// A particle: size, class index, index in the class.
+type At = (u64, usize, usize);
+
 /// What an accepted collision changes, from `plan` to `commit`.
 #[derive(Clone, Copy, Debug, Default)]
 enum Pending {
     #[default]
     None,
-    /// Particles `(x, k)` and `(y, l)` leave with these velocities.
+    /// The two particles leave with these velocities.
     Bounce {
-        x: u64,
-        k: usize,
+        k: At,
         vk: [f64; 3],
-        y: u64,
-        l: usize,
+        l: At,
         vl: [f64; 3],
     },
-    /// Particles `(x, k)` and `(y, l)` become one of size `x + y` with velocity `v`.
+    /// The two particles become one of size `size` with velocity `v`.
     Merge {
-        x: u64,
-        k: usize,
-        y: u64,
-        l: usize,
+        k: At,
+        l: At,
+        size: u64,
         v: [f64; 3],
     },
 }
@@ -365,13 +471,12 @@ enum Pending {
 /// The DSMC collision rule (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub struct Collisions {
-    /// The accepted pair: particle indices within their sizes, direction, `(V_k − V_l)·e`.
-    k: usize,
-    l: usize,
+    /// The accepted pair, its direction and `(V_k − V_l)·e`.
+    k: (usize, usize),
+    l: (usize, usize),
     e: [f64; 3],
     gn: f64,
     pending: Pending,
-    refactor: bool,
 }
 
 /// A direction uniform on the unit sphere (Marsaglia 1972).
@@ -420,6 +525,18 @@ fn bad_velocity(v: f64) -> Error {
     }
 }
 
+/// Removes particles `ats` (the later index first where two share a class).
+fn remove_both<S>(gas: &mut Gas<S>, mut ats: [At; 2]) {
+    if ats[0] < ats[1] {
+        ats.swap(0, 1);
+    }
+    for (size, ci, idx) in ats {
+        gas.species[size as usize - 1].classes[ci]
+            .v
+            .swap_remove(idx);
+    }
+}
+
 impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
     const REWEIGHS: bool = true;
     const DOUBLES: bool = false;
@@ -435,33 +552,45 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         gas: &Gas<S>,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
-        _low_is_bound: bool,
+        low_is_bound: bool,
         _spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>> {
         let (x, y) = (c.x, c.y);
-        let (lx, ly) = (&gas.v[x as usize - 1], &gas.v[y as usize - 1]);
-        // two distinct particles of the proposed sizes (the engine has already thinned
-        // a size paired with itself by (N − 1)/N)
-        let k = below(rng, lx.len() as u64) as usize;
-        let l = if x == y {
-            let l = below(rng, lx.len() as u64 - 1) as usize;
-            l + usize::from(l >= k)
+        let (sx, sy) = (&gas.species[x as usize - 1], &gas.species[y as usize - 1]);
+        if gas.weighted && !low_is_bound {
+            return Err(Error::Unsupported {
+                what: "a gas weighted for the per-size trees on another engine (use new_gas)",
+            });
+        }
+        // the first particle ∝ its bound (weighted) or uniformly; the second uniformly
+        // among the others
+        let k = if gas.weighted {
+            sx.weighted(sx.s * unit_f64(rng.next_u64()))
         } else {
-            below(rng, ly.len() as u64) as usize
+            sx.locate(below(rng, sx.n as u64) as usize)
         };
-        let (vk, vl) = (lx[k], ly[l]);
+        let l = if x == y {
+            let r = below(rng, sx.n as u64 - 1) as usize;
+            sx.locate(r + usize::from(r >= sx.global(k.0, k.1)))
+        } else {
+            sy.locate(below(rng, sy.n as u64) as usize)
+        };
+        let (ck, cl) = (&sx.classes[k.0], &sy.classes[l.0]);
+        let (vk, vl) = (ck.v[k.1], cl.v[l.1]);
         let g = [vk[0] - vl[0], vk[1] - vl[1], vk[2] - vl[2]];
         let gabs = norm(&g);
-        // the pair's rate integrated over e against the engine's bound at the pair: on
-        // the per-size trees (π/4)(x^{1/3} + y^{1/3})² (w_x + w_y)
-        let (bound, _) = bounds();
-        let d = size_cbrt(x) + size_cbrt(y);
-        let rate = QUARTER_PI * d * d * gabs;
+        let (rate, bound) = if gas.weighted {
+            (gabs, ck.w + cl.w)
+        } else {
+            // the pair's rate integrated over e against the engine's bound
+            let d = size_cbrt(x) + size_cbrt(y);
+            (QUARTER_PI * d * d * gabs, bounds().0)
+        };
         if rate.is_nan() || rate > bound * (1.0 + 1e-12) {
-            // a speed past its size's maximum: an invariant broke (or a velocity is NaN)
+            // a speed past its class's bound: an invariant broke
             return Err(Error::BoundExceeded {
-                name: "DSMC speed maxima",
+                name: "DSMC speed bounds",
                 rate,
                 bound,
             });
@@ -496,16 +625,17 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         outcome: &Outcome,
         _count: &dyn Fn(u64) -> u64,
     ) -> Result<()> {
-        let (k, l, e, gn) = (self.k, self.l, self.e, self.gn);
-        let vk = gas.v[x as usize - 1][k];
-        let vl = gas.v[y as usize - 1][l];
+        let (e, gn) = (self.e, self.gn);
+        let k = (x, self.k.0, self.k.1);
+        let l = (y, self.l.0, self.l.1);
+        let vk = gas.species[x as usize - 1].classes[k.1].v[k.2];
+        let vl = gas.species[y as usize - 1].classes[l.1].v[l.2];
         let (mx, my) = (x as f64, y as f64);
         self.pending = match *outcome {
             Outcome::Bounce => {
                 // momentum along e exchanged, the normal relative velocity times −ε
                 let q = (1.0 + gas.restitution) * gn / (mx + my);
-                let mut nk = vk;
-                let mut nl = vl;
+                let (mut nk, mut nl) = (vk, vl);
                 for d in 0..3 {
                     nk[d] -= q * my * e[d];
                     nl[d] += q * mx * e[d];
@@ -513,11 +643,12 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                 if let Some(&bad) = nk.iter().chain(&nl).find(|c| !c.is_finite()) {
                     return Err(bad_velocity(bad));
                 }
+                // room in the classes they move to
+                gas.species[x as usize - 1].reserve(class_of(&nk).0)?;
+                gas.species[y as usize - 1].reserve(class_of(&nl).0)?;
                 Pending::Bounce {
-                    x,
                     k,
                     vk: nk,
-                    y,
                     l,
                     vl: nl,
                 }
@@ -530,85 +661,88 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                 if let Some(&bad) = v.iter().find(|c| !c.is_finite()) {
                     return Err(bad_velocity(bad));
                 }
-                // room for the merged particle before anything changes
                 let idx = usize::try_from(size - 1).map_err(|_| Error::Capacity {
                     name: "particle size",
                     capacity: usize::MAX,
                 })?;
-                if idx >= gas.v.len() {
-                    let more = idx + 1 - gas.v.len();
-                    try_reserve(&mut gas.v, more)?;
-                    try_reserve(&mut gas.w, more)?;
-                    gas.v.resize(idx + 1, Vec::new());
-                    gas.w.resize(idx + 1, 0.0);
+                if idx >= gas.species.len() {
+                    let more = idx + 1 - gas.species.len();
+                    try_reserve(&mut gas.species, more)?;
+                    gas.species.resize(idx + 1, Species::default());
                 }
-                try_reserve(&mut gas.v[idx], 1)?;
-                Pending::Merge { x, k, y, l, v }
+                gas.species[idx].reserve(class_of(&v).0)?;
+                Pending::Merge { k, l, size, v }
             }
         };
         Ok(())
     }
 
     fn commit(&mut self, gas: &mut Gas<S>) -> Reweighed {
-        let mut changed = Reweighed::new();
-        let raise = |gas: &mut Gas<S>, size: u64, v: &[f64; 3], changed: &mut Reweighed| {
-            let s = norm(v) * MARGIN;
-            let w = &mut gas.w[size as usize - 1];
-            if s > *w {
-                *w = s;
-                if !changed.contains(&size) {
-                    let _ = changed.push(size);
-                }
+        let mut touched = Reweighed::new();
+        let mut touch = |s: u64| {
+            if !touched.contains(&s) {
+                let _ = touched.push(s);
             }
         };
         match core::mem::take(&mut self.pending) {
             Pending::None => {}
-            Pending::Bounce { x, k, vk, y, l, vl } => {
-                gas.v[x as usize - 1][k] = vk;
-                gas.v[y as usize - 1][l] = vl;
-                raise(gas, x, &vk, &mut changed);
-                raise(gas, y, &vl, &mut changed);
-            }
-            Pending::Merge { x, k, y, l, v } => {
-                // (the larger index first when both are of one size)
-                if x == y {
-                    let list = &mut gas.v[x as usize - 1];
-                    list.swap_remove(k.max(l));
-                    list.swap_remove(k.min(l));
-                } else {
-                    gas.v[x as usize - 1].swap_remove(k);
-                    gas.v[y as usize - 1].swap_remove(l);
+            Pending::Bounce { k, vk, l, vl } => {
+                // a particle that stays in its class is written in place; the others
+                // leave their classes (the later index first) and join their new ones
+                let same = |at: At, v: &[f64; 3], gas: &Gas<S>| {
+                    gas.species[at.0 as usize - 1].classes[at.1].q == class_of(v).0
+                };
+                let (stay_k, stay_l) = (same(k, &vk, gas), same(l, &vl, gas));
+                for (at, v, stay) in [(k, vk, stay_k), (l, vl, stay_l)] {
+                    if stay {
+                        gas.species[at.0 as usize - 1].classes[at.1].v[at.2] = v;
+                    }
                 }
-                let size = x + y;
-                gas.v[size as usize - 1].push(v);
-                raise(gas, size, &v, &mut changed);
+                match (stay_k, stay_l) {
+                    (true, true) => {}
+                    (false, true) => {
+                        gas.species[k.0 as usize - 1].classes[k.1]
+                            .v
+                            .swap_remove(k.2);
+                        gas.species[k.0 as usize - 1].insert(vk);
+                    }
+                    (true, false) => {
+                        gas.species[l.0 as usize - 1].classes[l.1]
+                            .v
+                            .swap_remove(l.2);
+                        gas.species[l.0 as usize - 1].insert(vl);
+                    }
+                    (false, false) => {
+                        remove_both(gas, [k, l]);
+                        gas.species[k.0 as usize - 1].insert(vk);
+                        gas.species[l.0 as usize - 1].insert(vl);
+                    }
+                }
+                touch(k.0);
+                touch(l.0);
+            }
+            Pending::Merge { k, l, size, v } => {
+                remove_both(gas, [k, l]);
+                gas.species[size as usize - 1].insert(v);
+                touch(k.0);
+                touch(l.0);
+                touch(size);
             }
         }
-        gas.since += 1;
-        if gas.since >= RECOMPUTE.max(gas.v.iter().map(|l| l.len() as u64).sum()) {
-            gas.recompute();
-            gas.since = 0;
-            self.refactor = true;
+        for &s in &touched {
+            gas.species[s as usize - 1].refresh();
         }
-        changed
-    }
-
-    fn refactor_due(&mut self) -> bool {
-        core::mem::take(&mut self.refactor)
+        touched
     }
 
     fn check_counts(gas: &Gas<S>, counts: &[u64]) -> Result<()> {
+        let have = gas.species.iter().map(|s| s.n as u64);
         let agree = counts
             .iter()
             .copied()
             .chain(core::iter::repeat(0))
-            .zip(
-                gas.v
-                    .iter()
-                    .map(|l| l.len() as u64)
-                    .chain(core::iter::repeat(0)),
-            )
-            .take(counts.len().max(gas.v.len()))
+            .zip(have.chain(core::iter::repeat(0)))
+            .take(counts.len().max(gas.species.len()))
             .all(|(a, b)| a == b);
         if agree {
             Ok(())
@@ -620,48 +754,49 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
     }
 
     fn save(&self, gas: &Gas<S>, w: &mut Writer) {
-        w.u64(gas.since);
-        w.u64(gas.v.len() as u64);
-        for l in &gas.v {
-            w.f64s(&l.iter().flatten().copied().collect::<Vec<_>>());
+        w.u64(gas.species.len() as u64);
+        for sp in &gas.species {
+            w.u64(sp.classes.len() as u64);
+            for c in &sp.classes {
+                w.u64(c.q as i64 as u64);
+                w.f64s(&c.v.iter().flatten().copied().collect::<Vec<_>>());
+            }
         }
-        w.f64s(&gas.w);
     }
 
     fn load(&self, gas: &Gas<S>, r: &mut Reader) -> Result<Option<Gas<S>>> {
         let bad = |what| Error::Checkpoint { what };
-        let since = r.u64()?;
         let m = r.u64()?;
-        let mut v = Vec::new();
+        let mut species = Vec::new();
         for _ in 0..m {
-            let flat = r.f64s()?;
-            if flat.len() % 3 != 0 || flat.iter().any(|c| !c.is_finite()) {
-                return Err(bad("invalid particle velocities"));
+            let nc = r.u64()?;
+            let mut sp = Species::default();
+            for _ in 0..nc {
+                let q = i32::try_from(r.u64()? as i64).map_err(|_| bad("invalid speed class"))?;
+                let flat = r.f64s()?;
+                if flat.is_empty() || flat.len() % 3 != 0 {
+                    return Err(bad("invalid speed class"));
+                }
+                let v: Vec<[f64; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
+                if v.iter()
+                    .any(|x| x.iter().any(|c| !c.is_finite()) || class_of(x).0 != q)
+                    || sp.classes.iter().any(|c: &Class| c.q == q)
+                {
+                    return Err(bad("particle velocities do not match their speed classes"));
+                }
+                let w = class_of(&v[0]).1;
+                try_reserve(&mut sp.classes, 1)?;
+                sp.classes.push(Class { q, w, v });
             }
-            try_reserve(&mut v, 1)?;
-            v.push(
-                flat.chunks_exact(3)
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect::<Vec<_>>(),
-            );
-        }
-        let w = r.f64s()?;
-        if w.len() != v.len()
-            || v.iter()
-                .zip(&w)
-                .any(|(l, &wi)| !(wi.is_finite() && l.iter().all(|x| norm(x) * MARGIN <= wi)))
-        {
-            return Err(bad("speed maxima do not bound the particles"));
-        }
-        if since > RECOMPUTE.max(v.iter().map(|l| l.len() as u64).sum()) {
-            return Err(bad("invalid collision counter"));
+            sp.refresh();
+            try_reserve(&mut species, 1)?;
+            species.push(sp);
         }
         Ok(Some(Gas {
             restitution: gas.restitution,
             sticking: gas.sticking.clone(),
-            v,
-            w,
-            since,
+            species,
+            weighted: gas.weighted,
         }))
     }
 }
@@ -671,8 +806,11 @@ where
     S: Sticking + Clone,
     E: ProposalEngine<3>,
 {
-    /// The scheme over the particles of `gas` in volume `volume`.
-    pub fn new_gas(gas: Gas<S>, volume: f64) -> Result<Self> {
+    /// The scheme over the particles of `gas` in volume `volume` (on the per-size
+    /// trees the first particle of a pair is drawn ∝ its speed bound; see the module
+    /// docs).
+    pub fn new_gas(mut gas: Gas<S>, volume: f64) -> Result<Self> {
+        gas.weighted = E::LOW_IS_BOUND;
         let counts = gas.counts();
         Self::new(gas, &counts, volume)
     }
@@ -698,14 +836,14 @@ where
 
     /// The partial temperature `m ⟨|V|²⟩/3` of size `size` (0 when none).
     pub fn temperature(&self, size: u64) -> f64 {
-        let l = self.kernel().velocities(size);
-        if l.is_empty() {
+        let (mut n, mut s) = (0usize, 0.0);
+        for v in self.kernel().velocities(size) {
+            n += 1;
+            s += v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
+        }
+        if n == 0 {
             return 0.0;
         }
-        let s: f64 = l
-            .iter()
-            .map(|v| v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-            .sum();
-        size as f64 * s / (3.0 * l.len() as f64)
+        size as f64 * s / (3.0 * n as f64)
     }
 }
