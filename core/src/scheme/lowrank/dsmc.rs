@@ -155,30 +155,51 @@ const MARGIN: f64 = 1.0 + 1e-12;
 const SQRT2_MANTISSA: u64 = core::f64::consts::SQRT_2.to_bits() & ((1 << 52) - 1);
 
 /// The speed class of `v`: `q` with `|v|² ∈ [2^{q/2}, 2^{(q+1)/2})` (`i32::MIN` for
-/// `v = 0`), and its bound.
-fn class_of(v: &[f64; 3]) -> (i32, f64) {
+/// `v = 0`).
+#[inline]
+fn class_of(v: &[f64; 3]) -> i32 {
     let s = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
     if s <= 0.0 || !s.is_finite() {
-        return (i32::MIN, 0.0);
+        return i32::MIN;
     }
     let bits = s.to_bits();
     let field = ((bits >> 52) & 0x7ff) as i32;
-    let q = if field == 0 {
+    if field == 0 {
         // subnormal |v|²: a speed below 1.5e-154
         libm::floor(2.0 * libm::log2(s)) as i32
     } else {
         2 * (field - 1023) + i32::from(bits & ((1 << 52) - 1) >= SQRT2_MANTISSA)
-    };
-    (q, libm::exp2(f64::from(q + 1) / 4.0) * MARGIN)
+    }
+}
+
+/// The bound of class q: `2^{(q+1)/4}`, a little above (0 for the class of `v = 0`).
+fn class_bound(q: i32) -> f64 {
+    if q == i32::MIN {
+        0.0
+    } else {
+        libm::exp2(f64::from(q + 1) / 4.0) * MARGIN
+    }
 }
 
 impl Species {
-    /// Recomputes the counts and sums and drops empty classes.
+    /// Recomputes the counts and sums (in one pass, exactly: no drift) and drops the
+    /// empty classes when they are many.
     fn refresh(&mut self) {
-        self.classes.retain(|c| !c.v.is_empty());
-        self.n = self.classes.iter().map(|c| c.v.len()).sum();
-        self.s = self.classes.iter().map(|c| c.v.len() as f64 * c.w).sum();
-        self.top = self.classes.iter().map(|c| c.w).fold(0.0, f64::max);
+        let (mut n, mut s, mut top, mut empty) = (0, 0.0, 0.0f64, 0);
+        for c in &self.classes {
+            let len = c.v.len();
+            n += len;
+            s += len as f64 * c.w;
+            if len > 0 {
+                top = top.max(c.w);
+            } else {
+                empty += 1;
+            }
+        }
+        (self.n, self.s, self.top) = (n, s, top);
+        if empty > 8 {
+            self.classes.retain(|c| !c.v.is_empty());
+        }
     }
 
     /// Reserves room for one more particle of class `q` (a new class if needed).
@@ -191,12 +212,12 @@ impl Species {
 
     /// Adds a particle (its class created if needed; room reserved by `reserve`).
     fn insert(&mut self, v: [f64; 3]) {
-        let (q, w) = class_of(&v);
+        let q = class_of(&v);
         match self.classes.iter_mut().find(|c| c.q == q) {
             Some(c) => c.v.push(v),
             None => self.classes.push(Class {
                 q,
-                w,
+                w: class_bound(q),
                 v: alloc::vec![v],
             }),
         }
@@ -341,7 +362,7 @@ impl<S: Sticking> Gas<S> {
                 });
             }
             let sp = &mut species[s as usize - 1];
-            sp.reserve(class_of(vel).0)?;
+            sp.reserve(class_of(vel))?;
             sp.insert(*vel);
         }
         for sp in &mut species {
@@ -644,8 +665,8 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                     return Err(bad_velocity(bad));
                 }
                 // room in the classes they move to
-                gas.species[x as usize - 1].reserve(class_of(&nk).0)?;
-                gas.species[y as usize - 1].reserve(class_of(&nl).0)?;
+                gas.species[x as usize - 1].reserve(class_of(&nk))?;
+                gas.species[y as usize - 1].reserve(class_of(&nl))?;
                 Pending::Bounce {
                     k,
                     vk: nk,
@@ -670,7 +691,7 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                     try_reserve(&mut gas.species, more)?;
                     gas.species.resize(idx + 1, Species::default());
                 }
-                gas.species[idx].reserve(class_of(&v).0)?;
+                gas.species[idx].reserve(class_of(&v))?;
                 Pending::Merge { k, l, size, v }
             }
         };
@@ -690,7 +711,7 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                 // a particle that stays in its class is written in place; the others
                 // leave their classes (the later index first) and join their new ones
                 let same = |at: At, v: &[f64; 3], gas: &Gas<S>| {
-                    gas.species[at.0 as usize - 1].classes[at.1].q == class_of(v).0
+                    gas.species[at.0 as usize - 1].classes[at.1].q == class_of(v)
                 };
                 let (stay_k, stay_l) = (same(k, &vk, gas), same(l, &vl, gas));
                 for (at, v, stay) in [(k, vk, stay_k), (l, vl, stay_l)] {
@@ -774,17 +795,19 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
             for _ in 0..nc {
                 let q = i32::try_from(r.u64()? as i64).map_err(|_| bad("invalid speed class"))?;
                 let flat = r.f64s()?;
-                if flat.is_empty() || flat.len() % 3 != 0 {
+                // (the classes a finite speed can have; an empty one stays listed until
+                // the species compacts)
+                if flat.len() % 3 != 0 || !(q == i32::MIN || (-2200..=2047).contains(&q)) {
                     return Err(bad("invalid speed class"));
                 }
                 let v: Vec<[f64; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
                 if v.iter()
-                    .any(|x| x.iter().any(|c| !c.is_finite()) || class_of(x).0 != q)
+                    .any(|x| x.iter().any(|c| !c.is_finite()) || class_of(x) != q)
                     || sp.classes.iter().any(|c: &Class| c.q == q)
                 {
                     return Err(bad("particle velocities do not match their speed classes"));
                 }
-                let w = class_of(&v[0]).1;
+                let w = class_bound(q);
                 try_reserve(&mut sp.classes, 1)?;
                 sp.classes.push(Class { q, w, v });
             }
