@@ -272,14 +272,16 @@ enum BenchKind {
         /// Initial monomers of the full-scale rows (the paper's 1e7).
         #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
         n0: u64,
-        /// Times of the full-scale rows (comma-separated, increasing; empty skips).
-        #[arg(long, value_delimiter = ',', default_value = "1e3,1e4", value_parser = positive_f64)]
+        /// Times of the full-scale rows (comma-separated, increasing; the flag without a
+        /// value skips them).
+        #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "1e3,1e4", value_parser = positive_f64)]
         times: Vec<f64>,
         /// Initial monomers of the scaled rows.
         #[arg(long, default_value_t = 1 << 18, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
         scaled_n0: u64,
-        /// Times of the scaled rows (comma-separated, increasing; empty skips).
-        #[arg(long, value_delimiter = ',', default_value = "1e5,1e6", value_parser = positive_f64)]
+        /// Times of the scaled rows (comma-separated, increasing; the flag without a
+        /// value skips them).
+        #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "1e5,1e6", value_parser = positive_f64)]
         scaled_times: Vec<f64>,
         /// Wall-clock budget of one run in seconds (cells beyond it print "-").
         #[arg(long, default_value_t = 1800.0, value_parser = positive_f64)]
@@ -290,6 +292,9 @@ enum BenchKind {
         /// Seed of the random streams.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Time only the low-rank method (the AR columns print "-").
+        #[arg(long)]
+        skip_baseline: bool,
     },
     /// Low-rank DSMC against acceptance-rejection on the paper's workload (Osinsky
     /// 2023, tables 5-6: N_k ~ exp(-a (k-1)), a = 0.1 and 0.01, eps = 0.99).
@@ -647,6 +652,7 @@ fn main() -> ExitCode {
                     budget,
                     repeat,
                     seed,
+                    skip_baseline,
                 },
         } => {
             let increasing = |v: &[f64]| v.windows(2).all(|w| w[0] < w[1]);
@@ -654,15 +660,17 @@ fn main() -> ExitCode {
                 eprintln!("error: --times and --scaled-times must increase");
                 return ExitCode::FAILURE;
             }
-            return match reproduce::osinsky2023::bench(
+            let settings = reproduce::osinsky2023::Table4 {
                 n0,
-                &times,
+                times,
                 scaled_n0,
-                &scaled_times,
+                scaled_times,
                 budget,
                 repeat,
                 seed,
-            ) {
+                skip_baseline,
+            };
+            return match reproduce::osinsky2023::bench(&settings) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");

@@ -233,20 +233,37 @@ fn timed<E: ProposalEngine<3>>(
     })
 }
 
+/// The settings of `coagula bench temperature` (see [`bench()`]).
+pub struct Table4 {
+    /// Monomers of the full-scale rows and their times.
+    pub n0: u64,
+    pub times: Vec<f64>,
+    /// Monomers of the scaled rows and their times.
+    pub scaled_n0: u64,
+    pub scaled_times: Vec<f64>,
+    /// Seconds after which a run stops; rounds; seed; whether to skip the AR runs.
+    pub budget: f64,
+    pub repeat: u32,
+    pub seed: u64,
+    pub skip_baseline: bool,
+}
+
 /// `coagula bench temperature`: table 4 rerun, low-rank and acceptance–rejection
 /// alternating (`repeat` rounds, the fastest of each cell kept), at `n0` monomers for
 /// `times` and at `scaled_n0` for `scaled_times`. Collisions per second are compared
 /// with the paper's through our collision count scaled to 1e7 monomers (the same
 /// process: the count is proportional to N0).
-pub fn bench(
-    n0: u64,
-    times: &[f64],
-    scaled_n0: u64,
-    scaled_times: &[f64],
-    budget: f64,
-    repeat: u32,
-    seed: u64,
-) -> Result<(), String> {
+pub fn bench(b: &Table4) -> Result<(), String> {
+    let Table4 {
+        n0,
+        ref times,
+        scaled_n0,
+        ref scaled_times,
+        budget,
+        repeat,
+        seed,
+        skip_baseline,
+    } = *b;
     println!(
         "Osinsky (2023) table 4: temperature-dependent ballistic model (eps = 0.99, a = 0.1, lambda = 0.4), n1(0) = 0.3/pi, T1(0) = 1."
     );
@@ -272,6 +289,7 @@ pub fn bench(
         "x paper"
     );
     for (n, ts) in [(n0, times), (scaled_n0, scaled_times)] {
+        let ts: &[f64] = ts;
         if ts.is_empty() {
             continue;
         }
@@ -280,7 +298,9 @@ pub fn bench(
         for round in 0..repeat {
             let s = seed + u64::from(round);
             keep_fastest(&mut best_lr, timed::<Tree>(n, ts, budget, s)?);
-            keep_fastest(&mut best_ar, timed::<UniformEngine<3>>(n, ts, budget, s)?);
+            if !skip_baseline {
+                keep_fastest(&mut best_ar, timed::<UniformEngine<3>>(n, ts, budget, s)?);
+            }
         }
         for (i, &t) in ts.iter().enumerate() {
             let paper = TABLE4.iter().find(|r| r.0 == t);
@@ -393,8 +413,10 @@ pub fn bench_dsmc(
         "paper c/s",
         "x paper"
     );
+    let mut bounds = Vec::new();
     for (a, table) in [(0.1, &TABLE5), (0.01, &TABLE6)] {
         let counts = dsmc_workload(a, total as f64);
+        bounds.push((a, bound_ratio(&counts, seed)?));
         let mut best_lr: Vec<Cell> = vec![None; times.len()];
         let mut best_ar: Vec<Cell> = vec![None; times.len()];
         for round in 0..repeat {
@@ -431,7 +453,45 @@ pub fn bench_dsmc(
             );
         }
     }
+    for (a, r) in bounds {
+        println!(
+            "a = {a}: the AR engine's bound at t = 0 is {r:.3} x the seed's eq. 43 bound (its rejections cost that factor more proposals)"
+        );
+    }
     Ok(())
+}
+
+/// At t = 0 of the workload: the acceptance–rejection engine's bound
+/// `2 Σ_k max a_k max b_k` (from the gas's factors) over the seed's eq. 43 bound
+/// `2 (π/4) max_i (i^{1/3} + M^{1/3})² max_k |V_k|` (M the largest size).
+fn bound_ratio(counts: &[u64], seed: u64) -> Result<f64, String> {
+    use coagula_core::kernel::CoagulationKernel;
+    let mut rng = generator(seed, 0);
+    let temps = vec![1.0; counts.len()];
+    let gas = Gas::maxwellian(0.99, counts, &temps, &mut rng).map_err(err)?;
+    let m = counts.len() as f64;
+    let (mut amax, mut bmax) = ([0.0f64; 3], [0.0f64; 3]);
+    let mut eq43 = 0.0f64;
+    for (i, &c) in counts.iter().enumerate() {
+        if c == 0 {
+            continue;
+        }
+        let size = i as u64 + 1;
+        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
+        gas.factors(size as f64, &mut a, &mut b);
+        for k in 0..3 {
+            amax[k] = amax[k].max(a[k]);
+            bmax[k] = bmax[k].max(b[k]);
+        }
+        let fastest = gas
+            .velocities(size)
+            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+            .fold(0.0, f64::max);
+        let d = (size as f64).cbrt() + m.cbrt();
+        eq43 = eq43.max(d * d * fastest);
+    }
+    let ours: f64 = 2.0 * (0..3).map(|k| amax[k] * bmax[k]).sum::<f64>();
+    Ok(ours / (2.0 * std::f64::consts::FRAC_PI_4 * eq43))
 }
 
 /// The DSMC validate cases: Haff's law at t = τ (ε = 0.95, density 0.1, with the first

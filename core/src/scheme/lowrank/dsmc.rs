@@ -405,6 +405,12 @@ impl<S: Sticking> Gas<S> {
         self.restitution
     }
 
+    /// The speed bound of size `size`: the largest bound of its non-empty speed classes
+    /// (at most `2^{1/4}` above its fastest particle; 0 when none).
+    pub fn speed_bound(&self, size: u64) -> f64 {
+        self.species(size).map_or(0.0, |s| s.top)
+    }
+
     #[inline]
     fn species(&self, size: u64) -> Option<&Species> {
         self.species
