@@ -408,6 +408,9 @@ fn bad_input_is_refused() {
     }
     assert!(Gas::from_particles(0.9, NeverStick, &[1, 1], &[[f64::NAN, 0.0, 0.0], v[1]]).is_err());
     assert!(Gas::from_particles(0.9, NeverStick, &[1], &v).is_err());
+    // |v|² overflows: such a particle would land in the class of v = 0 (bound 0) and
+    // every pair with it would fail the bound (review finding)
+    assert!(Gas::from_particles(1.0, NeverStick, &[1, 1], &[[1e155, 0.0, 0.0], v[1]]).is_err());
     assert!(Gas::from_particles(0.9, NeverStick, &[0, 1], &v).is_err());
     assert!(Gas::maxwellian(0.9, &[10], &[1.0, 2.0], &mut rng(1)).is_err());
     assert!(Gas::maxwellian(0.9, &[10], &[-1.0], &mut rng(1)).is_err());

@@ -172,6 +172,12 @@ fn class_of(v: &[f64; 3]) -> i32 {
     }
 }
 
+/// A velocity whose components and `|v|²` are finite (`|v|² = inf` would put a fast
+/// particle in the class of `v = 0`).
+fn finite_speed(v: &[f64; 3]) -> bool {
+    (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).is_finite()
+}
+
 /// The bound of class q: `2^{(q+1)/4}`, a little above (0 for the class of `v = 0`).
 fn class_bound(q: i32) -> f64 {
     if q == i32::MIN {
@@ -204,9 +210,10 @@ impl Species {
 
     /// Reserves room for one more particle of class `q` (a new class if needed).
     fn reserve(&mut self, q: i32) -> Result<()> {
+        // (room for two: both particles of a bounce may go to one class)
         match self.classes.iter_mut().find(|c| c.q == q) {
-            Some(c) => try_reserve(&mut c.v, 1),
-            None => try_reserve(&mut self.classes, 1),
+            Some(c) => try_reserve(&mut c.v, 2),
+            None => try_reserve(&mut self.classes, 2),
         }
     }
 
@@ -355,10 +362,10 @@ impl<S: Sticking> Gas<S> {
         try_reserve(&mut species, m)?;
         species.resize(m, Species::default());
         for (&s, vel) in sizes.iter().zip(velocities) {
-            if let Some(&bad) = vel.iter().find(|c| !c.is_finite()) {
+            if !finite_speed(vel) {
                 return Err(Error::InvalidRate {
-                    name: "particle velocity",
-                    value: bad,
+                    name: "particle velocity (|v|² must be finite)",
+                    value: vel.iter().fold(0.0f64, |a, c| a.max(c.abs())),
                 });
             }
             let sp = &mut species[s as usize - 1];
@@ -667,8 +674,8 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                     nk[d] -= q * my * e[d];
                     nl[d] += q * mx * e[d];
                 }
-                if let Some(&bad) = nk.iter().chain(&nl).find(|c| !c.is_finite()) {
-                    return Err(bad_velocity(bad));
+                if !(finite_speed(&nk) && finite_speed(&nl)) {
+                    return Err(bad_velocity(nk[0] + nl[0]));
                 }
                 // room in the classes they move to
                 gas.species[x as usize - 1].reserve(class_of(&nk))?;
@@ -685,8 +692,8 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                 for d in 0..3 {
                     v[d] = (mx * vk[d] + my * vl[d]) / (mx + my);
                 }
-                if let Some(&bad) = v.iter().find(|c| !c.is_finite()) {
-                    return Err(bad_velocity(bad));
+                if !finite_speed(&v) {
+                    return Err(bad_velocity(v[0]));
                 }
                 let idx = usize::try_from(size - 1).map_err(|_| Error::Capacity {
                     name: "particle size",
@@ -807,8 +814,7 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
                     return Err(bad("invalid speed class"));
                 }
                 let v: Vec<[f64; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                if v.iter()
-                    .any(|x| x.iter().any(|c| !c.is_finite()) || class_of(x) != q)
+                if v.iter().any(|x| !finite_speed(x) || class_of(x) != q)
                     || sp.classes.iter().any(|c: &Class| c.q == q)
                 {
                     return Err(bad("particle velocities do not match their speed classes"));

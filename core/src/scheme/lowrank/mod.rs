@@ -390,14 +390,16 @@ where
             rep.rejections += 1;
             return Ok(false);
         };
+        if let Outcome::Merge { size } = outcome {
+            self.pop.check_size(size)?;
+        }
         if Rl::REWEIGHS {
             let engine = &self.engine;
             self.rule
                 .plan(&mut self.kernel, (c.x, c.y), &outcome, &|s| engine.count(s))?;
         }
         let merged = match outcome {
-            Outcome::Merge { size } => {
-                self.pop.check_size(size)?;
+            Outcome::Merge { .. } => {
                 self.engine.prepare(&self.kernel, &outcome, &self.pop)?;
                 self.engine.apply(&c, &outcome);
                 self.pop.n -= 1;

@@ -207,6 +207,15 @@ impl Collide {
                 return Err(invalid(name, v));
             }
         }
+        for v in [r.energy_gain]
+            .into_iter()
+            .chain(r.aggregation_loss)
+            .chain(r.restitution_loss)
+        {
+            if !v.is_finite() {
+                return Err(invalid("temperature kernel: energy rate", v));
+            }
+        }
         Ok(())
     }
 }
@@ -270,7 +279,8 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
         let (nx, ny) = (count(x) as f64, count(y) as f64);
         let mut set = |s: u64, t: f64| {
             // (capacity 3: a pair and the merged size)
-            let _ = self.pending.push((s, t.max(0.0)));
+            // (clipped at 0; a NaN stays NaN, for the check below)
+            let _ = self.pending.push((s, if t < 0.0 { 0.0 } else { t }));
         };
         match *outcome {
             Outcome::Merge { size: k } => {
@@ -298,13 +308,6 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
                     set(y, after(ny, ty, r.aggregation_loss[1]));
                 }
                 set(k, (nk * tk + per(r.energy_gain, ca)) / (nk + 1.0));
-                // the temperature table covers the merged size before anything changes
-                let need = usize::try_from(k).unwrap_or(usize::MAX);
-                if need > kernel.temps.len() {
-                    let target = need.checked_next_power_of_two().unwrap_or(need);
-                    let more = target - kernel.temps.len();
-                    try_reserve(&mut kernel.temps, more)?;
-                }
             }
             Outcome::Bounce => {
                 let cr = r.restitution;
@@ -315,6 +318,15 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
                     set(y, ty - per(r.restitution_loss[1], cr * ny));
                 }
             }
+        }
+        // the temperature table covers every size the event sets before anything
+        // changes (commit then resizes within that capacity)
+        let top = self.pending.iter().map(|p| p.0).max().unwrap_or(0);
+        let need = usize::try_from(top).unwrap_or(usize::MAX);
+        if need > kernel.temps.len() {
+            let target = need.checked_next_power_of_two().unwrap_or(need);
+            let more = target - kernel.temps.len();
+            try_reserve(&mut kernel.temps, more)?;
         }
         kernel.recent.clear();
         for &(s, t) in &self.pending {
