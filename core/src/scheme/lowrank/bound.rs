@@ -30,6 +30,42 @@ pub(crate) fn factors_at<K: CoagulationKernel + ?Sized, const R: usize>(
     Ok((a, b))
 }
 
+/// Extends a per-size factor table `fab` (`fab[i − 1] = [a(i), b(i)]`) to sizes
+/// `..= m`, validating every new row before the table changes (nothing to do when it
+/// already covers `m`).
+pub(crate) fn extend_rows<K: CoagulationKernel + ?Sized, const R: usize>(
+    kernel: &K,
+    fab: &mut alloc::vec::Vec<[[f64; R]; 2]>,
+    m: usize,
+) -> Result<()> {
+    use crate::scheme::population::try_reserve;
+    let start = fab.len();
+    if m <= start {
+        return Ok(());
+    }
+    let mut new = alloc::vec::Vec::new();
+    try_reserve(&mut new, m - start)?;
+    for i in start + 1..=m {
+        let (a, b) = factors_at::<K, R>(kernel, i as f64)?;
+        new.push([a, b]);
+    }
+    try_reserve(fab, new.len())?;
+    fab.extend(new);
+    Ok(())
+}
+
+/// Re-reads every row of a factor table from `kernel` (the rule validated them).
+pub(crate) fn reread_rows<K: CoagulationKernel + ?Sized, const R: usize>(
+    kernel: &K,
+    fab: &mut [[[f64; R]; 2]],
+) {
+    for (i, f) in fab.iter_mut().enumerate() {
+        let (mut a, mut b) = ([0.0; R], [0.0; R]);
+        kernel.factors((i + 1) as f64, &mut a, &mut b);
+        *f = [a, b];
+    }
+}
+
 /// log2 of the buckets per octave.
 pub(crate) const SUB_BITS: u32 = 5;
 /// Buckets per octave.

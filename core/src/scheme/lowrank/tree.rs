@@ -4,7 +4,6 @@
 //! change walks a single path. A proposal picks k ∝ `U_k V_k`, then i and j by descending
 //! the tree; the bound at the pair is exact per size (`low = bound`).
 
-use super::bound::factors_at;
 use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
 use super::rule::Outcome;
 use super::trees::{ProposalTree, Weights};
@@ -63,20 +62,7 @@ impl<const R: usize, T: ProposalTree<R>> TreeEngine<R, T> {
     /// Computes the factor tables for sizes `fab.len() + 1 ..= m`, validating them
     /// (nothing to do when the tables already cover `m`).
     fn extend_factors<K: CoagulationKernel>(&mut self, kernel: &K, m: usize) -> Result<()> {
-        let start = self.fab.len();
-        if m <= start {
-            return Ok(());
-        }
-        // validate all before the table changes
-        let mut new = Vec::new();
-        try_reserve(&mut new, m - start)?;
-        for i in start + 1..=m {
-            let (a, b) = factors_at::<K, R>(kernel, i as f64)?;
-            new.push([a, b]);
-        }
-        try_reserve(&mut self.fab, new.len())?;
-        self.fab.extend(new);
-        Ok(())
+        super::bound::extend_rows(kernel, &mut self.fab, m)
     }
 
     /// The weights of size index `idx` (zero past the count array).
@@ -302,11 +288,7 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
     }
 
     fn refactor<K: CoagulationKernel>(&mut self, kernel: &K) {
-        for (i, f) in self.fab.iter_mut().enumerate() {
-            let (mut a, mut b) = ([0.0; R], [0.0; R]);
-            kernel.factors((i + 1) as f64, &mut a, &mut b);
-            *f = [a, b];
-        }
+        super::bound::reread_rows(kernel, &mut self.fab);
         self.rebuild();
     }
 

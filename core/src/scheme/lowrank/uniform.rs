@@ -11,7 +11,6 @@
 //! `max(M, 1024)` events (a stale maximum is still a bound: it only costs
 //! rejections).
 
-use super::bound::factors_at;
 use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
 use super::rule::Outcome;
 use super::trees::Weights;
@@ -92,19 +91,7 @@ impl<const R: usize> UniformEngine<R> {
     }
 
     fn extend_factors<K: CoagulationKernel>(&mut self, kernel: &K, m: usize) -> Result<()> {
-        let start = self.fab.len();
-        if m <= start {
-            return Ok(());
-        }
-        let mut new = Vec::new();
-        try_reserve(&mut new, m - start)?;
-        for i in start + 1..=m {
-            let (a, b) = factors_at::<K, R>(kernel, i as f64)?;
-            new.push([a, b]);
-        }
-        try_reserve(&mut self.fab, new.len())?;
-        self.fab.extend(new);
-        Ok(())
+        super::bound::extend_rows(kernel, &mut self.fab, m)
     }
 
     /// The engine over the particle list `sizes` (validated by the caller) for `n0`.
@@ -284,11 +271,7 @@ impl<const R: usize> ProposalEngine<R> for UniformEngine<R> {
     }
 
     fn refactor<K: CoagulationKernel>(&mut self, kernel: &K) {
-        for (i, f) in self.fab.iter_mut().enumerate() {
-            let (mut a, mut b) = ([0.0; R], [0.0; R]);
-            kernel.factors((i + 1) as f64, &mut a, &mut b);
-            *f = [a, b];
-        }
+        super::bound::reread_rows(kernel, &mut self.fab);
         self.max = Self::occupied_max(&self.counts, &self.fab);
         self.since = 0;
     }
