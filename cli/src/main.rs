@@ -6,6 +6,7 @@ use coagula_core::kernel::{Coagulation, check_low_rank, check_majorant, log_grid
 use std::process::ExitCode;
 
 mod bench;
+mod ensemble;
 mod examples;
 mod frag;
 mod moments;
@@ -130,6 +131,11 @@ enum Command {
         /// running.
         #[arg(long)]
         check: bool,
+        /// Save every finished block of replicas in this directory, and take the
+        /// blocks already saved there instead of running them again: a killed run
+        /// resumes where it stopped, with the same results.
+        #[arg(long, value_name = "DIR")]
+        checkpoint: Option<String>,
     },
     /// List the built-in example scenarios, or print one.
     Examples {
@@ -454,6 +460,7 @@ fn main() -> ExitCode {
             rows,
             quiet,
             check,
+            checkpoint,
         } => {
             let mut ov = set;
             let mut put = |k: &str, v: toml::Value| ov.push((k.to_string(), v));
@@ -498,6 +505,7 @@ fn main() -> ExitCode {
                 rows: rows as usize,
                 quiet,
                 check,
+                checkpoint,
             };
             return match run::run(scenario.as_deref(), ov, steps, outputs) {
                 Ok(()) => ExitCode::SUCCESS,

@@ -255,10 +255,20 @@ fn physical_note(plan: &Plan) -> &'static str {
 /// CSV: `t`, then per observable its mean, `_ci95` (half-width, with replicas) and
 /// `_exact` (where known).
 pub fn csv(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> {
+    let (head, recs) = csv_records(plan, out);
+    let mut wr = csv::Writer::from_writer(w);
+    wr.write_record(&head).map_err(|e| e.to_string())?;
+    for rec in recs {
+        wr.write_record(&rec).map_err(|e| e.to_string())?;
+    }
+    wr.flush().map_err(|e| e.to_string())
+}
+
+/// The CSV header and records of one run.
+fn csv_records(plan: &Plan, out: &Outcome) -> (Vec<String>, Vec<Vec<String>>) {
     let rows = rows(plan, out);
     let with_ci = plan.replicas >= 2;
     let with_exact = rows.iter().any(|r| r.cells.iter().any(|c| !c.2.is_nan()));
-    let mut wr = csv::Writer::from_writer(w);
     let mut head = vec!["t".to_string()];
     for o in &plan.observables {
         head.push(o.name());
@@ -269,21 +279,68 @@ pub fn csv(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> 
             head.push(format!("{}_exact", o.name()));
         }
     }
-    wr.write_record(&head).map_err(|e| e.to_string())?;
-    for r in &rows {
-        let mut rec = vec![r.t.to_string()];
-        for &(m, h, e) in &r.cells {
-            rec.push(m.to_string());
-            if with_ci {
-                rec.push(h.to_string());
+    let recs = rows
+        .iter()
+        .map(|r| {
+            let mut rec = vec![r.t.to_string()];
+            for &(m, h, e) in &r.cells {
+                rec.push(m.to_string());
+                if with_ci {
+                    rec.push(h.to_string());
+                }
+                if with_exact {
+                    rec.push(e.to_string());
+                }
             }
-            if with_exact {
-                rec.push(e.to_string());
+            rec
+        })
+        .collect();
+    (head, recs)
+}
+
+/// A sweep point's run: the values it sets, its plan, its outcome.
+pub type SweepRun<'a> = (&'a [(String, toml::Value)], &'a Plan, &'a Outcome);
+
+/// CSV of a sweep: the swept keys' values, then the columns of [`csv()`], for every
+/// point. The points must have the same columns (the same observables, and replicas
+/// and exact values on all or none).
+pub fn csv_sweep(runs: &[SweepRun<'_>], w: &mut dyn Write) -> Result<(), String> {
+    let mut wr = csv::Writer::from_writer(w);
+    let mut first: Option<Vec<String>> = None;
+    for (set, plan, out) in runs {
+        let (head, recs) = csv_records(plan, out);
+        let keys: Vec<String> = set.iter().map(|(k, _)| k.clone()).collect();
+        let head: Vec<String> = keys.into_iter().chain(head).collect();
+        match &first {
+            None => {
+                wr.write_record(&head).map_err(|e| e.to_string())?;
+                first = Some(head);
             }
+            Some(h) if *h != head => {
+                return Err(format!(
+                    "--csv: sweep point {} has other columns than the first ({} vs {}): write --json instead",
+                    crate::run::label(set),
+                    head.join(","),
+                    h.join(",")
+                ));
+            }
+            Some(_) => {}
         }
-        wr.write_record(&rec).map_err(|e| e.to_string())?;
+        let vals: Vec<String> = set.iter().map(|(_, v)| csv_value(v)).collect();
+        for rec in recs {
+            let rec: Vec<String> = vals.iter().cloned().chain(rec).collect();
+            wr.write_record(&rec).map_err(|e| e.to_string())?;
+        }
     }
     wr.flush().map_err(|e| e.to_string())
+}
+
+/// A TOML value in a CSV cell: strings bare, the rest as TOML writes them.
+fn csv_value(v: &toml::Value) -> String {
+    match v {
+        toml::Value::String(s) => s.clone(),
+        v => v.to_string(),
+    }
 }
 
 #[derive(Serialize)]
@@ -321,6 +378,12 @@ fn finite(v: f64) -> Option<f64> {
 /// JSON: the scenario, the times, and per observable the mean, standard error, CI and
 /// exact values (null where undefined).
 pub fn json(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> {
+    serde_json::to_writer_pretty(&mut *w, &report(plan, out)).map_err(|e| e.to_string())?;
+    writeln!(w).map_err(|e| e.to_string())
+}
+
+/// The JSON report of one run.
+fn report<'a>(plan: &'a Plan, out: &Outcome) -> Report<'a> {
     let series = plan
         .observables
         .iter()
@@ -346,7 +409,7 @@ pub fn json(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String>
         })
         .collect();
     let t = &out.totals;
-    let report = Report {
+    Report {
         title: &plan.title,
         scheme: plan.scheme.name(),
         replicas: plan.replicas,
@@ -361,7 +424,23 @@ pub fn json(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String>
         doublings: t.doublings,
         seconds: out.seconds,
         scenario: &plan.scenario,
-    };
-    serde_json::to_writer_pretty(&mut *w, &report).map_err(|e| e.to_string())?;
+    }
+}
+
+/// JSON of a sweep: `{"sweep": [{"set": {key: value}, "report": ...}]}`, each report
+/// as [`json`] writes one run.
+pub fn json_sweep(runs: &[SweepRun<'_>], w: &mut dyn Write) -> Result<(), String> {
+    let points: Vec<serde_json::Value> = runs
+        .iter()
+        .map(|(set, plan, out)| {
+            let set: serde_json::Map<String, serde_json::Value> = set
+                .iter()
+                .map(|(k, v)| (k.clone(), serde_json::to_value(v).unwrap_or_default()))
+                .collect();
+            serde_json::json!({ "set": set, "report": report(plan, out) })
+        })
+        .collect();
+    serde_json::to_writer_pretty(&mut *w, &serde_json::json!({ "sweep": points }))
+        .map_err(|e| e.to_string())?;
     writeln!(w).map_err(|e| e.to_string())
 }

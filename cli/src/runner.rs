@@ -199,15 +199,7 @@ pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
             .collect()
     });
     progress.finish();
-    let mut values = Vec::with_capacity(results.len());
-    let mut totals = StepReport::default();
-    let mut events = Vec::with_capacity(values.capacity());
-    for res in results {
-        let (rows, rep) = res?;
-        totals.accumulate(&rep);
-        events.push(rep.events);
-        values.push(rows);
-    }
+    let (values, totals, events) = collect(results)?;
     let stats = statistics(&values, plan.times.len(), plan.observables.len());
     Ok(Outcome {
         values,
@@ -218,8 +210,46 @@ pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
     })
 }
 
-/// Welford statistics per (time, observable), replicas pushed in order.
+/// The replicas' rows in order, the totals of their reports and their events; the
+/// first replica's error if one failed.
+type Collected = (Vec<Vec<Vec<f64>>>, StepReport, Vec<u64>);
+
+fn collect(results: Vec<Result<ReplicaRows, String>>) -> Result<Collected, String> {
+    let mut values = Vec::with_capacity(results.len());
+    let mut totals = StepReport::default();
+    let mut events = Vec::with_capacity(results.len());
+    for res in results {
+        let (rows, rep) = res?;
+        totals.accumulate(&rep);
+        events.push(rep.events);
+        values.push(rows);
+    }
+    Ok((values, totals, events))
+}
+
+/// Replicas per block: the unit of work that an ensemble shares out over processes
+/// and saves in checkpoints. Inside a block the replicas are pushed in order; blocks
+/// are merged in block order (Chan et al.'s update, [`Replicas::merge`]), so every
+/// figure has the same bits whatever the number of processes and threads.
+pub const BLOCK: u64 = 8;
+
+/// The number of blocks of `replicas` replicas.
+pub fn blocks(replicas: u64) -> u64 {
+    replicas.div_ceil(BLOCK)
+}
+
+/// Statistics per (time, observable): replicas pushed in order within each block of
+/// [`BLOCK`], blocks merged in order.
 pub fn statistics(values: &[Vec<Vec<f64>>], times: usize, obs: usize) -> Vec<Vec<Replicas>> {
+    let mut stats = vec![vec![Replicas::new(); obs]; times];
+    for chunk in values.chunks(BLOCK as usize) {
+        merge_stats(&mut stats, &pushed(chunk, times, obs));
+    }
+    stats
+}
+
+/// Welford statistics of one block, replicas pushed in order.
+fn pushed(values: &[Vec<Vec<f64>>], times: usize, obs: usize) -> Vec<Vec<Replicas>> {
     let mut stats = vec![vec![Replicas::new(); obs]; times];
     for rows in values {
         for (i, row) in rows.iter().enumerate() {
@@ -229,4 +259,41 @@ pub fn statistics(values: &[Vec<Vec<f64>>], times: usize, obs: usize) -> Vec<Vec
         }
     }
     stats
+}
+
+/// Merges a block's statistics into `acc` (same shape).
+pub fn merge_stats(acc: &mut [Vec<Replicas>], block: &[Vec<Replicas>]) {
+    for (a, b) in acc.iter_mut().zip(block) {
+        for (x, y) in a.iter_mut().zip(b) {
+            x.merge(y);
+        }
+    }
+}
+
+/// One block's results: its statistics, the totals of its replicas' reports and each
+/// replica's events.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Block {
+    /// `[time][observable]`.
+    pub stats: Vec<Vec<Replicas>>,
+    /// Totals of the block's reports.
+    pub totals: StepReport,
+    /// Events of each replica.
+    pub events: Vec<u64>,
+}
+
+/// Runs block `b` of a plan (its replicas in parallel on the current rayon pool).
+pub fn run_block(plan: &Plan, b: u64, tick: &(dyn Fn() + Sync)) -> Result<Block, String> {
+    let lo = b * BLOCK;
+    let hi = plan.replicas.min(lo + BLOCK);
+    let results: Vec<Result<ReplicaRows, String>> = (lo..hi)
+        .into_par_iter()
+        .map(|r| replica(plan, r, tick))
+        .collect();
+    let (values, totals, events) = collect(results)?;
+    Ok(Block {
+        stats: pushed(&values, plan.times.len(), plan.observables.len()),
+        totals,
+        events,
+    })
 }

@@ -43,6 +43,11 @@ pub struct Scenario {
     /// Replicas, seed, threads.
     #[serde(default)]
     pub run: RunSpec,
+    /// A parameter sweep (`coagula run` only): every leaf is an array of values for
+    /// the key of its path (`[sweep]` then `initial.particles = [1000, 10000]`), and
+    /// the run covers every combination.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<toml::Table>,
 }
 
 /// The built-in kernels (Eibeck & Wagner 2000 §6; Osinsky 2023 eqs. 24, 27).

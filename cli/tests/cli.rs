@@ -589,3 +589,153 @@ fn plots_in_both_formats() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Asserts a run succeeded, showing its standard error if not.
+fn succeeded(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A run killed part-way resumes from its checkpoint directory and gives the same
+/// CSV, bit for bit, as an unbroken run (the blocks it saved are taken, not rerun).
+#[test]
+fn a_killed_run_resumes_with_the_same_results() {
+    let dir = std::env::temp_dir().join(format!("coagula-resume-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let ckpt = dir.join("ckpt");
+    // 12 blocks of 8 replicas, one thread: about a second of work
+    let args = |csv: &std::path::Path| {
+        let mut c = coagula();
+        c.args([
+            "run",
+            "quickstart-constant",
+            "--replicas",
+            "96",
+            "--threads",
+            "1",
+        ])
+        .args(["--particles", "100000", "--quiet", "--csv"])
+        .arg(csv);
+        c
+    };
+    let whole = dir.join("whole.csv");
+    let out = args(&whole).output().unwrap();
+    succeeded(&out);
+    let mut child = args(&dir.join("killed.csv"))
+        .arg("--checkpoint")
+        .arg(&ckpt)
+        .stdout(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let saved = |d: &std::path::Path| {
+        std::fs::read_dir(d).map_or(0, |it| {
+            it.filter(|e| {
+                e.as_ref()
+                    .is_ok_and(|e| e.path().extension().is_some_and(|x| x == "bin"))
+            })
+            .count()
+        })
+    };
+    let t0 = std::time::Instant::now();
+    while saved(&ckpt) == 0 && t0.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let before = saved(&ckpt);
+    assert!(before >= 1, "no block saved in 120 s");
+    let resumed = dir.join("resumed.csv");
+    let out = args(&resumed)
+        .arg("--checkpoint")
+        .arg(&ckpt)
+        .output()
+        .unwrap();
+    succeeded(&out);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains(&format!(
+            "12 blocks of up to 8 replicas over 1 processes; {before} resumed"
+        )),
+        "{text}"
+    );
+    assert_eq!(
+        std::fs::read(&whole).unwrap(),
+        std::fs::read(&resumed).unwrap(),
+        "resumed ({before} of 12 blocks saved) vs unbroken"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A `[sweep]` runs every combination (first axis slowest), each point with the bits
+/// of a run of that point alone, and refuses a key swept and set at once.
+#[test]
+fn a_sweep_runs_every_point_as_a_run_of_its_own() {
+    let dir = std::env::temp_dir().join(format!("coagula-sweep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("sweep.toml");
+    std::fs::write(
+        &file,
+        "[kernel]\nkind = \"constant\"\n[initial]\nkind = \"monodisperse\"\nparticles = 1000\n\
+         [scheme]\nname = \"lowrank\"\n[output]\nt-end = 2.0\ncount = 2\nobservables = [\"M0\", \"M2\"]\n\
+         [run]\nreplicas = 12\n[sweep]\ninitial.particles = [500, 2000]\nkernel.coefficient = [1.0, 2.0, 4.0]\n",
+    )
+    .unwrap();
+    let out = coagula()
+        .arg("run")
+        .arg(&file)
+        .args(["--quiet", "--csv", "-"])
+        .output()
+        .unwrap();
+    succeeded(&out);
+    let text = String::from_utf8(out.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "initial.particles,kernel.coefficient,t,M0,M0_ci95,M0_exact,M2,M2_ci95,M2_exact"
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len(), 6 * 2);
+    let keys: Vec<String> = rows
+        .iter()
+        .step_by(2)
+        .map(|r| r.split(',').take(2).collect::<Vec<_>>().join(","))
+        .collect();
+    assert_eq!(
+        keys,
+        [
+            "500,1.0", "500,2.0", "500,4.0", "2000,1.0", "2000,2.0", "2000,4.0"
+        ]
+    );
+    // the point (2000, 4.0) alone
+    let alone = coagula()
+        .arg("run")
+        .arg(&file)
+        .args(["--quiet", "--csv", "-", "--set", "initial.particles=2000"])
+        .args(["--set", "kernel.coefficient=4.0", "--set", "sweep={}"])
+        .output()
+        .unwrap();
+    let alone_text = String::from_utf8_lossy(&alone.stdout);
+    let alone_rows: Vec<&str> = alone_text.lines().skip(1).collect();
+    assert_eq!(
+        alone_rows.len(),
+        2,
+        "{}",
+        String::from_utf8_lossy(&alone.stderr)
+    );
+    for (s, a) in rows[10..].iter().zip(&alone_rows) {
+        assert_eq!(s.split_once(",4.0,").unwrap().1, *a);
+    }
+    let both = coagula()
+        .arg("run")
+        .arg(&file)
+        .args(["--set", "kernel.coefficient=3.0"])
+        .output()
+        .unwrap();
+    assert!(!both.status.success());
+    assert!(String::from_utf8_lossy(&both.stderr).contains("both swept and set"));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -220,8 +220,16 @@ impl Replicas {
     }
 
     /// Merges another set of replicas (Chan et al.'s parallel update).
+    ///
+    /// Merging into an empty set copies `other` bit for bit, so a fixed order of
+    /// merges (blocks of replicas merged in block order) gives the same bits however
+    /// the blocks were shared out.
     pub fn merge(&mut self, other: &Replicas) {
         if other.n == 0 {
+            return;
+        }
+        if self.n == 0 {
+            *self = *other;
             return;
         }
         let n = self.n + other.n;
@@ -229,6 +237,32 @@ impl Replicas {
         self.mean += d * other.n as f64 / n as f64;
         self.m2 += other.m2 + d * d * (self.n as f64 * other.n as f64) / n as f64;
         self.n = n;
+    }
+
+    /// The raw state `(count, mean, sum of squared deviations)`, to carry a set of
+    /// replicas between processes or into a checkpoint; [`Replicas::from_raw`] takes it
+    /// back.
+    pub fn to_raw(&self) -> (u64, f64, f64) {
+        (self.n, self.mean, self.m2)
+    }
+
+    /// A set of replicas from [`Replicas::to_raw`]'s state. `None` if it cannot be one:
+    /// a count of 0 with a nonzero mean or spread, or a negative or NaN spread.
+    ///
+    /// ```
+    /// use coagula_core::observe::Replicas;
+    /// let mut r = Replicas::new();
+    /// r.push(1.0);
+    /// r.push(3.0);
+    /// let (n, mean, m2) = r.to_raw();
+    /// assert_eq!(Replicas::from_raw(n, mean, m2), Some(r));
+    /// assert_eq!(Replicas::from_raw(2, 2.0, -1.0), None);
+    /// ```
+    pub fn from_raw(n: u64, mean: f64, m2: f64) -> Option<Self> {
+        let empty_ok = n > 0 || (mean == 0.0 && m2 == 0.0);
+        // a NaN or infinite observable (an undefined gel mass) makes a NaN spread
+        let m2_ok = m2 >= 0.0 || (m2.is_nan() && !mean.is_finite());
+        (empty_ok && m2_ok).then_some(Replicas { n, mean, m2 })
     }
 
     /// Number of replicas.
@@ -476,6 +510,19 @@ mod tests {
         a.merge(&b);
         assert_eq!(a.count(), 1000);
         assert!((a.variance() - var).abs() < 1e-6 * var);
+        // merging into an empty set copies the bits (three values whose mean·3/3
+        // would round otherwise)
+        let mut c = Replicas::new();
+        for x in [0.1, 0.7, 1.3] {
+            c.push(x);
+        }
+        let mut e = Replicas::new();
+        e.merge(&c);
+        assert_eq!(e, c);
+        let (n, mean, m2) = c.to_raw();
+        assert_eq!(Replicas::from_raw(n, mean, m2), Some(c));
+        assert_eq!(Replicas::from_raw(0, 1.0, 0.0), None);
+        assert_eq!(Replicas::from_raw(3, 1.0, f64::NAN), None);
     }
 
     #[test]
