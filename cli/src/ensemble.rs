@@ -28,6 +28,12 @@ pub trait World {
     fn size(&self) -> usize;
     /// Every rank's words at rank 0, in rank order; `None` on the other ranks.
     fn gather(&self, mine: Vec<u64>) -> Option<Vec<Vec<u64>>>;
+    /// An error on this rank alone before the gather (the others would wait for it
+    /// forever): with other processes, prints it and ends the whole job; alone, hands
+    /// it back.
+    fn fatal(&self, e: String) -> String {
+        e
+    }
 }
 
 /// One process.
@@ -55,13 +61,21 @@ pub struct Mpi {
 
 #[cfg(feature = "mpi")]
 impl Mpi {
-    /// Initialises MPI (once per process).
+    /// Initialises MPI (once per process). With more than one process a panic ends
+    /// the whole job (the other ranks would wait for this one forever).
     pub fn init() -> Result<Self, String> {
         use mpi::traits::Communicator;
         let universe = mpi::initialize().ok_or("MPI was initialised already")?;
         let world = universe.world();
         if world.size() < 1 {
             return Err("MPI world of no process".into());
+        }
+        if world.size() > 1 {
+            let previous = std::panic::take_hook();
+            std::panic::set_hook(Box::new(move |info| {
+                previous(info);
+                mpi::topology::SimpleCommunicator::world().abort(101);
+            }));
         }
         Ok(Mpi {
             _universe: universe,
@@ -94,6 +108,14 @@ impl World for Mpi {
             None
         }
     }
+    fn fatal(&self, e: String) -> String {
+        use mpi::traits::Communicator;
+        if self.world.size() > 1 {
+            eprintln!("error (rank {}): {e}", self.rank());
+            self.world.abort(1);
+        }
+        e
+    }
 }
 
 /// The world of this process: MPI's when built with the `mpi` feature, else one process.
@@ -112,12 +134,15 @@ const BLOCK_MAGIC: u64 = u64::from_le_bytes(*b"coagBLK1");
 const FILE_MAGIC: u64 = u64::from_le_bytes(*b"coagCKP1");
 
 /// What identifies a plan's results: everything but the threads (results do not
-/// depend on them) and the memory estimate (which does), with the CLI's version.
+/// depend on them), the memory estimate (which does) and the memory budget (the
+/// machine's), with the CLI's version.
 pub fn fingerprint(plan: &Plan) -> u64 {
     let mut p = plan.clone();
     p.threads = 0;
     p.memory = 0;
     p.scenario.run.threads = 0;
+    // (from the machine's memory: ranks on other machines must agree)
+    p.options.memory_budget = 0;
     let text = format!("{} {p:?}", env!("CARGO_PKG_VERSION"));
     // FNV-1a, 64 bits
     text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -188,6 +213,10 @@ pub fn decode(w: &[u64]) -> Result<(u64, usize, u64, Block), String> {
     }
     let (fp, point, b) = (w[1], w[2] as usize, w[3]);
     let (times, obs, reps) = (w[4] as usize, w[5] as usize, w[6] as usize);
+    if times == 0 || obs == 0 {
+        // (a plan has at least one of each; the length check below then bounds both)
+        return Err("a block of no time or no observable".into());
+    }
     let cells = times.checked_mul(obs).and_then(|c| c.checked_mul(3));
     let want = cells.and_then(|c| c.checked_add(HEAD + reps));
     if want != Some(w.len()) || reps as u64 > runner::BLOCK {
@@ -235,10 +264,17 @@ fn save(path: &Path, words: &[u64]) -> Result<(), String> {
     for w in words {
         bytes.extend(w.to_le_bytes());
     }
-    let tmp = path.with_extension("tmp");
-    std::fs::write(&tmp, &bytes)
-        .and_then(|()| std::fs::rename(&tmp, path))
-        .map_err(|e| format!("checkpoint {}: {e}", path.display()))
+    // a name of this process's own: two runs on one directory never share it
+    let tmp = path.with_extension(format!("{}.tmp", std::process::id()));
+    let write = || -> std::io::Result<()> {
+        use std::io::Write;
+        let mut f = std::fs::File::create(&tmp)?;
+        f.write_all(&bytes)?;
+        // on disk before it gets its name: a crash leaves no empty block file
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    };
+    write().map_err(|e| format!("checkpoint {}: {e}", path.display()))
 }
 
 /// A saved block, if its file exists: it must be a block of this plan, point and
@@ -355,16 +391,27 @@ fn run_share(
     if let Some(dir) = checkpoint {
         std::fs::create_dir_all(dir).map_err(|e| format!("--checkpoint {}: {e}", dir.display()))?;
     }
+    // every saved block is read (and a bad file refused) before any work starts
+    let mut saved = Vec::with_capacity(items.len());
+    for &(p, b) in &items {
+        saved.push(match checkpoint {
+            Some(dir) => load(&checkpoint_path(dir, p, b), prints[p], p, b, &points[p])?,
+            None => None,
+        });
+    }
+    let resumed = saved.iter().filter(|s| s.is_some()).count() as u64;
     let ticks: u64 = items
         .iter()
-        .map(|&(p, b)| {
+        .zip(&saved)
+        .filter(|(_, s)| s.is_none())
+        .map(|(&(p, b), _)| {
             let plan = &points[p];
             (plan.replicas.min((b + 1) * runner::BLOCK) - b * runner::BLOCK)
                 * plan.times.len() as u64
         })
         .sum();
     let label = if points.len() > 1 {
-        format!("{} points x {} replicas", points.len(), points[0].replicas)
+        format!("{} sweep points", points.len())
     } else {
         format!("{} x {}", points[0].replicas, points[0].scheme.name())
     };
@@ -374,35 +421,26 @@ fn run_share(
         .num_threads(points[0].threads)
         .build()
         .map_err(|e| format!("thread pool: {e}"))?;
-    let done: Vec<Result<(bool, Vec<u64>), String>> = pool.install(|| {
+    // the first failure stops the rank's remaining blocks
+    let blocks: Result<Vec<Vec<u64>>, String> = pool.install(|| {
         items
             .par_iter()
-            .map(|&(p, b)| {
-                let plan = &points[p];
-                let path = checkpoint.map(|d| checkpoint_path(d, p, b));
-                if let Some(path) = &path
-                    && let Some(block) = load(path, prints[p], p, b, plan)?
-                {
-                    return Ok((true, encode(prints[p], p, b, &block)));
+            .zip(saved)
+            .map(|(&(p, b), saved)| {
+                if let Some(block) = saved {
+                    return Ok(encode(prints[p], p, b, &block));
                 }
-                let block = runner::run_block(plan, b, &tick)?;
+                let block = runner::run_block(&points[p], b, &tick)?;
                 let words = encode(prints[p], p, b, &block);
-                if let Some(path) = &path {
-                    save(path, &words)?;
+                if let Some(dir) = checkpoint {
+                    save(&checkpoint_path(dir, p, b), &words)?;
                 }
-                Ok((false, words))
+                Ok(words)
             })
             .collect()
     });
     progress.finish();
-    let mut resumed = 0;
-    let mut blocks = Vec::with_capacity(done.len());
-    for d in done {
-        let (was_saved, words) = d?;
-        resumed += u64::from(was_saved);
-        blocks.push(words);
-    }
-    Ok((resumed, blocks))
+    Ok((resumed, blocks?))
 }
 
 /// What an ensemble gave, at rank 0.
@@ -628,6 +666,19 @@ mod tests {
         // and another seed gives other bits
         let other = over(&plans(21, 1, 6), 2, None).unwrap();
         assert_ne!(bits(&other.outcomes[0]), bits(&one));
+    }
+
+    #[test]
+    fn the_fingerprint_ignores_the_machine_but_not_the_case() {
+        let p = plans(16, 1, 5).remove(0);
+        let mut q = plans(16, 2, 5).remove(0);
+        // a machine with more memory and cores
+        q.options.memory_budget = p.options.memory_budget * 2 + 1;
+        q.memory += 12345;
+        assert_eq!(fingerprint(&q), fingerprint(&p));
+        for other in [plans(16, 1, 6), plans(24, 1, 5)] {
+            assert_ne!(fingerprint(&other[0]), fingerprint(&p));
+        }
     }
 
     #[test]

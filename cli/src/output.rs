@@ -264,11 +264,21 @@ pub fn csv(plan: &Plan, out: &Outcome, w: &mut dyn Write) -> Result<(), String> 
     wr.flush().map_err(|e| e.to_string())
 }
 
-/// The CSV header and records of one run.
-fn csv_records(plan: &Plan, out: &Outcome) -> (Vec<String>, Vec<Vec<String>>) {
-    let rows = rows(plan, out);
+/// Whether a plan's output has an exact value anywhere.
+fn has_exact(plan: &Plan) -> bool {
+    plan.exact.is_some_and(|e| {
+        plan.times.iter().any(|&t| {
+            plan.observables
+                .iter()
+                .any(|o| e.value(o, t).is_some_and(|v| !v.is_nan()))
+        })
+    })
+}
+
+/// The CSV columns of a plan's run.
+fn csv_head(plan: &Plan) -> Vec<String> {
     let with_ci = plan.replicas >= 2;
-    let with_exact = rows.iter().any(|r| r.cells.iter().any(|c| !c.2.is_nan()));
+    let with_exact = has_exact(plan);
     let mut head = vec!["t".to_string()];
     for o in &plan.observables {
         head.push(o.name());
@@ -279,6 +289,35 @@ fn csv_records(plan: &Plan, out: &Outcome) -> (Vec<String>, Vec<Vec<String>>) {
             head.push(format!("{}_exact", o.name()));
         }
     }
+    head
+}
+
+/// Refuses a sweep whose points would write different CSV columns (before the run).
+pub fn check_sweep_columns(points: &[crate::run::Point]) -> Result<(), String> {
+    let Some((_, first)) = points.first() else {
+        return Ok(());
+    };
+    let head = csv_head(first);
+    for (set, plan) in &points[1..] {
+        let other = csv_head(plan);
+        if other != head {
+            return Err(format!(
+                "--csv: sweep point {} has other columns than the first ({} vs {}): write --json instead",
+                crate::run::label(set),
+                other.join(","),
+                head.join(",")
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The CSV header and records of one run.
+fn csv_records(plan: &Plan, out: &Outcome) -> (Vec<String>, Vec<Vec<String>>) {
+    let rows = rows(plan, out);
+    let with_ci = plan.replicas >= 2;
+    let with_exact = has_exact(plan);
+    let head = csv_head(plan);
     let recs = rows
         .iter()
         .map(|r| {

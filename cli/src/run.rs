@@ -143,14 +143,30 @@ pub fn points(
         // an empty table (`--set sweep={}`) switches the sweep off
         return Ok(vec![(Vec::new(), base)]);
     }
+    // a key and the table it lies in are the same setting
+    let clash = |a: &str, b: &str| {
+        a == b
+            || a.strip_prefix(b).is_some_and(|r| r.starts_with('.'))
+            || b.strip_prefix(a).is_some_and(|r| r.starts_with('.'))
+    };
     for (key, _) in &ax {
-        if overrides.iter().any(|(k, _)| k == key) {
+        if let Some((k, _)) = overrides.iter().find(|(k, _)| clash(k, key)) {
             return Err(format!(
-                "{key} is both swept and set on the command line: drop one"
+                "{key} is swept and {k} is set on the command line: drop one"
             ));
         }
-        if key.starts_with("sweep") {
+        if steps.is_some() && clash(key, "scheme.dt") {
+            return Err(format!(
+                "{key} is swept and --steps sets scheme.dt: drop one"
+            ));
+        }
+        if clash(key, "sweep") {
             return Err(format!("sweep.{key}: a sweep cannot set the sweep"));
+        }
+        if clash(key, "run.threads") {
+            return Err(format!(
+                "sweep.{key}: threads do not change the results (set run.threads once)"
+            ));
         }
     }
     let count = ax
@@ -216,27 +232,41 @@ pub fn run(
         return crate::reproduce::maftei2016::first_hits_scenario(&name, &text, out.json.is_some());
     }
     let points = points(scenario, overrides, steps)?;
-    let world = ensemble::world()?;
-    let root = world.rank() == 0;
     let sweep = points.len() > 1 || !points[0].0.is_empty();
-    // every output is opened (by rank 0) before the work starts
+    // what every rank finds alike is checked before MPI starts
     if out.csv.as_deref() == Some("-") && out.json.as_deref() == Some("-") {
         return Err("--csv - and --json -: only one of them can go to standard output".into());
     }
     if sweep && out.plot.is_some() {
         return Err("--plot draws one run: a sweep writes --csv or --json".into());
     }
-    let mut csv = match (&out.csv, root) {
-        (Some(p), true) => Some(Sink::open("--csv", p)?),
-        _ => None,
-    };
-    let mut json = match (&out.json, root) {
-        (Some(p), true) => Some(Sink::open("--json", p)?),
-        _ => None,
-    };
-    if let Some(p) = &out.plot {
-        plot::check(p)?;
+    if sweep && out.csv.is_some() {
+        output::check_sweep_columns(&points)?;
     }
+    let world = ensemble::world()?;
+    let root = world.rank() == 0;
+    // every output is opened (by rank 0) before the work starts; a failure there ends
+    // the whole job (the other ranks would wait for rank 0)
+    let opened = || -> Result<(Option<Sink>, Option<Sink>), String> {
+        if !root {
+            return Ok((None, None));
+        }
+        let csv = out
+            .csv
+            .as_deref()
+            .map(|p| Sink::open("--csv", p))
+            .transpose()?;
+        let json = out
+            .json
+            .as_deref()
+            .map(|p| Sink::open("--json", p))
+            .transpose()?;
+        if let Some(p) = &out.plot {
+            plot::check(p)?;
+        }
+        Ok((csv, json))
+    };
+    let (mut csv, mut json) = opened().map_err(|e| world.fatal(e))?;
     if out.check {
         if root {
             for (set, plan) in &points {

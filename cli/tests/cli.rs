@@ -736,6 +736,17 @@ fn a_sweep_runs_every_point_as_a_run_of_its_own() {
         .output()
         .unwrap();
     assert!(!both.status.success());
-    assert!(String::from_utf8_lossy(&both.stderr).contains("both swept and set"));
+    assert!(
+        String::from_utf8_lossy(&both.stderr).contains("is swept and kernel.coefficient is set")
+    );
+    // a table that holds a swept key is the same setting
+    let table = coagula()
+        .arg("run")
+        .arg(&file)
+        .args(["--set", "kernel={kind=\"constant\"}"])
+        .output()
+        .unwrap();
+    assert!(!table.status.success());
+    assert!(String::from_utf8_lossy(&table.stderr).contains("is swept and kernel is set"));
     std::fs::remove_dir_all(&dir).ok();
 }

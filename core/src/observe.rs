@@ -247,7 +247,8 @@ impl Replicas {
     }
 
     /// A set of replicas from [`Replicas::to_raw`]'s state. `None` if it cannot be one:
-    /// a count of 0 with a nonzero mean or spread, or a negative or NaN spread.
+    /// a count of 0 with a nonzero mean or spread, or a negative spread (NaN and
+    /// infinite states, which NaN or overflowing observables make, are kept).
     ///
     /// ```
     /// use coagula_core::observe::Replicas;
@@ -260,8 +261,8 @@ impl Replicas {
     /// ```
     pub fn from_raw(n: u64, mean: f64, m2: f64) -> Option<Self> {
         let empty_ok = n > 0 || (mean == 0.0 && m2 == 0.0);
-        // a NaN or infinite observable (an undefined gel mass) makes a NaN spread
-        let m2_ok = m2 >= 0.0 || (m2.is_nan() && !mean.is_finite());
+        // every Welford update adds a product of two numbers of one sign
+        let m2_ok = m2 >= 0.0 || m2.is_nan();
         (empty_ok && m2_ok).then_some(Replicas { n, mean, m2 })
     }
 
@@ -522,7 +523,8 @@ mod tests {
         let (n, mean, m2) = c.to_raw();
         assert_eq!(Replicas::from_raw(n, mean, m2), Some(c));
         assert_eq!(Replicas::from_raw(0, 1.0, 0.0), None);
-        assert_eq!(Replicas::from_raw(3, 1.0, f64::NAN), None);
+        assert_eq!(Replicas::from_raw(3, 1.0, -1e-300), None);
+        assert!(Replicas::from_raw(3, f64::NEG_INFINITY, f64::NAN).is_some());
     }
 
     #[test]

@@ -42,18 +42,26 @@ static double rss_bytes(void) {
 static unsigned long long step_all(coag_sim **cells, long n, double t) {
     unsigned long long events = 0;
     int failed = COAG_OK;
+    char why[256] = "";
 #pragma omp parallel for schedule(dynamic, 64) reduction(+ : events)
     for (long c = 0; c < n; c++) {
         coag_step_report rep;
         coag_step_report_init(&rep, sizeof rep);
         int s = coag_sim_advance_to(cells[c], t, &rep);
         if (s != COAG_OK) {
-#pragma omp atomic write
-            failed = s;
+            /* the message is this thread's: copy it here */
+#pragma omp critical
+            {
+                failed = s;
+                coag_last_error_message(why, sizeof why, NULL);
+            }
         }
         events += rep.events;
     }
-    if (failed != COAG_OK) die(failed, "coag_sim_advance_to");
+    if (failed != COAG_OK) {
+        fprintf(stderr, "coag_sim_advance_to: %s: %s\n", coag_status_name(failed), why);
+        exit(1);
+    }
     return events;
 }
 
@@ -73,11 +81,12 @@ static unsigned long long serial_steps(coag_sim **cells, long n, double t) {
 int main(int argc, char **argv) {
     long ncells = argc > 1 ? atol(argv[1]) : 10000;
     long particles = argc > 2 ? atol(argv[2]) : 1000;
-    if (argc > 3) omp_set_num_threads(atoi(argv[3]));
-    if (ncells < 1 || particles < 2) {
-        fprintf(stderr, "usage: %s [cells >= 1] [particles >= 2] [threads]\n", argv[0]);
+    int nthreads = argc > 3 ? atoi(argv[3]) : omp_get_max_threads();
+    if (ncells < 1 || particles < 2 || nthreads < 1) {
+        fprintf(stderr, "usage: %s [cells >= 1] [particles >= 2] [threads >= 1]\n", argv[0]);
         return 2;
     }
+    omp_set_num_threads(nthreads);
     coag_kernel *k;
     int s = coag_kernel_new_brownian(&k);
     if (s != COAG_OK) die(s, "kernel");
