@@ -1,7 +1,11 @@
 //! One time step of the mass-flow scheme at N = 2^20 on Lécot's case (K = 1,
-//! F = 2/(x+y), Δt = 1/400), with the adaptive re-sort and with a full sort.
+//! F = 2/(x+y), Δt = 1/400), with the adaptive re-sort and with a full sort; QMC
+//! against MC, and QMC's points visited by particle (the default) against the same
+//! points visited in their sequence order (through the randomisation wrapper with no
+//! randomisation, which takes the block path).
 
 use coagula_core::kernel::{BinaryUniform, Coagulation};
+use coagula_core::qmc::{Niederreiter2, Randomization, Scrambled};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource, Sorting};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -21,6 +25,15 @@ fn step(c: &mut Criterion) {
             "mc-adaptive-sort",
             Sorting::Adaptive,
             PointSource::monte_carlo(),
+        ),
+        (
+            "qmc-sequence-order-adaptive-sort",
+            Sorting::Adaptive,
+            PointSource::ScrambledNiederreiter(Scrambled::new(
+                Niederreiter2::dim3(),
+                Randomization::None,
+                &mut Pcg64Mcg::new(0),
+            )),
         ),
     ] {
         let k = Coagulation::constant(1.0).unwrap();

@@ -234,6 +234,80 @@ pub trait DigitalSequence {
     }
 }
 
+/// Block `n` of `N = 2^m` points of a digital sequence with 64-bit words, no
+/// randomisation and at least 3 coordinates, visited by the first coordinate's top `m`
+/// digits `k = ⌊N u_0⌋` instead of by index: `visit(k, x1, x2)` gets the digit words of
+/// coordinates 1 and 2 of the point whose first coordinate has those digits, with `k`
+/// in Gray-code order (`k = j ^ (j >> 1)`, `j = 0, 1, …`: every aligned run of `2^b`
+/// consecutive calls stays in one aligned run of `2^b` values of `k`, so arrays indexed
+/// by `k` are walked nearly in order).
+///
+/// The words are those of [`DigitalSequence::block_bits`] bit for bit (the same points,
+/// each updated by XOR of columns): only the order of the visits differs. In the block
+/// the top `m` digits of the first coordinate are `A p ⊕ c` for point `p` (`A` the top
+/// `m × m` corner of the first generating matrix, `c` from the block number), so the
+/// point of digits `k` is `p = A⁻¹ (k ⊕ c)`, and a step of `k` in one bit moves `p` by
+/// one column of `A⁻¹`. Returns `Ok(false)` without visiting anything when `A` is
+/// singular (no first coordinate that is a (0, m, 1)-net) or `m > 53`; the first error
+/// of `visit` stops the walk and is returned.
+pub(crate) fn walk_by_first<S>(
+    seq: &S,
+    n: u64,
+    m: u32,
+    mut visit: impl FnMut(usize, u64, u64) -> Result<()>,
+) -> Result<bool>
+where
+    S: DigitalSequence<Word = u64> + ?Sized,
+{
+    if seq.dim() < 3 || m == 0 || m > 53 {
+        return Ok(false);
+    }
+    let big_n = check_block::<u64>(n, m, 3, 3usize << m)?;
+    let base = n << m;
+    let (c0, c1, c2) = (seq.matrix(0), seq.matrix(1), seq.matrix(2));
+    let top = |w: u64| (w >> (64 - m)) as usize;
+    // pairs (image k, preimage p), reduced until image r is bit r alone
+    let mut pairs: [(usize, usize); 64] = [(0, 0); 64];
+    for (r, pair) in pairs.iter_mut().enumerate().take(m as usize) {
+        *pair = (c0.get(r).map_or(0, |&w| top(w)), 1 << r);
+    }
+    for b in 0..m as usize {
+        let Some(pivot) = (b..m as usize).find(|&i| pairs[i].0 >> b & 1 == 1) else {
+            return Ok(false);
+        };
+        pairs.swap(b, pivot);
+        let (img, pre) = pairs[b];
+        for (i, pair) in pairs.iter_mut().enumerate().take(m as usize) {
+            if i != b && pair.0 >> b & 1 == 1 {
+                pair.0 ^= img;
+                pair.1 ^= pre;
+            }
+        }
+    }
+    // the point of k = 0, and the moves of coordinates 1, 2 per bit of k
+    let c = top(apply(c0, base));
+    let p0 = (0..m as usize)
+        .filter(|&b| c >> b & 1 == 1)
+        .fold(0, |p, b| p ^ pairs[b].1);
+    let mut x1 = apply(c1, base | p0 as u64);
+    let mut x2 = apply(c2, base | p0 as u64);
+    let mut d1 = [0u64; 64];
+    let mut d2 = [0u64; 64];
+    for b in 0..m as usize {
+        d1[b] = apply(c1, pairs[b].1 as u64);
+        d2[b] = apply(c2, pairs[b].1 as u64);
+    }
+    for j in 0..big_n {
+        visit(j ^ (j >> 1), seq.finish(1, x1), seq.finish(2, x2))?;
+        let r = (j + 1).trailing_zeros() as usize;
+        if r < m as usize {
+            x1 ^= d1[r];
+            x2 ^= d2[r];
+        }
+    }
+    Ok(true)
+}
+
 /// Validates block `n` of `2^m` points and returns `N = 2^m`.
 fn check_block<W: Word>(n: u64, m: u32, dim: usize, len: usize) -> Result<usize> {
     if m > W::BITS || m >= usize::BITS {
@@ -501,6 +575,41 @@ mod tests {
         dims_and_orders(&Sobol::<u32>::new(5).unwrap());
         dims_and_orders(&Niederreiter2::<u64>::new(7).unwrap());
         dims_and_orders(&Niederreiter2::<u32>::new(7).unwrap());
+    }
+
+    /// The walk by first digits visits exactly the block's points (same words), each
+    /// at the `k` its first coordinate gives.
+    #[test]
+    fn walk_by_first_visits_the_block() {
+        fn check<S: DigitalSequence<Word = u64>>(seq: &S) {
+            for (n, m) in [(0u64, 1u32), (0, 5), (3, 4), (7, 10), (1, 12)] {
+                let big_n = 1usize << m;
+                let mut block = vec![0u64; 3 * big_n];
+                seq.block_bits(n, m, &mut block).unwrap();
+                let mut want: Vec<Option<(u64, u64)>> = vec![None; big_n];
+                for p in 0..big_n {
+                    let k = (block[3 * p] >> (64 - m)) as usize;
+                    assert!(want[k].is_none(), "first digits repeat");
+                    want[k] = Some((block[3 * p + 1], block[3 * p + 2]));
+                }
+                let mut seen = 0;
+                let mut last = None;
+                let walked = walk_by_first(seq, n, m, |k, x1, x2| {
+                    assert_eq!(want[k], Some((x1, x2)), "n {n} m {m} k {k}");
+                    want[k] = None;
+                    seen += 1;
+                    last = Some(k);
+                    Ok(())
+                })
+                .unwrap();
+                assert!(walked);
+                assert_eq!(seen, big_n);
+                // Gray order: the last visit is k = N/2
+                assert_eq!(last, Some(big_n / 2));
+            }
+        }
+        check(&Niederreiter2::<u64>::dim3());
+        check(&Sobol::<u64>::new(3).unwrap());
     }
 
     #[test]

@@ -64,6 +64,7 @@
 use super::{Budget, Scheme, StepReport, check_target};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
+use crate::qmc::Word;
 use crate::tree::{Weight, unit_f64};
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -361,29 +362,13 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let n = self.n;
         let nf = n as f64;
         let mut rep = StepReport::default();
-        let mc = matches!(self.points, PointSource::MonteCarlo);
         let (x, next, pts, _) = split(self.ws.as_mut(), n, self.cur);
-        if !mc {
-            self.points.block(self.steps, self.m, pts)?;
-        }
-        for p in 0..n {
-            let (k, l, u3) = if mc {
-                (
-                    p,
-                    u64::uniform_below(rng, n as u64) as usize,
-                    unit_f64(rng.next_u64()),
-                )
-            } else {
-                let u = &pts[3 * p..3 * p + 3];
-                (
-                    ((nf * u[0]) as usize).min(n - 1),
-                    ((nf * u[1]) as usize).min(n - 1),
-                    u[2],
-                )
-            };
+        let (kernel, frag, mass) = (&self.kernel, &self.frag, self.mass);
+        // particle k's move with partner l and uniform u3 (next[k] from the old sizes)
+        let mut one = |k: usize, l: usize, u3: f64| -> Result<()> {
             let (xk, xl) = (x[k], x[l]);
-            let kt = self.kernel.rate(xk, xl);
-            let fd = self.frag.total_rate(xk);
+            let kt = kernel.rate(xk, xl);
+            let fd = frag.total_rate(xk);
             if !(kt >= 0.0 && kt.is_finite()) {
                 return Err(Error::InvalidRate {
                     name: "coagulation kernel",
@@ -396,7 +381,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     value: fd,
                 });
             }
-            let pc = h * self.mass * kt / xl;
+            let pc = h * mass * kt / xl;
             let pf = h * fd;
             if pc + pf > 1.0 {
                 rep.clipped += 1;
@@ -406,7 +391,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 xk + xl
             } else if pf > 0.0 && u3 >= 1.0 - pf {
                 rep.events += 1;
-                let piece = self.frag.inverse_piece(xk, ((1.0 - u3) / pf).min(1.0));
+                let piece = frag.inverse_piece(xk, ((1.0 - u3) / pf).min(1.0));
                 if !(piece > 0.0 && piece.is_finite()) {
                     return Err(Error::InvalidRate {
                         name: "fragment size",
@@ -424,6 +409,47 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 });
             }
             next[k] = new;
+            Ok(())
+        };
+        // the partner of a point: ⌊N u⌋ (a u64 word's top m digits, as `to_unit` keeps
+        // 53 bits and N = 2^m)
+        let partner = |u: f64| ((nf * u) as usize).min(n - 1);
+        // the block's points in the order of the particle they move: rows by
+        // k = ⌊N u_0⌋ (written nearly in order), so that the loop below walks the sizes
+        // like MC's instead of scattered (same points, same pairs, same bits)
+        let by_particle = |k: usize, w1: u64, w2: u64| {
+            if let Some(row) = pts.get_mut(3 * k..3 * k + 3) {
+                row[1] = w1.to_unit();
+                row[2] = w2.to_unit();
+            }
+            Ok(())
+        };
+        let sorted = match &self.points {
+            PointSource::MonteCarlo => {
+                for p in 0..n {
+                    let l = u64::uniform_below(rng, n as u64) as usize;
+                    one(p, l, unit_f64(rng.next_u64()))?;
+                }
+                rep.proposals = n as u64;
+                return Ok(rep);
+            }
+            PointSource::Niederreiter(seq) if n == 1 << self.m => {
+                crate::qmc::walk_by_first(seq, self.steps, self.m, by_particle)?
+            }
+            PointSource::Sobol(seq) if n == 1 << self.m => {
+                crate::qmc::walk_by_first(seq, self.steps, self.m, by_particle)?
+            }
+            _ => false,
+        };
+        if sorted {
+            for (k, u) in pts.chunks_exact(3).take(n).enumerate() {
+                one(k, partner(u[1]), u[2])?;
+            }
+        } else {
+            self.points.block(self.steps, self.m, pts)?;
+            for u in pts.chunks_exact(3).take(n) {
+                one(partner(u[0]), partner(u[1]), u[2])?;
+            }
         }
         rep.proposals = n as u64;
         Ok(rep)

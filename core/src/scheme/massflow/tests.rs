@@ -433,3 +433,55 @@ fn rqmc_small_particles_survive_like_the_others() {
         "the smallest particles survive at {p_small:.4}, all at {p_all:.4} ({z:.1} SE)"
     );
 }
+
+/// QMC's points visited by particle (Niederreiter, Sobol: the walk by first digits)
+/// give the bits of the same points visited in sequence order (the block path, reached
+/// through the randomisation wrapper with no randomisation), step for step.
+#[test]
+fn walking_by_particle_changes_no_bit() {
+    use crate::qmc::{Niederreiter2, Randomization, Scrambled, Sobol};
+    let none = |s| Scrambled::new(s, Randomization::None, &mut rand_pcg::Pcg64Mcg::new(0));
+    let pairs = [
+        (
+            PointSource::niederreiter(),
+            PointSource::ScrambledNiederreiter(none(Niederreiter2::dim3())),
+        ),
+        (
+            PointSource::sobol(),
+            PointSource::ScrambledSobol(Scrambled::new(
+                Sobol::new(3).unwrap(),
+                Randomization::None,
+                &mut rand_pcg::Pcg64Mcg::new(0),
+            )),
+        ),
+    ];
+    for (walk, block) in pairs {
+        let build = |p| {
+            MassFlow::new(
+                Coagulation::constant(1.0).unwrap(),
+                BinaryUniform::new(1.0).unwrap(),
+                &vec![1.0; 1 << 12],
+                1.0,
+                0.01,
+                p,
+            )
+            .unwrap()
+        };
+        let (mut a, mut b) = (build(walk), build(block));
+        let mut rng = rand_pcg::Pcg64Mcg::new(1);
+        for step in 1..=40 {
+            let t = 0.01 * f64::from(step);
+            let ra = a.advance_to(t, &mut rng).unwrap();
+            let rb = b.advance_to(t, &mut rng).unwrap();
+            assert_eq!(
+                (ra.events, ra.clipped),
+                (rb.events, rb.clipped),
+                "step {step}"
+            );
+            assert!(ra.events > 0);
+            let bits =
+                |s: &MassFlow<_, _, _>| s.sizes().iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a), bits(&b), "step {step}");
+        }
+    }
+}
