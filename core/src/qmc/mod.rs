@@ -235,7 +235,7 @@ pub trait DigitalSequence {
 }
 
 /// Block `n` of `N = 2^m` points of a digital sequence with 64-bit words, no
-/// randomisation and at least 3 coordinates, visited by the first coordinate's top `m`
+/// randomisation (`finish` the identity on coordinate 0) and 3 coordinates, visited by the first coordinate's top `m`
 /// digits `k = ⌊N u_0⌋` instead of by index: `visit(k, x1, x2)` gets the digit words of
 /// coordinates 1 and 2 of the point whose first coordinate has those digits, with `k`
 /// in Gray-code order (`k = j ^ (j >> 1)`, `j = 0, 1, …`: every aligned run of `2^b`
@@ -259,7 +259,8 @@ pub(crate) fn walk_by_first<S>(
 where
     S: DigitalSequence<Word = u64> + ?Sized,
 {
-    if seq.dim() < 3 || m == 0 || m > 53 {
+    // (a sequence of more coordinates is not a mass-flow block: the block path refuses it)
+    if seq.dim() != 3 || m == 0 || m > 53 {
         return Ok(false);
     }
     let big_n = check_block::<u64>(n, m, 3, 3usize << m)?;
@@ -610,6 +611,26 @@ mod tests {
         }
         check(&Niederreiter2::<u64>::dim3());
         check(&Sobol::<u64>::new(3).unwrap());
+        // both have van der Corput's first coordinate (A a permutation): rotate the
+        // coordinates so that A is Niederreiter's second one, a full triangular matrix
+        // whose inversion needs the elimination's row additions
+        struct Rotated(Niederreiter2<u64>);
+        impl DigitalSequence for Rotated {
+            type Word = u64;
+            fn dim(&self) -> usize {
+                3
+            }
+            fn matrix(&self, coord: usize) -> &[u64] {
+                self.0.matrix((coord + 1) % 3)
+            }
+        }
+        let rotated = Rotated(Niederreiter2::<u64>::dim3());
+        let a = rotated.matrix(0);
+        assert!(
+            (1..8).any(|r| a[r].count_ones() > 1),
+            "not a permutation: the test covers the row additions"
+        );
+        check(&rotated);
     }
 
     #[test]
