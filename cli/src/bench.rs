@@ -334,8 +334,8 @@ pub fn lowrank_small(
         "constant kernel, monomers in a count vector of length {len}, to t = {t}, {replicas} replicas"
     );
     println!(
-        "{:>8} {:>9} | {:>9} {:>9} {:>12} {:>10}",
-        "N0", "layout", "accept", "s", "mean N/V", "SE"
+        "{:>8} {:>9} | {:>9} {:>9} {:>10} {:>12} {:>10}",
+        "N0", "layout", "accept", "s", "ns/event", "mean N/V", "SE"
     );
     for &n0 in n0s {
         let mut init = vec![0u64; len];
@@ -361,10 +361,13 @@ pub fn lowrank_small(
                 ev += rep.events;
                 st.push(nv);
             }
+            // everything a host pays per accepted event: building, stepping, reading
+            let secs = start.elapsed().as_secs_f64();
             println!(
-                "{n0:>8} {layout:>9} | {:>9.4} {:>9.3} {:>12.6} {:>10.2e}",
+                "{n0:>8} {layout:>9} | {:>9.4} {:>9.3} {:>10.1} {:>12.6} {:>10.2e}",
                 ev as f64 / prop.max(1) as f64,
-                start.elapsed().as_secs_f64(),
+                secs,
+                secs * 1e9 / ev.max(1) as f64,
                 st.mean(),
                 st.std_error()
             );
