@@ -26,9 +26,17 @@ pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
 
 /// A memory budget from what this machine has: half of its physical memory (Linux:
 /// `MemTotal` in `/proc/meminfo`), at least 256 MiB; [`DEFAULT_MEMORY_BUDGET`] where the
-/// machine cannot say. The C ABI and the CLI use it when no budget is given.
+/// machine cannot say. The C ABI and the CLI use it when no budget is given. Read
+/// once per process (a host that builds a simulation per grid cell would otherwise
+/// read `/proc/meminfo` for each).
 #[cfg(feature = "std")]
 pub fn machine_memory_budget() -> usize {
+    static BUDGET: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
+    *BUDGET.get_or_init(read_machine_budget)
+}
+
+#[cfg(feature = "std")]
+fn read_machine_budget() -> usize {
     let total_kib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
         m.lines()
             .find(|l| l.starts_with("MemTotal:"))
