@@ -310,8 +310,7 @@ fn load(path: &Path, fp: u64, point: usize, b: u64, plan: &Plan) -> Result<Optio
 
 /// Whether a block has the shape plan's block b must have.
 fn shaped(block: &Block, plan: &Plan, b: u64) -> bool {
-    let reps = plan.replicas.min((b + 1) * runner::BLOCK) - b * runner::BLOCK;
-    block.events.len() as u64 == reps
+    block.events.len() == runner::block_replicas(plan.replicas, b).count()
         && block.stats.len() == plan.times.len()
         && block
             .stats
@@ -406,8 +405,7 @@ fn run_share(
         .filter(|(_, s)| s.is_none())
         .map(|(&(p, b), _)| {
             let plan = &points[p];
-            (plan.replicas.min((b + 1) * runner::BLOCK) - b * runner::BLOCK)
-                * plan.times.len() as u64
+            runner::block_replicas(plan.replicas, b).count() as u64 * plan.times.len() as u64
         })
         .sum();
     let label = if points.len() > 1 {

@@ -238,6 +238,11 @@ pub fn blocks(replicas: u64) -> u64 {
     replicas.div_ceil(BLOCK)
 }
 
+/// The replicas of block `b` (of `replicas` in all).
+pub fn block_replicas(replicas: u64, b: u64) -> core::ops::Range<u64> {
+    b * BLOCK..replicas.min((b + 1) * BLOCK)
+}
+
 /// Statistics per (time, observable): replicas pushed in order within each block of
 /// [`BLOCK`], blocks merged in order.
 pub fn statistics(values: &[Vec<Vec<f64>>], times: usize, obs: usize) -> Vec<Vec<Replicas>> {
@@ -284,9 +289,7 @@ pub struct Block {
 
 /// Runs block `b` of a plan (its replicas in parallel on the current rayon pool).
 pub fn run_block(plan: &Plan, b: u64, tick: &(dyn Fn() + Sync)) -> Result<Block, String> {
-    let lo = b * BLOCK;
-    let hi = plan.replicas.min(lo + BLOCK);
-    let results: Vec<Result<ReplicaRows, String>> = (lo..hi)
+    let results: Vec<Result<ReplicaRows, String>> = block_replicas(plan.replicas, b)
         .into_par_iter()
         .map(|r| replica(plan, r, tick))
         .collect();

@@ -729,24 +729,25 @@ fn a_sweep_runs_every_point_as_a_run_of_its_own() {
     for (s, a) in rows[10..].iter().zip(&alone_rows) {
         assert_eq!(s.split_once(",4.0,").unwrap().1, *a);
     }
-    let both = coagula()
-        .arg("run")
-        .arg(&file)
-        .args(["--set", "kernel.coefficient=3.0"])
-        .output()
-        .unwrap();
-    assert!(!both.status.success());
-    assert!(
-        String::from_utf8_lossy(&both.stderr).contains("is swept and kernel.coefficient is set")
-    );
-    // a table that holds a swept key is the same setting
-    let table = coagula()
-        .arg("run")
-        .arg(&file)
-        .args(["--set", "kernel={kind=\"constant\"}"])
-        .output()
-        .unwrap();
-    assert!(!table.status.success());
-    assert!(String::from_utf8_lossy(&table.stderr).contains("is swept and kernel is set"));
+    // a key both swept and set, or lying in a table set, is refused
+    for (set, says) in [
+        (
+            "kernel.coefficient=3.0",
+            "is swept and kernel.coefficient is set",
+        ),
+        ("kernel={kind=\"constant\"}", "is swept and kernel is set"),
+    ] {
+        let out = coagula()
+            .arg("run")
+            .arg(&file)
+            .args(["--set", set])
+            .output()
+            .unwrap();
+        assert!(!out.status.success());
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(says),
+            "--set {set}"
+        );
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
