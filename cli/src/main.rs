@@ -83,7 +83,7 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE", value_parser = scenario::parse_override)]
         set: Vec<(String, toml::Value)>,
         /// The scheme (a registry name: massflow, lowrank, lowrank-tree,
-        /// lowrank-binary-tree, inverse, rejection, mfa, dsa, dsa-counts).
+        /// lowrank-binary-tree, inverse, rejection, mfa, dsa, dsa-counts, lowrank-sizes).
         #[arg(long)]
         scheme: Option<String>,
         /// Number of simulation particles N0.

@@ -188,7 +188,7 @@ pub enum Points {
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct SchemeSpec {
     /// A registry name: massflow, lowrank, lowrank-tree, lowrank-binary-tree, inverse,
-    /// rejection, mfa, dsa, dsa-counts.
+    /// rejection, mfa, dsa, dsa-counts, lowrank-sizes.
     pub name: String,
     /// Time step (mass flow).
     pub dt: Option<f64>,
@@ -1007,16 +1007,17 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
     let counts_scheme = scheme.info().state == StateKind::Counts;
     // the time-driven mass flow (Δt, point sets, N a power of two) against the
     // event-driven particle schemes; direct simulation starts from samples of the
-    // number distribution, the mass-flow schemes from samples of the mass distribution
+    // number distribution (as does low-rank over sizes), the mass-flow schemes from
+    // samples of the mass distribution
     let mass_flow = scheme == SchemeId::MassFlow;
-    let direct = scheme == SchemeId::Dsa;
+    let direct = matches!(scheme, SchemeId::Dsa | SchemeId::LowRankSizes);
     let kernel = kernel_of(&s.kernel, src)?;
 
     // fragmentation
     let frag = match &s.fragmentation {
         None => Frag::None,
         Some(f) => {
-            if counts_scheme {
+            if counts_scheme || scheme == SchemeId::LowRankSizes {
                 return Err(src.at(
                     "fragmentation",
                     format!(

@@ -264,6 +264,7 @@ pub(crate) mod tag {
     pub const THERMAL: u64 = 10;
     pub const UNIFORM: u64 = 11;
     pub const DSMC: u64 = 12;
+    pub const LOWRANK_SIZES: u64 = 13;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

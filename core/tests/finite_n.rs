@@ -1,8 +1,9 @@
 //! The exact finite-N reference: the master equation of the Marcus–Lushnikov process
 //! *with the particle-doubling rule*, for N0 = V = 32 monomers, solved by
-//! uniformisation; every size-count scheme of the registry must reproduce its E[N/V], E[N1/V] and
+//! uniformisation; every size-count scheme of the registry, and low-rank over particle
+//! sizes (`lowrank-sizes`), must reproduce its E[N/V], E[N1/V] and
 //! E[N2/V] within the suite's family-wise tolerance over 6000 replicas. The scheme
-//! without doubling (`dsa-counts`, direct simulation) is checked against the same
+//! without doubling (`dsa-counts`, and `dsa` over particles) is checked against the same
 //! master equation without the doubling rule: the plain Marcus–Lushnikov process.
 //!
 //! The large-N exact solutions cannot see O(1/N) errors (a wrong same-particle rule, a
@@ -23,8 +24,9 @@
 use crate::common;
 
 use coagula_core::kernel::Coagulation;
+use coagula_core::kernel::NoFragmentation;
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::registry::SchemeId;
+use coagula_core::scheme::registry::{self, Init, Options, SchemeId};
 use std::collections::HashMap;
 
 const N0: u64 = 32;
@@ -198,7 +200,18 @@ fn reference(kind: Kind, times: &[f64], doubling: bool) -> Vec<[f64; 3]> {
     results
 }
 
-/// Compares every size-count scheme of the registry with the reference; returns the
+/// A particle scheme of the registry from `N0` particles of size 1 in volume `N0`.
+fn sizes_sim(id: SchemeId, kernel: Coagulation) -> Box<common::Sim> {
+    let sizes = [1.0; N0 as usize];
+    let init = Init::Sizes {
+        sizes: &sizes,
+        mass: 1.0,
+    };
+    registry::build(id, kernel, NoFragmentation, &init, &Options::default()).unwrap()
+}
+
+/// Compares every size-count scheme of the registry, low-rank over sizes and direct
+/// simulation over particles with the reference; returns the
 /// z-scores and the failures.
 fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
     let exact = reference(kind, times, true);
@@ -220,6 +233,21 @@ fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
         })
         .collect();
     assert!(runs.len() >= 6, "every size-count scheme ran");
+    // the particle schemes from 32 particles of size 1 in volume 32: low-rank over sizes
+    // doubles, direct simulation does not
+    let mut runs = runs;
+    let offset = registry::SCHEMES.len() as u64;
+    for (i, id) in [SchemeId::LowRankSizes, SchemeId::Dsa]
+        .into_iter()
+        .enumerate()
+    {
+        let make = || sizes_sim(id, kernel);
+        runs.push((
+            id.name(),
+            id == SchemeId::LowRankSizes,
+            common::facade_replicas(offset + i as u64 + 1, REPLICAS, times, make),
+        ));
+    }
     for (name, doubles, stats) in &runs {
         let exact = if *doubles { &exact } else { &plain };
         for (ti, &t) in times.iter().enumerate() {

@@ -22,6 +22,8 @@ mod host_control;
 mod kernel_bounds;
 #[path = "no_panic.rs"]
 mod no_panic;
+#[path = "particle_sizes.rs"]
+mod particle_sizes;
 #[path = "regime_sweep.rs"]
 mod regime_sweep;
 #[path = "regressions.rs"]

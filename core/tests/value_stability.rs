@@ -244,6 +244,41 @@ fn event_driven_schemes_are_value_stable() {
     assert!(failures.is_empty(), "{failures}");
 }
 
+/// Low-rank over particle sizes: 2000 sizes of an exponential start (the quantile
+/// midpoints of Exp(1)) to t = 2 on seed 42, with a rank-1 exact bound (Golovin's
+/// kernel) and the rank-3 ballistic bound (squeezed, K evaluated).
+#[test]
+fn lowrank_sizes_is_value_stable() {
+    use coagula_core::scheme::lowrank::LowRankSizes;
+    let n = 2000;
+    let sizes: Vec<f64> = (0..n)
+        .map(|i| -(1.0 - (i as f64 + 0.5) / n as f64).ln())
+        .collect();
+    let mut failures = String::new();
+    let mut rng = Pcg64Mcg::seed_from_u64(42);
+    let mut s = LowRankSizes::<_, 1, 2>::new(Coagulation::additive(), &sizes, n as f64).unwrap();
+    let rep = s.advance_to(2.0, &mut rng).unwrap();
+    let got = pin(rep, fnv(s.sizes().iter().map(|x| x.to_bits())));
+    check(
+        "lowrank-sizes additive",
+        got,
+        (2919, 2953, 34, 2, 13561644901882726402),
+        &mut failures,
+    );
+    let mut rng = Pcg64Mcg::seed_from_u64(42);
+    let k = Coagulation::free_molecular();
+    let mut s = LowRankSizes::<_, 3, 6>::new(k, &sizes, n as f64).unwrap();
+    let rep = s.advance_to(2.0, &mut rng).unwrap();
+    let got = pin(rep, fnv(s.sizes().iter().map(|x| x.to_bits())));
+    check(
+        "lowrank-sizes ballistic",
+        got,
+        (3296, 4364, 1068, 3, 15502914626313247711),
+        &mut failures,
+    );
+    assert!(failures.is_empty(), "{failures}");
+}
+
 /// Langevin batches: the paper's problem (specular and absorbing, 1-D) and a 3-D ball
 /// with friction, 500 trajectories under key 42; the pin hashes every position,
 /// velocity and hit count.

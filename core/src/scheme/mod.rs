@@ -283,6 +283,40 @@ impl Pending {
     }
 }
 
+/// The next proposal of an event-driven scheme whose proposals come at `rate` (finite):
+/// the pending one, else one an exponential wait after `time`. `Ok(None)` when none
+/// comes by `t` — the clock then stands at `t`, and a drawn proposal stays pending;
+/// otherwise the proposal is left pending (a caller that stops before carrying it out
+/// resumes with it) and returned. Errors: a mean wait that cannot move the clock.
+#[inline]
+pub(crate) fn next_proposal<R: Rng + ?Sized>(
+    pending: &mut Option<Pending>,
+    time: &mut f64,
+    t: f64,
+    rate: f64,
+    rng: &mut R,
+) -> crate::error::Result<Option<Pending>> {
+    let p = match *pending {
+        Some(p) => p,
+        None => {
+            if rate.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
+                // nothing can happen any more (too few particles, or zero weights)
+                *time = t;
+                return Ok(None);
+            }
+            let mean = 1.0 / rate;
+            Pending::check(*time, mean)?;
+            Pending::after(*time, mean, Ziggurat::new().sample(rng))
+        }
+    };
+    *pending = Some(p);
+    if p.at > t {
+        *time = t;
+        return Ok(None);
+    }
+    Ok(Some(p))
+}
+
 /// Validates a time a host sets (`set_time`): finite and not negative.
 pub(crate) fn check_time(t: f64) -> Result<f64> {
     crate::error::finite("t", t)?;

@@ -31,7 +31,9 @@
 
 use super::baseline::{AcceptanceRejection, Inverse};
 use super::eventflow::{Dsa, DsaCounts, Mfa};
-use super::lowrank::{BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, ProposalEngine};
+use super::lowrank::{
+    BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, LowRankSizes, ProposalEngine,
+};
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Budget, Scheme, StepReport};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
@@ -65,6 +67,8 @@ pub enum SchemeId {
     Dsa,
     /// Direct simulation over size counts (integer sizes).
     DsaCounts,
+    /// Osinsky 2023: low-rank MC over particle sizes (continuous or sparse).
+    LowRankSizes,
 }
 
 /// What a scheme's state is.
@@ -155,6 +159,12 @@ pub const SCHEMES: &[SchemeInfo] = &[
         name: "dsa-counts",
         state: StateKind::Counts,
         summary: "Eibeck & Wagner 2000: direct simulation over size counts (integer sizes, no doubling)",
+    },
+    SchemeInfo {
+        id: SchemeId::LowRankSizes,
+        name: "lowrank-sizes",
+        state: StateKind::Sizes,
+        summary: "Osinsky 2023: low-rank Monte Carlo over particle sizes (continuous or sparse; memory O(particles))",
     },
 ];
 
@@ -661,6 +671,18 @@ where
             };
             Ok(boxed(s, id))
         }
+        (SchemeId::LowRankSizes, Init::Sizes { sizes, mass }) => {
+            if !frag.is_none() {
+                return Err(Error::Unsupported {
+                    what: "fragmentation: the low-rank schemes only coagulate",
+                });
+            }
+            let v = dsa_volume(sizes, mass)?;
+            by_rank!(kernel.rank(), R, W => {
+                let s = LowRankSizes::<K, R, W>::new_with_memory_budget(kernel, sizes, v, opts.memory_budget)?;
+                Ok(boxed::<_, K, F, G>(s, id))
+            })
+        }
         (SchemeId::Dsa, Init::Sizes { sizes, mass }) => {
             let cap = dsa_capacity(sizes.len(), &frag, opts);
             let s = Dsa::new(kernel, frag, sizes, dsa_volume(sizes, mass)?, cap)?
@@ -878,6 +900,33 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
         Err(Error::Unsupported {
             what: "mass: direct simulation's mass is its sizes over its volume (use set_sizes)",
+        })
+    }
+}
+
+impl<K: CoagulationKernel, F, const R: usize, const W: usize> Facet<K, F>
+    for LowRankSizes<K, R, W>
+{
+    fn state(&self) -> State<'_> {
+        State::Sizes(self.sizes())
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        LowRankSizes::set_sizes(self, sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        LowRankSizes::set_kernel(self, kernel)
+    }
+    fn set_fragmentation(&mut self, _frag: F) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "fragmentation: the low-rank schemes only coagulate",
+        })
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        LowRankSizes::set_time(self, t)
+    }
+    fn set_mass(&mut self, _mass: f64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "mass: this scheme's mass is its sizes over its volume (use set_sizes)",
         })
     }
 }

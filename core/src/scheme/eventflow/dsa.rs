@@ -23,11 +23,11 @@
 //! Estimators: `M_m = Σ_i y_i^m / V`, `C(a, b) = #{a ≤ y_i ≤ b} / V`; gel mass: the
 //! largest cluster's mass over V (E–W 6.15).
 
-use super::super::{Budget, Pending, Scheme, StepReport, check_target};
+use super::super::{Budget, Pending, Scheme, StepReport, check_target, next_proposal};
 use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
-use crate::random::{Ziggurat, unit_f64};
+use crate::random::unit_f64;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -314,26 +314,11 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     value: total,
                 });
             }
-            let p = match self.pending {
-                Some(p) => p,
-                None => {
-                    if total.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
-                        self.time = t;
-                        break Ok(());
-                    }
-                    let mean = 1.0 / total;
-                    if let Err(e) = Pending::check(self.time, mean) {
-                        break Err(e);
-                    }
-                    Pending::after(self.time, mean, Ziggurat::new().sample(rng))
-                }
+            let p = match next_proposal(&mut self.pending, &mut self.time, t, total, rng) {
+                Ok(Some(p)) => p,
+                Ok(None) => break Ok(()),
+                Err(e) => break Err(e),
             };
-            if p.at > t {
-                self.pending = Some(p);
-                self.time = t;
-                break Ok(());
-            }
-            self.pending = Some(p);
             if !budget.take(1) {
                 rep.interrupted = true;
                 break Ok(());

@@ -14,11 +14,11 @@
 //! Estimators: `M_m = (M1/N) Σ_i x_i^{m−1}`, `C(a, b) = (M1/N) Σ_{a ≤ x_i ≤ b} 1/x_i`,
 //! gel mass `M1 (1 − n/N)` (E–W 6.14).
 
-use super::super::{Budget, Pending, Scheme, StepReport, check_target};
+use super::super::{Budget, Pending, Scheme, StepReport, check_target, next_proposal};
 use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
-use crate::random::{Ziggurat, unit_f64};
+use crate::random::unit_f64;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -345,32 +345,15 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 Ok(t) => t,
                 Err(e) => break Err(e),
             };
-            let p = match self.pending {
-                Some(p) => p,
-                None => {
-                    if total.partial_cmp(&0.0) != Some(core::cmp::Ordering::Greater) {
-                        // nothing can happen any more (no particle, or zero weights)
-                        self.time = t;
-                        break Ok(());
-                    }
-                    let mean = 1.0 / total;
-                    if let Err(e) = Pending::check(self.time, mean) {
-                        break Err(e);
-                    }
-                    Pending::after(self.time, mean, Ziggurat::new().sample(rng))
-                }
+            let p = match next_proposal(&mut self.pending, &mut self.time, t, total, rng) {
+                Ok(Some(p)) => p,
+                Ok(None) => break Ok(()),
+                Err(e) => break Err(e),
             };
-            if p.at > t {
-                self.pending = Some(p);
-                self.time = t;
-                break Ok(());
-            }
             if !budget.take(1) {
-                self.pending = Some(p);
                 rep.interrupted = true;
                 break Ok(());
             }
-            self.pending = Some(p);
             rep.proposals += 1;
             match self.event(coag, total, &mut rep, rng) {
                 Ok(changed) => {

@@ -131,12 +131,9 @@ pub struct Coagulate {
 
 impl<K: CoagulationKernel> EventRule<K> for Coagulate {
     fn for_kernel(kernel: &K) -> Self {
-        let floor = if kernel.low_rank_is_exact() {
-            1.0
-        } else {
-            kernel.low_rank_floor().clamp(0.0, 1.0)
-        };
-        Coagulate { floor }
+        Coagulate {
+            floor: floor_of(kernel),
+        }
     }
 
     #[inline(always)]
@@ -158,22 +155,56 @@ impl<K: CoagulationKernel> EventRule<K> for Coagulate {
             return Ok(Some(merge));
         }
         let (bound, low) = bounds();
-        // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
-        let squeeze = self.floor * low;
-        let evaluated = squeeze < bound && {
-            let u = bound * open_unit(rng);
-            u > squeeze && {
-                let k = bounded_rate(kernel, c.x as f64, c.y as f64, bound, "low-rank bound")?;
-                if u > k {
-                    return Ok(None);
-                }
-                true
-            }
-        };
-        if !evaluated && spot {
-            // accepted without K: a spot check now and then
-            bounded_rate(kernel, c.x as f64, c.y as f64, bound, "low-rank bound")?;
+        if !thin(
+            self.floor, kernel, c.x as f64, c.y as f64, bound, low, spot, rng,
+        )? {
+            return Ok(None);
         }
         Ok(Some(merge))
+    }
+}
+
+/// The thinning of a proposal at a pair of sizes `x, y` whose bound is `bound` and whose
+/// squeeze base is `low ≤ bound`: `Ok(true)` with probability `K(x, y)/bound`. A uniform
+/// below `floor · low` accepts without evaluating K (`floor` is the kernel's acceptance
+/// floor ρ, `K ≥ ρ · low`); `spot` evaluates K anyway (see [`SPOT_CHECK`]). A kernel that
+/// returns an invalid rate or exceeds the bound is an error.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
+    floor: f64,
+    kernel: &K,
+    x: f64,
+    y: f64,
+    bound: f64,
+    low: f64,
+    spot: bool,
+    rng: &mut G,
+) -> Result<bool> {
+    // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
+    let squeeze = floor * low;
+    let evaluated = squeeze < bound && {
+        let u = bound * open_unit(rng);
+        u > squeeze && {
+            let k = bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+            if u > k {
+                return Ok(false);
+            }
+            true
+        }
+    };
+    if !evaluated && spot {
+        // accepted without K: a spot check now and then
+        bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+    }
+    Ok(true)
+}
+
+/// The acceptance floor ρ ∈ [0, 1] of `kernel` (1 for an exact bound).
+pub(crate) fn floor_of<K: CoagulationKernel + ?Sized>(kernel: &K) -> f64 {
+    if kernel.low_rank_is_exact() {
+        1.0
+    } else {
+        kernel.low_rank_floor().clamp(0.0, 1.0)
     }
 }
