@@ -953,15 +953,22 @@ fn normal_inverse(p: f64) -> f64 {
 /// Mass-weighted quantiles of a finite number distribution given as (size, weight)
 /// pairs: the mass-flow scheme's particles are samples of the mass distribution.
 fn mass_quantiles(n: usize, pairs: &mut [(f64, f64)]) -> Vec<f64> {
+    quantiles(n, pairs, |x| x)
+}
+
+/// `n` quantiles of the distribution of weighted sizes `pairs` (size, count), each
+/// count weighted by `weight(size)` (1: the number distribution; the size: the mass
+/// distribution), taken at `(k + 1/2)/n`.
+fn quantiles(n: usize, pairs: &mut [(f64, f64)], weight: impl Fn(f64) -> f64) -> Vec<f64> {
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let total: f64 = pairs.iter().map(|&(x, w)| x * w).sum();
+    let total: f64 = pairs.iter().map(|&(x, w)| weight(x) * w).sum();
     let mut out = Vec::with_capacity(n);
-    let (mut i, mut cum) = (0usize, pairs[0].0 * pairs[0].1);
+    let (mut i, mut cum) = (0usize, weight(pairs[0].0) * pairs[0].1);
     for k in 0..n {
         let u = (k as f64 + 0.5) / n as f64 * total;
         while cum < u && i + 1 < pairs.len() {
             i += 1;
-            cum += pairs[i].0 * pairs[i].1;
+            cum += weight(pairs[i].0) * pairs[i].1;
         }
         out.push(pairs[i].0);
     }
@@ -1062,7 +1069,8 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             "only mfa truncates",
         )?;
     }
-    if (counts_scheme && scheme != SchemeId::DsaCounts) || mass_flow {
+    let low_rank_sizes = scheme == SchemeId::LowRankSizes;
+    if (counts_scheme && scheme != SchemeId::DsaCounts) || mass_flow || low_rank_sizes {
         refuse(
             src,
             "scheme.strict-bound",
@@ -1070,7 +1078,7 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             "only mfa, dsa and dsa-counts count violations of the product majorant (the other schemes refuse them)",
         )?;
     }
-    if counts_scheme || mass_flow {
+    if counts_scheme || mass_flow || low_rank_sizes {
         refuse(
             src,
             "scheme.sampler",
@@ -1490,6 +1498,15 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                     }),
                     1.0,
                 )
+            } else if direct {
+                // samples of the number distribution as given, in the volume n / c0
+                (
+                    Start::Fixed(InitData::Sizes {
+                        sizes: sizes.clone(),
+                        mass: c0 * mean,
+                    }),
+                    1.0,
+                )
             } else {
                 if !sizes.len().is_power_of_two() {
                     return Err(src.at(
@@ -1568,7 +1585,13 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
                     .filter(|&(_, &c)| c > 0)
                     .map(|(k, &c)| ((k + 1) as f64, c as f64))
                     .collect();
-                let q = mass_quantiles(n as usize, &mut pairs);
+                // direct schemes take samples of the number distribution, the mass-flow
+                // schemes of the mass distribution
+                let q = if direct {
+                    quantiles(n as usize, &mut pairs, |_| 1.0)
+                } else {
+                    mass_quantiles(n as usize, &mut pairs)
+                };
                 (
                     Start::Fixed(InitData::Sizes {
                         sizes: q,

@@ -751,3 +751,49 @@ fn a_sweep_runs_every_point_as_a_run_of_its_own() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A list of sizes (or counts) starts the particle schemes that take samples of the
+/// number distribution (`dsa`, `lowrank-sizes`) from those very particles in the volume
+/// N / c0: before any event M0 = c0, M1 = c0 · mean and M2 = c0 · mean of x². (They
+/// were once resampled from the mass distribution, the mass-flow schemes' start: M0
+/// then came out as 0.67 c0 for these sizes.)
+#[test]
+fn a_size_list_starts_direct_schemes_from_its_particles() {
+    let dir = std::env::temp_dir().join(format!("coagula-cli-sizes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let common = "[kernel]\nkind = \"constant\"\n[output]\ntimes = [1e-9]\nobservables = [\"M0\", \"M1\", \"M2\"]\n[run]\nreplicas = 2\n";
+    let starts = [
+        "[initial]\nkind = \"sizes\"\nsizes = [1.0, 1.0, 1.0, 5.0]\nconcentration = 2.0\n",
+        "[initial]\nkind = \"counts\"\ncounts = [3, 0, 0, 0, 1]\nparticles = 8\nconcentration = 2.0\n",
+    ];
+    for (i, start) in starts.iter().enumerate() {
+        let file = dir.join(format!("start{i}.toml"));
+        std::fs::write(&file, format!("{start}{common}")).unwrap();
+        for scheme in ["dsa", "lowrank-sizes"] {
+            let out = coagula()
+                .args([
+                    "run",
+                    file.to_str().unwrap(),
+                    "--scheme",
+                    scheme,
+                    "--csv",
+                    "-",
+                ])
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let text = String::from_utf8(out.stdout).unwrap();
+            let row = text.lines().last().unwrap();
+            let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();
+            // t, M0, ±, M1, ±, M2, ±
+            for (got, want) in [(v[1], 2.0), (v[3], 4.0), (v[5], 14.0)] {
+                approx::assert_relative_eq!(got, want, max_relative = 1e-12);
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

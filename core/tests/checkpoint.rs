@@ -182,3 +182,80 @@ fn bucketed_restore_refuses_a_particle_past_the_maximum_size() {
     assert!(c.restore_from(&buf).is_err());
     assert_eq!(c.counts().into_owned(), before);
 }
+
+/// Low-rank over particle sizes from continuous sizes (buckets holding many sizes, so
+/// the bounds the checkpoint keeps are history, not recomputable), through doublings:
+/// rank 1 (exact bound) and rank 3 (squeezed).
+#[test]
+fn lowrank_sizes_split_from_continuous_sizes() {
+    use coagula_core::scheme::lowrank::LowRankSizes;
+    let n = 2000;
+    let sizes: Vec<f64> = (0..n)
+        .map(|i| -(1.0 - (i as f64 + 0.5) / n as f64).ln())
+        .collect();
+    let s = sizes.clone();
+    split_equals_unbroken(
+        move || LowRankSizes::<_, 1, 2>::new(Coagulation::additive(), &s, n as f64).unwrap(),
+        0.6,
+        2.0,
+        |s| bits(s.sizes()),
+    );
+    split_equals_unbroken(
+        move || {
+            LowRankSizes::<_, 3, 6>::new(Coagulation::free_molecular(), &sizes, n as f64).unwrap()
+        },
+        0.6,
+        2.0,
+        |s| bits(s.sizes()),
+    );
+}
+
+/// A checkpoint whose bucket bound does not cover its particles (a factor above the
+/// bucket's largest, or a negative smallest) is refused, the target unchanged
+/// (resealed, so that the state's own check is what refuses it).
+#[test]
+fn lowrank_sizes_restore_refuses_bounds_that_do_not_cover() {
+    use coagula_core::scheme::lowrank::LowRankSizes;
+    let k = Coagulation::additive();
+    // one bucket: the last words before the checksum are its (hi, lo) for a_0 and b_0
+    let sizes = [1.0; 100];
+    let a = LowRankSizes::<_, 1, 2>::new(k, &sizes, 100.0).unwrap();
+    assert_eq!(a.buckets(), 1);
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    a.save_to(&mut buf).unwrap();
+    let word = |buf: &[u8], i: usize| {
+        f64::from_bits(u64::from_le_bytes(buf[i..i + 8].try_into().unwrap()))
+    };
+    let hi0 = buf.len() - 8 - 32;
+    assert_eq!(
+        (word(&buf, hi0), word(&buf, hi0 + 8)),
+        (1.0, 1.0),
+        "a_0 = x at x = 1"
+    );
+    let reseal = |mut b: Vec<u8>, at: usize, v: f64| {
+        b[at..at + 8].copy_from_slice(&v.to_bits().to_le_bytes());
+        let body = b.len() - 8;
+        let sum = coagula_core::checkpoint::checksum(&b[..body]);
+        b[body..].copy_from_slice(&sum.to_le_bytes());
+        b
+    };
+    let mut c = LowRankSizes::<_, 1, 2>::new(k, &[2.0, 3.0], 5.0).unwrap();
+    let before = bits(c.sizes());
+    // the untouched checkpoint restores
+    let mut d = LowRankSizes::<_, 1, 2>::new(k, &[2.0, 3.0], 5.0).unwrap();
+    d.restore_from(&reseal(buf.clone(), hi0, 1.0)).unwrap();
+    assert_eq!(bits(d.sizes()), bits(a.sizes()));
+    for (at, v) in [
+        (hi0, 0.5),
+        (hi0 + 8, -1.0),
+        (hi0 + 8, f64::NEG_INFINITY),
+        (hi0 + 8, f64::NAN),
+        (hi0, f64::INFINITY),
+    ] {
+        assert!(
+            c.restore_from(&reseal(buf.clone(), at, v)).is_err(),
+            "{v} at {at}"
+        );
+        assert_eq!(bits(c.sizes()), before);
+    }
+}

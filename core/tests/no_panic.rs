@@ -434,6 +434,17 @@ proptest! {
             let t = s.time();
             let _ = short(&mut s, t + 0.05, &mut rng);
         }
+        // low-rank over sizes, with a kernel whose bound is squeezed
+        let fm = Coagulation::free_molecular();
+        if let Ok(mut s) = coagula_core::scheme::lowrank::LowRankSizes::<_, 3, 6>::new(fm, &sizes, x) {
+            let before = s.sizes().to_vec();
+            if s.set_sizes(&other).is_err() {
+                prop_assert_eq!(&before, &s.sizes().to_vec());
+            }
+            let _ = s.set_time(x);
+            let t = s.time();
+            let _ = short(&mut s, t + 0.05, &mut rng);
+        }
     }
 
     /// Arbitrary bytes, and a checkpoint of each event-driven scheme and sampler with
@@ -455,7 +466,7 @@ proptest! {
         mfa.advance_to(0.5, &mut rng).unwrap();
         dsa.advance_to(0.5, &mut rng).unwrap();
         let save = |s: &dyn Fn(&mut [u8]) -> usize| {
-            let mut b = vec![0u8; 1 << 12];
+            let mut b = vec![0u8; 1 << 14];
             let n = s(&mut b);
             b.truncate(n);
             b
@@ -465,8 +476,27 @@ proptest! {
             b[i] = value;
             b
         };
+        let mut lrs = coagula_core::scheme::lowrank::LowRankSizes::<_, 1, 2>::new(k, &[0.5, 1.0, 1.5, 2.0, 7.0, 9.0], 6.0).unwrap();
+        lrs.advance_to(0.3, &mut rng).unwrap();
         let m = save(&|b| { mfa.save_to(b).unwrap() });
         let d = save(&|b| { dsa.save_to(b).unwrap() });
+        let l = save(&|b| { lrs.save_to(b).unwrap() });
+        // (one byte changed and resealed, so that the state's own checks see it)
+        let resealed = |b: Vec<u8>| {
+            let mut b = bent(b);
+            let body = b.len() - 8;
+            let sum = coagula_core::checkpoint::checksum(&b[..body]);
+            b[body..].copy_from_slice(&sum.to_le_bytes());
+            b
+        };
+        for buf in [&bytes, &bent(l.clone()), &resealed(l)] {
+            let before = lrs.sizes().to_vec();
+            if lrs.restore_from(buf).is_err() {
+                prop_assert_eq!(&before, &lrs.sizes().to_vec());
+            } else {
+                let _ = { let t = lrs.time() + 0.05; short(&mut lrs, t, &mut rng) };
+            }
+        }
         for buf in [&bytes, &bent(m), &bent(d)] {
             let before = mfa.sizes().to_vec();
             if mfa.restore_from(buf).is_err() {

@@ -181,11 +181,15 @@ pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
     spot: bool,
     rng: &mut G,
 ) -> Result<bool> {
-    // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept
+    // `floor · low ≥ bound`: the kernel equals the bound (an exact pair), accept; a
+    // uniform under the bound that falls below the squeeze accepts without K (a NaN
+    // squeeze never does: K is evaluated)
     let squeeze = floor * low;
-    let evaluated = squeeze < bound && {
+    let sure = squeeze >= bound;
+    let evaluated = !sure && {
         let u = bound * open_unit(rng);
-        u > squeeze && {
+        let under = u <= squeeze;
+        !under && {
             let k = bounded_rate(kernel, x, y, bound, "low-rank bound")?;
             if u > k {
                 return Ok(false);
@@ -205,6 +209,8 @@ pub(crate) fn floor_of<K: CoagulationKernel + ?Sized>(kernel: &K) -> f64 {
     if kernel.low_rank_is_exact() {
         1.0
     } else {
-        kernel.low_rank_floor().clamp(0.0, 1.0)
+        let f = kernel.low_rank_floor();
+        // (a NaN floor squeezes nothing)
+        if f.is_nan() { 0.0 } else { f.clamp(0.0, 1.0) }
     }
 }

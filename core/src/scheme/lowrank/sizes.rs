@@ -32,7 +32,8 @@
 //! derivation). A merge moves three particles between buckets (O(log buckets)); when
 //! fewer than `N0/2` particles remain every particle is copied and V doubles
 //! (Osinsky's particle doubling). Memory is O(particles + buckets): 16 bytes per
-//! particle, and a finite double has at most 65 504 buckets.
+//! particle (28 with the lists' slack, which a shrinking list gives back), and a finite
+//! double has at most 65 504 buckets.
 //!
 //! Proposal times are drawn one exponential per proposal (the size-count layouts'
 //! batches are not used), so a run does not depend on where a host stops it.
@@ -72,8 +73,9 @@ fn key(y: f64) -> u32 {
     (y.to_bits() >> (52 - SUB_BITS)) as u32
 }
 
-/// Bytes per particle: the size, its place in its bucket's list and the list entry.
-const PARTICLE_BYTES: usize = 16;
+/// Bytes per particle: the size, its place in its bucket's list and the list entry with
+/// its slack (a list's capacity stays below 4 times its length plus 16).
+const PARTICLE_BYTES: usize = 8 + 4 + 4 * 4;
 
 /// One bucket: its particles and the bound they set.
 #[derive(Clone, Debug, PartialEq)]
@@ -172,6 +174,17 @@ fn leaf_of<const R: usize, const W: usize>(buckets: &[Bucket<W>], b: usize) -> W
     buckets.get(b).map_or([[0.0; R]; 2], |x| x.leaf::<R>())
 }
 
+/// Moves `list` to an allocation of twice its length, if one is to be had (a list's
+/// capacity thus stays below 4 times its length plus 16: the memory stays
+/// O(particles)). An allocation that fails leaves the list as it was.
+fn shrink(list: &mut Vec<u32>) {
+    let mut v = Vec::new();
+    if v.try_reserve_exact(2 * list.len()).is_ok() {
+        v.extend_from_slice(list);
+        *list = v;
+    }
+}
+
 /// Leaves of a tree over `buckets` buckets (a power of two, at least 8).
 fn leaves_for(buckets: usize) -> usize {
     buckets.next_power_of_two().max(8)
@@ -179,7 +192,7 @@ fn leaves_for(buckets: usize) -> usize {
 
 /// Bytes of a state of `n` particles (room for `cap`) over `buckets` buckets.
 fn bytes_for<const R: usize, const W: usize>(cap: usize, buckets: usize) -> Option<usize> {
-    let per = core::mem::size_of::<Bucket<W>>();
+    let per = core::mem::size_of::<Bucket<W>>() + 16 * 4;
     cap.checked_mul(PARTICLE_BYTES)?
         .checked_add(buckets.checked_mul(per)?)?
         .checked_add(<BinaryTree<R> as ProposalTree<R>>::bytes(leaves_for(
@@ -413,10 +426,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
             self.p.at[moved as usize] = pos as u32;
         }
         if bucket.list.is_empty() {
-            *bucket = Bucket {
-                list: core::mem::take(&mut bucket.list),
-                ..Bucket::empty()
-            };
+            *bucket = Bucket::empty();
+        } else if bucket.list.capacity() > 4 * bucket.list.len() + 16 {
+            shrink(&mut bucket.list);
         }
         self.touch(b);
     }
@@ -463,6 +475,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
     /// Copies every particle and doubles V (Osinsky's particle doubling). Nothing
     /// changes on error.
     fn double(&mut self) -> Result<()> {
+        let volume = 2.0 * self.volume;
+        if !volume.is_finite() {
+            return Err(Error::Overflow {
+                name: "volume (particle doubling passed the largest f64)",
+            });
+        }
         let n = self.p.sizes.len();
         try_reserve(&mut self.p.sizes, n)?;
         try_reserve(&mut self.p.at, n)?;
@@ -480,7 +498,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
         }
         let bs = &self.p.buckets;
         self.p.tree.refill(|i| leaf_of::<R, W>(bs, i));
-        self.volume *= 2.0;
+        self.volume = volume;
         Ok(())
     }
 
@@ -514,7 +532,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
         }
         let bound = symmetric::<R, W>(&lu.hi, &lv.hi);
         let low = symmetric::<R, W>(&lu.lo, &lv.lo);
-        self.proposals += 1;
+        self.proposals = self.proposals.wrapping_add(1);
         let spot = self.proposals.is_multiple_of(SPOT_CHECK);
         let (x, y) = (self.p.sizes[i], self.p.sizes[j]);
         if !thin(self.floor, &self.kernel, x, y, bound, low, spot, rng)? {
@@ -719,7 +737,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::checkpoint::Ch
             let ok = if b.list.is_empty() {
                 b.hi == [0.0; W] && b.lo == [f64::INFINITY; W]
             } else {
-                b.hi.iter().all(|h| h.is_finite())
+                b.hi.iter()
+                    .zip(&b.lo)
+                    .all(|(&h, &l)| h.is_finite() && l >= 0.0 && l <= h)
             };
             if !ok {
                 return Err(bad("an invalid bucket bound"));
