@@ -20,7 +20,8 @@ module coagula
        COAG_RANDOMIZATION_MATOUSEK = 2, COAG_RANDOMIZATION_OWEN = 3
   integer(c_int32_t), parameter :: COAG_METHOD_LOWRANK = 0, COAG_METHOD_INVERSE = 1, &
        COAG_METHOD_REJECTION = 2, COAG_METHOD_LOWRANK_TREE = 3, COAG_METHOD_DSA_COUNTS = 4
-  integer(c_int32_t), parameter :: COAG_EVENTFLOW_MFA = 0, COAG_EVENTFLOW_DSA = 1
+  integer(c_int32_t), parameter :: COAG_EVENTFLOW_MFA = 0, COAG_EVENTFLOW_DSA = 1, &
+       COAG_EVENTFLOW_LOWRANK = 2
   integer(c_int32_t), parameter :: COAG_SAMPLER_DEFAULT = 0, COAG_SAMPLER_TREE = 1, &
        COAG_SAMPLER_GROUPS = 2
   integer(c_int32_t), parameter :: COAG_EXACT_CONSTANT = 0, COAG_EXACT_ADDITIVE = 1, &

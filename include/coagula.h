@@ -242,6 +242,16 @@
 #define COAG_EVENTFLOW_DSA 1
 
 /*
+ Osinsky's low-rank Monte Carlo over a list of particles (continuous or sparse sizes;
+ memory O(particles), particle doubling; the kernel needs a low-rank bound, every
+ built-in kernel has one). Like direct simulation, its sizes are samples of the
+ number distribution in the volume `Σ sizes / mass`. No caller-owned workspace (it
+ grows its size buckets), no fragmentation; capacity, truncation, sampler and
+ strict bound must stay 0.
+ */
+#define COAG_EVENTFLOW_LOWRANK 2
+
+/*
  The scheme's default weighted sampler (the faster in our measurements: groups for
  the mass flow algorithm, the sum tree for direct simulation).
  */
@@ -607,8 +617,9 @@ typedef struct {
 } coag_first_hits;
 
 /*
- Configuration of the event-driven schemes over particle sizes (Eibeck & Wagner
- 2000): the mass flow algorithm and direct simulation. Fill it with
+ Configuration of the event-driven schemes over particle sizes: the mass flow
+ algorithm and direct simulation (Eibeck & Wagner 2000), low-rank Monte Carlo over
+ sizes (`COAG_EVENTFLOW_LOWRANK`, Osinsky 2023: sizes as for direct simulation). Fill it with
  `coag_eventflow_default_config`, which sets `struct_size`.
  */
 typedef struct {
@@ -1199,11 +1210,12 @@ int32_t coag_step_report_init(coag_step_report *out, size_t size);
 int32_t coag_eventflow_default_config(coag_eventflow_config *out, size_t size);
 
 /*
- An event-driven sim (Eibeck & Wagner 2000) over the `n` particle sizes `sizes`
- (each finite and > 0): the mass flow algorithm or direct simulation, as
- `config.method` says (see `coag_eventflow_config` for what the sizes mean). The
- kernel needs a product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)` (every built-in
- kernel has one; a user kernel declares it, else `COAG_UNSUPPORTED`). `frag` may be
+ An event-driven sim over the `n` particle sizes `sizes` (each finite and > 0): the
+ mass flow algorithm or direct simulation (Eibeck & Wagner 2000), or low-rank Monte
+ Carlo over sizes (Osinsky 2023), as `config.method` says (see
+ `coag_eventflow_config` for what the sizes mean). Eibeck & Wagner's schemes need a
+ product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)`, low-rank a low-rank bound (every
+ built-in kernel has both; a user kernel declares them, else `COAG_UNSUPPORTED`). `frag` may be
  NULL (pure coagulation); with it, break-ups are events at rate `Ḟ(x)` (no time
  step).
 

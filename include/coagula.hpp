@@ -205,8 +205,9 @@ class Sim {
                                    bytes, &s));
         return Sim(s);
     }
-    /// An event-driven scheme of Eibeck & Wagner (c.method: COAG_EVENTFLOW_MFA or
-    /// COAG_EVENTFLOW_DSA) over the particle sizes `sizes`; `f` may be null.
+    /// An event-driven scheme over the particle sizes `sizes` (c.method: Eibeck &
+    /// Wagner's COAG_EVENTFLOW_MFA or COAG_EVENTFLOW_DSA, or Osinsky's low-rank
+    /// COAG_EVENTFLOW_LOWRANK); `f` may be null.
     static Sim eventflow(const coag_eventflow_config &c, const Kernel &k, const Fragmentation *f,
                          const std::vector<double> &sizes) {
         coag_sim *s = nullptr;

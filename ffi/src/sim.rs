@@ -57,11 +57,19 @@ const METHODS: [(i32, SchemeId); 5] = [
 pub const COAG_EVENTFLOW_MFA: i32 = 0;
 /// Eibeck & Wagner's direct simulation over a list of particles (Marcus–Lushnikov).
 pub const COAG_EVENTFLOW_DSA: i32 = 1;
+/// Osinsky's low-rank Monte Carlo over a list of particles (continuous or sparse sizes;
+/// memory O(particles), particle doubling; the kernel needs a low-rank bound, every
+/// built-in kernel has one). Like direct simulation, its sizes are samples of the
+/// number distribution in the volume `Σ sizes / mass`. No caller-owned workspace (it
+/// grows its size buckets), no fragmentation; capacity, truncation, sampler and
+/// strict bound must stay 0.
+pub const COAG_EVENTFLOW_LOWRANK: i32 = 2;
 
 /// The `COAG_EVENTFLOW_*` codes and the registry's schemes they name.
-const EVENTFLOW: [(i32, SchemeId); 2] = [
+const EVENTFLOW: [(i32, SchemeId); 3] = [
     (COAG_EVENTFLOW_MFA, SchemeId::Mfa),
     (COAG_EVENTFLOW_DSA, SchemeId::Dsa),
+    (COAG_EVENTFLOW_LOWRANK, SchemeId::LowRankSizes),
 ];
 
 /// The scheme's default weighted sampler (the faster in our measurements: groups for
@@ -126,8 +134,9 @@ pub struct coag_counts_config {
     pub batched_clock: i32,
 }
 
-/// Configuration of the event-driven schemes over particle sizes (Eibeck & Wagner
-/// 2000): the mass flow algorithm and direct simulation. Fill it with
+/// Configuration of the event-driven schemes over particle sizes: the mass flow
+/// algorithm and direct simulation (Eibeck & Wagner 2000), low-rank Monte Carlo over
+/// sizes (`COAG_EVENTFLOW_LOWRANK`, Osinsky 2023: sizes as for direct simulation). Fill it with
 /// `coag_eventflow_default_config`, which sets `struct_size`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -446,7 +455,9 @@ pub unsafe extern "C" fn coag_eventflow_default_config(
 
 /// The registry options of an event-driven config (checked).
 fn eventflow_options(c: &coag_eventflow_config) -> Result<Options, Fail> {
-    let mut o = Options::default().with_strict_bound(c.strict_bound != 0);
+    let mut o = Options::default()
+        .with_strict_bound(c.strict_bound != 0)
+        .with_memory_budget(coagula_core::scheme::population::machine_memory_budget());
     match c.sampler {
         COAG_SAMPLER_DEFAULT => {}
         COAG_SAMPLER_TREE => o = o.with_sampler(coagula_core::scheme::eventflow::Sampler::SumTree),
@@ -474,11 +485,12 @@ fn eventflow_options(c: &coag_eventflow_config) -> Result<Options, Fail> {
     Ok(o.with_capacity(cap))
 }
 
-/// An event-driven sim (Eibeck & Wagner 2000) over the `n` particle sizes `sizes`
-/// (each finite and > 0): the mass flow algorithm or direct simulation, as
-/// `config.method` says (see `coag_eventflow_config` for what the sizes mean). The
-/// kernel needs a product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)` (every built-in
-/// kernel has one; a user kernel declares it, else `COAG_UNSUPPORTED`). `frag` may be
+/// An event-driven sim over the `n` particle sizes `sizes` (each finite and > 0): the
+/// mass flow algorithm or direct simulation (Eibeck & Wagner 2000), or low-rank Monte
+/// Carlo over sizes (Osinsky 2023), as `config.method` says (see
+/// `coag_eventflow_config` for what the sizes mean). Eibeck & Wagner's schemes need a
+/// product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)`, low-rank a low-rank bound (every
+/// built-in kernel has both; a user kernel declares them, else `COAG_UNSUPPORTED`). `frag` may be
 /// NULL (pure coagulation); with it, break-ups are events at rate `Ḟ(x)` (no time
 /// step).
 ///
@@ -595,6 +607,12 @@ fn eventflow_workspace(
     f: &Fragmentation,
 ) -> Result<(coag_eventflow_config, usize), Fail> {
     let c = resolve_eventflow(*c, id, n, f)?;
+    if id == SchemeId::LowRankSizes {
+        return fail(
+            COAG_UNSUPPORTED,
+            "caller-owned workspace: low-rank over sizes grows its size buckets (use coag_eventflow_new)",
+        );
+    }
     // (what the constructor would refuse, the query refuses)
     eventflow_options(&c)?;
     // (the registry's rule: N particles, or direct simulation's capacity, resolved)
@@ -688,6 +706,35 @@ fn resolve_eventflow(
     c.strict_bound = i32::from(c.strict_bound != 0);
     if c.truncation == f64::INFINITY || c.truncation == 0.0 {
         c.truncation = 0.0; // (also −0.0)
+    }
+    if id == SchemeId::LowRankSizes {
+        let unused = [
+            (
+                c.capacity != 0,
+                "capacity: low-rank over sizes never adds particles (leave it 0)",
+            ),
+            (
+                c.truncation != 0.0,
+                "truncation: low-rank over sizes keeps every particle (leave it 0)",
+            ),
+            (
+                c.sampler != COAG_SAMPLER_DEFAULT,
+                "sampler: low-rank over sizes draws from its bound's buckets (leave it COAG_SAMPLER_DEFAULT)",
+            ),
+            (
+                c.strict_bound != 0,
+                "strict_bound: low-rank over sizes always refuses a kernel above its bound (leave it 0)",
+            ),
+            (
+                !matches!(f, Fragmentation::None),
+                "fragmentation: low-rank over sizes only coagulates (pass NULL)",
+            ),
+        ];
+        if let Some((_, why)) = unused.iter().find(|(set, _)| *set) {
+            return fail(COAG_INVALID_ARGUMENT, *why);
+        }
+        within_machine_budget(n)?;
+        return Ok(c);
     }
     let mfa = id == SchemeId::Mfa;
     c.sampler = match (c.sampler, mfa) {

@@ -178,6 +178,72 @@ static coag_sim *eventflow_sim(const coag_kernel *k, const coag_fragmentation *f
     return s;
 }
 
+/* Low-rank Monte Carlo over particle sizes (COAG_EVENTFLOW_LOWRANK): the constant-kernel
+ * solution from monomers, M0(1) = 2/3 (one comparison at the suite's threshold); what
+ * its configuration refuses; a clone and a restored checkpoint continue bit for bit. */
+static void lowrank_sizes_scheme(void) {
+    coag_kernel *k;
+    OK(coag_kernel_new_constant(1.0, &k));
+    double e_m0;
+    OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 1.0, &e_m0));
+    stats m0 = {0};
+    for (int r = 0; r < REPLICAS; r++) {
+        coag_sim *s = eventflow_sim(k, NULL, COAG_EVENTFLOW_LOWRANK, COAG_SAMPLER_DEFAULT, 0.0, 4000 + r, 1 << 12);
+        OK(coag_sim_advance_to(s, 1.0, NULL));
+        double v;
+        OK(coag_sim_moment(s, 0.0, &v));
+        stats_push(&m0, v);
+        coag_sim_free(s);
+    }
+    CHECK(fabs(m0.mean - e_m0) < Z_TOL * stats_se(&m0), "lowrank-sizes: M0 %g ± %g vs %g", m0.mean, stats_se(&m0),
+          e_m0);
+    /* refused settings, and no caller-owned workspace */
+    static double sizes[64];
+    for (int i = 0; i < 64; i++) sizes[i] = 0.25 + 0.5 * i;
+    coag_fragmentation *f;
+    OK(coag_fragmentation_new_binary_uniform(0.5, &f));
+    coag_eventflow_config c;
+    coag_sim *s = NULL;
+    for (int v = 0; v < 5; v++) {
+        OK(coag_eventflow_default_config(&c, sizeof c));
+        c.method = COAG_EVENTFLOW_LOWRANK;
+        if (v == 0) c.capacity = 100;
+        if (v == 1) c.truncation = 10.0;
+        if (v == 2) c.sampler = COAG_SAMPLER_TREE;
+        if (v == 3) c.strict_bound = 1;
+        EXPECT(coag_eventflow_new(&c, k, v == 4 ? f : NULL, sizes, 64, &s), COAG_INVALID_ARGUMENT);
+    }
+    OK(coag_eventflow_default_config(&c, sizeof c));
+    c.method = COAG_EVENTFLOW_LOWRANK;
+    size_t bytes;
+    EXPECT(coag_eventflow_workspace_size(&c, NULL, 64, &bytes), COAG_UNSUPPORTED);
+    /* checkpoint, restore and clone of a run from continuous sizes */
+    c.seed = 5;
+    coag_sim *a, *b;
+    OK(coag_eventflow_new(&c, k, NULL, sizes, 64, &a));
+    OK(coag_eventflow_new(&c, k, NULL, sizes, 64, &b));
+    OK(coag_sim_advance_to(a, 0.5, NULL));
+    size_t need;
+    uint8_t *buf = snapshot(a, &need);
+    coag_sim *cl;
+    OK(coag_sim_clone(a, &cl));
+    OK(coag_sim_restore(b, buf, need));
+    OK(coag_sim_advance_to(a, 3.0, NULL));
+    OK(coag_sim_advance_to(b, 3.0, NULL));
+    OK(coag_sim_advance_to(cl, 3.0, NULL));
+    CHECK(same_sizes(a, b), "restored lowrank-sizes run differs");
+    CHECK(same_sizes(a, cl), "cloned lowrank-sizes run differs");
+    double mass;
+    OK(coag_sim_moment(a, 1.0, &mass));
+    CHECK(fabs(mass - 1.0) < 1e-12, "lowrank-sizes mass %g", mass);
+    free(buf);
+    coag_sim_free(a);
+    coag_sim_free(b);
+    coag_sim_free(cl);
+    coag_fragmentation_free(f);
+    coag_kernel_free(k);
+}
+
 /* The event-driven schemes over particle sizes (Eibeck & Wagner 2000) against the
  * constant-kernel solution from monomers, M0(t) = 1 / (1 + t/2) (per unit of mass: both
  * schemes are given mass 1), with every sampler; the mass flow algorithm's gel mass for
@@ -672,6 +738,7 @@ int main(void) {
     massflow_lecot();
     counts_schemes();
     eventflow_schemes();
+    lowrank_sizes_scheme();
     change_kernel_between_steps();
     host_randomness();
     checkpoint_restore();
