@@ -88,7 +88,7 @@ use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::random::{below, geometric, open_unit};
 use crate::sample::alias::{Alias, AliasScratch};
-use crate::scheme::population::{Population, try_reserve, within_budget};
+use crate::scheme::population::{Population, shrink_spare, try_reserve, within_budget};
 use alloc::borrow::Cow;
 use alloc::vec;
 use alloc::vec::Vec;
@@ -398,6 +398,8 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
                 // too sparse for a grid, or judged a list at a similar size before
                 if 4 * bk.n < 3 * width || bk.n.abs_diff(bk.judged) <= bk.judged >> 3 {
                     bk.slots = bk.n;
+                    // a list the distribution has moved past gives its memory back
+                    shrink_spare(&mut self.lists[b - SINGLE as usize]);
                     continue;
                 }
                 // restore the counts from the list, to judge the bucket
@@ -418,6 +420,13 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
                 bk.grid = true;
                 bk.cap = mx;
                 bk.slots = width * bk.cap;
+                if b >= SINGLE as usize {
+                    // a grid bucket keeps no list (rebuilt from the counts if it turns
+                    // back into one)
+                    let list = &mut self.lists[b - SINGLE as usize];
+                    list.clear();
+                    shrink_spare(list);
+                }
             } else {
                 bk.grid = false;
                 bk.cap = 0;
@@ -426,6 +435,7 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
                 for (off, &c) in cs.iter().enumerate() {
                     list.extend(core::iter::repeat_n(off as u32, c as usize));
                 }
+                shrink_spare(list);
                 bk.slots = n;
             }
         }

@@ -62,7 +62,7 @@ use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::random::{below, unit_f64};
-use crate::scheme::population::{DEFAULT_MEMORY_BUDGET, try_reserve, within_budget};
+use crate::scheme::population::{DEFAULT_MEMORY_BUDGET, shrink_spare, try_reserve, within_budget};
 use crate::scheme::{Budget, Pending, Scheme, StepReport, check_target, check_time, next_proposal};
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -172,17 +172,6 @@ struct Layout<const R: usize, const W: usize> {
 #[inline]
 fn leaf_of<const R: usize, const W: usize>(buckets: &[Bucket<W>], b: usize) -> Weights<R> {
     buckets.get(b).map_or([[0.0; R]; 2], |x| x.leaf::<R>())
-}
-
-/// Moves `list` to an allocation of twice its length, if one is to be had (a list's
-/// capacity thus stays below 4 times its length plus 16: the memory stays
-/// O(particles)). An allocation that fails leaves the list as it was.
-fn shrink(list: &mut Vec<u32>) {
-    let mut v = Vec::new();
-    if v.try_reserve_exact(2 * list.len()).is_ok() {
-        v.extend_from_slice(list);
-        *list = v;
-    }
 }
 
 /// Leaves of a tree over `buckets` buckets (a power of two, at least 8).
@@ -427,8 +416,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
         }
         if bucket.list.is_empty() {
             *bucket = Bucket::empty();
-        } else if bucket.list.capacity() > 4 * bucket.list.len() + 16 {
-            shrink(&mut bucket.list);
+        } else {
+            shrink_spare(&mut bucket.list);
         }
         self.touch(b);
     }

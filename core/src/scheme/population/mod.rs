@@ -149,6 +149,20 @@ pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Resu
     Ok(())
 }
 
+/// Gives back the spare capacity of `v` when it passes 4 times its length plus 16: `v`
+/// moves to an allocation of twice its length, if one is to be had (an allocation that
+/// fails leaves `v` as it was). Lists that empty out then hold O(their length), not
+/// their largest length ever. Contents and order are unchanged.
+pub(crate) fn shrink_spare<T: Copy>(v: &mut Vec<T>) {
+    if v.capacity() > 4 * v.len() + 16 {
+        let mut w = Vec::new();
+        if w.try_reserve_exact(2 * v.len()).is_ok() {
+            w.extend_from_slice(v);
+            *v = w;
+        }
+    }
+}
+
 /// `v.try_reserve(additional)`, a refusal mapped to `Err(Capacity)`.
 pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
     v.try_reserve(additional).map_err(|_| Error::Capacity {
