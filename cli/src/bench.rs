@@ -299,11 +299,12 @@ pub fn lowrank_single(name: &str, n0: u64, t: f64, seed: u64, binary: bool, buck
         rep.proposals, rep.rejections, rep.bound_violations
     );
     println!(
-        "{name} t={t} ({}): {} collisions, M={}, {s:.3} s, {:.3e} coll/s",
+        "{name} t={t} ({}): {} collisions, M={}, {s:.3} s, {:.3e} coll/s, N/V={:.6e}",
         id.name(),
         rep.events,
         sim.max_size().unwrap_or(0),
-        rep.events as f64 / s
+        rep.events as f64 / s,
+        sim.moment(0.0)
     );
 }
 
@@ -512,4 +513,192 @@ fn original_particles(file: Option<&str>) -> Option<u64> {
         .get("particles")?
         .as_integer()
         .map(|n| n as u64)
+}
+
+/// The figures measured for the peers and the authors' code, side by side with ours on
+/// this machine (see `docs/results/peers-golovin.md` and
+/// `docs/results/osinsky2023-authors.md` for how).
+const PEER_FIGURES: &str = include_str!("../../docs/results/peer-figures.csv");
+
+/// One recorded figure.
+struct Figure {
+    problem: String,
+    code: String,
+    version: String,
+    date: String,
+    n: f64,
+    t: f64,
+    seconds: f64,
+    rss_mb: Option<f64>,
+    errors: Option<(f64, f64)>,
+    collisions: Option<f64>,
+    n_ratio: Option<f64>,
+}
+
+/// The built-in figures (`#` lines are comments).
+fn figures() -> Vec<Figure> {
+    let mut r = csv::ReaderBuilder::new()
+        .comment(Some(b'#'))
+        .from_reader(PEER_FIGURES.as_bytes());
+    let opt = |x: &str| x.trim().parse::<f64>().ok();
+    r.records()
+        .map(|rec| {
+            let rec = rec.expect("built-in CSV");
+            let f = |i: usize| rec.get(i).unwrap_or("").trim().to_string();
+            let num = |i: usize| opt(&f(i)).expect("built-in number");
+            Figure {
+                problem: f(0),
+                code: f(1),
+                version: f(2),
+                date: f(3),
+                n: num(4),
+                t: num(5),
+                seconds: num(6),
+                rss_mb: opt(&f(7)),
+                errors: opt(&f(8)).zip(opt(&f(9))),
+                collisions: opt(&f(10)),
+                n_ratio: opt(&f(11)),
+            }
+        })
+        .collect()
+}
+
+/// Our row of the Golovin problem: particles, seconds per run, RMS relative errors of
+/// M0 and M2.
+struct Ours {
+    n: u64,
+    seconds: f64,
+    m0: f64,
+    m2: f64,
+}
+
+/// `coagula bench peers`: see the command's help.
+pub fn peers(seeds: u64, max_log2n: u32, authors: bool) -> Result<(), coagula_core::Error> {
+    use coagula_core::exact::Exact;
+    let figs = figures();
+    let t = 5.4;
+    let exact = Exact::additive_exponential();
+    let (e0, e2) = (exact.moment(0, t)?, exact.moment(2, t)?);
+    println!(
+        "Golovin's kernel K = x + y from c(x,0) = e^-x to t = {t}: lowrank-sizes here ({seeds} seeds,\n\
+         midpoint quantiles of Exp(1), one thread, seconds per run) against the peers' recorded\n\
+         figures (CPU seconds of stepping; RMS relative errors over their seeds)\n"
+    );
+    println!(
+        "{:>10} {:>12} {:>10} {:>10}",
+        "N", "s/run", "M0 err", "M2 err"
+    );
+    let mut ours = Vec::new();
+    for lg in (12..=max_log2n).step_by(2) {
+        let n = 1u64 << lg;
+        let sizes: Vec<f64> = (0..n)
+            .map(|i| -(-((i as f64 + 0.5) / n as f64)).ln_1p())
+            .collect();
+        let (mut s0, mut s2, mut secs) = (0.0, 0.0, 0.0);
+        for seed in 0..seeds {
+            let start = Instant::now();
+            let init = Init::Sizes {
+                sizes: &sizes,
+                mass: 1.0,
+            };
+            let mut sim: Box<Sim> = registry::build(
+                SchemeId::LowRankSizes,
+                Coagulation::additive(),
+                NoFragmentation,
+                &init,
+                &options(),
+            )?;
+            sim.advance_to(t, &mut generator(seed, 0))?;
+            secs += start.elapsed().as_secs_f64();
+            s0 += (sim.moment(0.0) / e0 - 1.0).powi(2);
+            s2 += (sim.moment(2.0) / e2 - 1.0).powi(2);
+        }
+        let k = seeds as f64;
+        let o = Ours {
+            n,
+            seconds: secs / k,
+            m0: (s0 / k).sqrt(),
+            m2: (s2 / k).sqrt(),
+        };
+        println!(
+            "{:>10} {:>12.4} {:>9.2}% {:>9.2}%",
+            format!("2^{lg}"),
+            o.seconds,
+            100.0 * o.m0,
+            100.0 * o.m2
+        );
+        ours.push(o);
+    }
+    println!(
+        "\n{:<10} {:>8} {:>10} {:>9} {:>9} | {:>10} {:>10} {:>9}",
+        "peer", "N", "CPU s", "M0 err", "M2 err", "our N", "our s", "ratio"
+    );
+    for f in figs
+        .iter()
+        .filter(|f| f.problem == "golovin-exp" && f.t == t)
+    {
+        let Some((m0, m2)) = f.errors else { continue };
+        let best = ours
+            .iter()
+            .filter(|o| o.m0 <= m0 && o.m2 <= m2)
+            .min_by(|a, b| a.seconds.total_cmp(&b.seconds));
+        let lg = f.n.log2().round();
+        let (on, os, ratio) = match best {
+            Some(o) => (
+                format!("2^{}", o.n.trailing_zeros()),
+                format!("{:.4}", o.seconds),
+                format!("{:.1}x", f.seconds / o.seconds),
+            ),
+            None => ("-".into(), "-".into(), "-".into()),
+        };
+        println!(
+            "{:<10} {:>8} {:>10.3} {:>8.2}% {:>8.2}% | {on:>10} {os:>10} {ratio:>9}",
+            f.code,
+            format!("2^{lg}"),
+            f.seconds,
+            100.0 * m0,
+            100.0 * m2
+        );
+    }
+    if let Some(f) = figs.iter().find(|f| f.problem == "golovin-exp") {
+        println!(
+            "(peer figures: {} {}, measured {}; ratio = peer CPU / ours at the cheapest of our rows with both errors at most the peer's; '-': none of ours up to 2^{max_log2n})",
+            f.code, f.version, f.date
+        );
+    }
+    if !authors {
+        return Ok(());
+    }
+    println!(
+        "\nOsinsky's tables from 1e7 monomers: the bucketed layout here against the authors' Fortran (recorded)\n"
+    );
+    println!(
+        "{:<10} {:>8} | {:>9} {:>8} {:>10} {:>12} | {:>9} {:>10} {:>12} | {:>6}",
+        "kernel", "t", "Fortran s", "RSS MB", "coll", "N/N0", "ours s", "coll", "N/N0", "ratio"
+    );
+    for f in figs.iter().filter(|f| f.problem.starts_with("osinsky-")) {
+        let name = f.problem.trim_start_matches("osinsky-");
+        let start = Instant::now();
+        let mut sim = monodisperse(SchemeId::LowRank, paper_kernel(name), f.n as u64)?;
+        let rep = sim.advance_to(f.t, &mut generator(1, 0))?;
+        let s = start.elapsed().as_secs_f64();
+        println!(
+            "{name:<10} {:>8} | {:>9.2} {:>8} {:>10.3e} {:>12.6e} | {s:>9.2} {:>10.3e} {:>12.6e} | {:>5.2}x",
+            f.t,
+            f.seconds,
+            f.rss_mb.map_or("-".into(), |m| format!("{m:.0}")),
+            f.collisions.unwrap_or(f64::NAN),
+            f.n_ratio.unwrap_or(f64::NAN),
+            rep.events as f64,
+            sim.moment(0.0),
+            f.seconds / s
+        );
+    }
+    if let Some(f) = figs.iter().find(|f| f.problem.starts_with("osinsky-")) {
+        println!(
+            "(Fortran: {} at {}, gfortran -O3 -march=native, measured {}; ours: this run, wall seconds including the build)",
+            f.code, f.version, f.date
+        );
+    }
+    Ok(())
 }

@@ -387,6 +387,23 @@ enum BenchKind {
         #[arg(long, default_value_t = 1000)]
         replicas: u64,
     },
+    /// Ours next to the figures measured for the peers (PySDM, PyPartMC) and for the
+    /// authors' own code (Osinsky's Fortran), read from docs/results/peer-figures.csv
+    /// (built in): Golovin's kernel from the exponential start with low-rank over
+    /// sizes, at equal or better M0 and M2 error; with --authors, the paper's 13 rows
+    /// from 1e7 monomers with the bucketed layout.
+    Peers {
+        /// Seeds per particle number (RMS errors over them).
+        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(2..=10_000))]
+        seeds: u64,
+        /// Largest particle number, as log2 (12..=24).
+        #[arg(long, default_value_t = 18, value_parser = clap::value_parser!(u32).range(12..=24))]
+        max_log2n: u32,
+        /// Also run the paper's 13 rows against the authors' Fortran figures (about a
+        /// minute).
+        #[arg(long)]
+        authors: bool,
+    },
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -770,6 +787,14 @@ fn main() -> ExitCode {
                     replicas,
                 },
         } => bench::lowrank_small(&n0, len, t, replicas),
+        Command::Bench {
+            which:
+                BenchKind::Peers {
+                    seeds,
+                    max_log2n,
+                    authors,
+                },
+        } => bench::peers(seeds, max_log2n, authors),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

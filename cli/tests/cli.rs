@@ -797,3 +797,33 @@ fn a_size_list_starts_direct_schemes_from_its_particles() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `coagula bench peers` parses its built-in figures and prints every peer row next to
+/// ours (a short run: 2 seeds, 2^12 particles).
+#[test]
+fn bench_peers_prints_the_recorded_figures() {
+    let out = coagula()
+        .args(["bench", "peers", "--seeds", "2", "--max-log2n", "12"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    for code in ["PySDM", "PyPartMC"] {
+        let rows = text.lines().filter(|l| l.starts_with(code)).count();
+        assert_eq!(rows, 5, "{code} rows in\n{text}");
+    }
+    assert!(
+        text.contains("3.0.1") && text.contains("2026-12-03"),
+        "{text}"
+    );
+    // our one row: 2^12 particles, errors printed as percentages
+    let ours = text
+        .lines()
+        .find(|l| l.trim_start().starts_with("2^12"))
+        .unwrap();
+    assert!(ours.matches('%').count() == 2, "{ours}");
+}
