@@ -135,6 +135,24 @@ impl<const R: usize> ProposalTree<R> for BinaryTree<R> {
         node - self.m
     }
 
+    /// The two descents interleaved level by level, so that their chains of dependent
+    /// loads overlap (the same leaves as two calls of [`descend`](Self::descend)).
+    #[inline]
+    fn descend_pair(&self, k: usize, mut tu: f64, mut tv: f64) -> (usize, usize) {
+        let (mut nu, mut nv) = (1, 1);
+        while nu < self.m {
+            let (lu, ru) = (self.nodes[2 * nu][0][k], self.nodes[2 * nu + 1][0][k]);
+            let (lv, rv) = (self.nodes[2 * nv][1][k], self.nodes[2 * nv + 1][1][k]);
+            let gu = (tu >= lu) & (ru > 0.0);
+            let gv = (tv >= lv) & (rv > 0.0);
+            tu -= if gu { lu } else { 0.0 };
+            tv -= if gv { lv } else { 0.0 };
+            nu = 2 * nu + usize::from(gu);
+            nv = 2 * nv + usize::from(gv);
+        }
+        (nu - self.m, nv - self.m)
+    }
+
     #[inline]
     fn add(&mut self, i: usize, _delta: &Weights<R>, leaf: &Weights<R>) {
         let mut node = self.m + i;
@@ -509,6 +527,16 @@ mod tests {
                 // a target at or beyond the total lands on the last positive leaf
                 let last = w.iter().rposition(|x| x[p][k] > 0.0).unwrap();
                 assert_eq!(t.descend(p, k, total), last);
+            }
+        }
+        // the paired descent finds what two single descents find
+        let tot = t.totals();
+        for k in 0..2 {
+            for _ in 0..500 {
+                let tu = crate::random::unit_f64(rng.next_u64()) * tot[0][k];
+                let tv = crate::random::unit_f64(rng.next_u64()) * tot[1][k];
+                let single = (t.descend(0, k, tu), t.descend(1, k, tv));
+                assert_eq!(t.descend_pair(k, tu, tv), single, "m={m} k={k}");
             }
         }
     }
