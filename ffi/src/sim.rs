@@ -1138,7 +1138,7 @@ pub unsafe extern "C" fn coag_sim_method(sim: *const coag_sim, out: *mut i32) ->
         let Some(&(m, _)) = METHODS.iter().find(|(_, i)| *i == id) else {
             return fail(
                 COAG_UNSUPPORTED,
-                "method: a sim over particle sizes (mass flow, mfa, dsa) has no COAG_METHOD (an event-driven sim's is in coag_sim_eventflow_config)",
+                "method: a sim over particle sizes (mass flow, mfa, dsa, lowrank-sizes) has no COAG_METHOD (an event-driven sim's is in coag_sim_eventflow_config)",
             );
         };
         // SAFETY: checked non-null; writable (contract).

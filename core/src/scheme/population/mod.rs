@@ -154,9 +154,9 @@ pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Resu
 /// fails leaves `v` as it was). Lists that empty out then hold O(their length), not
 /// their largest length ever. Contents and order are unchanged.
 pub(crate) fn shrink_spare<T: Copy>(v: &mut Vec<T>) {
-    if v.capacity() > 4 * v.len() + 16 {
+    if v.capacity() > v.len().saturating_mul(4).saturating_add(16) {
         let mut w = Vec::new();
-        if w.try_reserve_exact(2 * v.len()).is_ok() {
+        if w.try_reserve_exact(v.len().saturating_mul(2)).is_ok() {
             w.extend_from_slice(v);
             *v = w;
         }
