@@ -285,15 +285,18 @@ impl Pending {
 
 /// The next proposal of an event-driven scheme whose proposals come at `rate` (finite):
 /// the pending one, else one an exponential wait after `time`. `Ok(None)` when none
-/// comes by `t` — the clock then stands at `t`, and a drawn proposal stays pending;
-/// otherwise the proposal is left pending (a caller that stops before carrying it out
-/// resumes with it) and returned. Errors: a mean wait that cannot move the clock.
+/// comes by `t` — the clock then stands at `t`, and a drawn proposal stays pending — or
+/// when `budget` is spent (`rep.interrupted`); otherwise the proposal is counted in
+/// `rep.proposals`, left pending (a caller that stops before carrying it out resumes
+/// with it) and returned. Errors: a mean wait that cannot move the clock.
 #[inline]
 pub(crate) fn next_proposal<R: Rng + ?Sized>(
     pending: &mut Option<Pending>,
     time: &mut f64,
     t: f64,
     rate: f64,
+    budget: &mut Budget<'_>,
+    rep: &mut StepReport,
     rng: &mut R,
 ) -> crate::error::Result<Option<Pending>> {
     let p = match *pending {
@@ -314,6 +317,11 @@ pub(crate) fn next_proposal<R: Rng + ?Sized>(
         *time = t;
         return Ok(None);
     }
+    if !budget.take(1) {
+        rep.interrupted = true;
+        return Ok(None);
+    }
+    rep.proposals += 1;
     Ok(Some(p))
 }
 

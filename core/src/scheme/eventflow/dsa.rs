@@ -314,16 +314,20 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     value: total,
                 });
             }
-            let p = match next_proposal(&mut self.pending, &mut self.time, t, total, rng) {
+            let next = next_proposal(
+                &mut self.pending,
+                &mut self.time,
+                t,
+                total,
+                budget,
+                &mut rep,
+                rng,
+            );
+            let p = match next {
                 Ok(Some(p)) => p,
                 Ok(None) => break Ok(()),
                 Err(e) => break Err(e),
             };
-            if !budget.take(1) {
-                rep.interrupted = true;
-                break Ok(());
-            }
-            rep.proposals += 1;
             match self.event(coag, total, &mut rep, rng) {
                 Ok(changed) => {
                     rep.events += u64::from(changed);

@@ -561,16 +561,20 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for LowRankSiz
                     value: rate,
                 });
             }
-            let p = match next_proposal(&mut self.pending, &mut self.time, t, rate, rng) {
+            let next = next_proposal(
+                &mut self.pending,
+                &mut self.time,
+                t,
+                rate,
+                budget,
+                &mut rep,
+                rng,
+            );
+            let p = match next {
                 Ok(Some(p)) => p,
                 Ok(None) => break Ok(()),
                 Err(e) => break Err(e),
             };
-            if !budget.take(1) {
-                rep.interrupted = true;
-                break Ok(());
-            }
-            rep.proposals += 1;
             match self.propose(s, rng) {
                 Ok(changed) => {
                     if changed {
