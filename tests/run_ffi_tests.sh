@@ -39,13 +39,39 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 
 # The C tests again without sanitizers, under valgrind's memcheck (leaks, uninitialised
 # reads, invalid accesses the sanitizers' instrumentation does not see in the Rust
-# library); test_hostile in its quick mode (smaller work limits, fewer crafted
-# checkpoints: the same checks).
+# library), in their quick mode (COAG_TEST_QUICK: fewer particles in the statistical
+# checks, smaller work limits and fewer crafted checkpoints in test_hostile: the same
+# code paths). Two at a time (COAG_VALGRIND_JOBS): memcheck runs one thread per program.
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal test_dsmc test_cells; do
+    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_thermal test_dsmc test_cells"
+    for t in $vg_tests; do
         gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
-        COAG_TEST_QUICK=1 valgrind -q --error-exitcode=99 --leak-check=full \
-            --errors-for-leak-kinds=definite,indirect "$out/vg_$t" | tail -n 1
     done
+    jobs_max=${COAG_VALGRIND_JOBS:-2}
+    for t in $vg_tests; do
+        while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+        (
+            rc=0
+            COAG_TEST_QUICK=1 valgrind -q --error-exitcode=99 --leak-check=full \
+                --errors-for-leak-kinds=definite,indirect "$out/vg_$t" || rc=$?
+            echo "$rc" > "$out/vg_$t.rc"
+        ) > "$out/vg_$t.log" 2>&1 &
+    done
+    wait
+    failed=""
+    for t in $vg_tests; do
+        rc=$(cat "$out/vg_$t.rc" 2>/dev/null || echo "no status")
+        if [ "$rc" = 0 ]; then
+            tail -n 1 "$out/vg_$t.log"
+        else
+            cat "$out/vg_$t.log"
+            echo "$t under valgrind: exit status $rc"
+            failed="$failed $t"
+        fi
+    done
+    if [ -n "$failed" ]; then
+        echo "failed under valgrind:$failed"
+        exit 1
+    fi
 fi

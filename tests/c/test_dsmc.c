@@ -10,7 +10,8 @@
 
 #define T15 7.90
 #define REPS 16
-#define N 10000u
+/* particles of the Haff runs (half under valgrind: see test_quick) */
+#define N_FULL 10000u
 
 static void particles_of(const coag_dsmc *h, uint64_t *n, uint64_t **sizes, double **vel) {
     OK(coag_dsmc_info(h, NULL, n, NULL));
@@ -20,6 +21,7 @@ static void particles_of(const coag_dsmc *h, uint64_t *n, uint64_t **sizes, doub
 }
 
 int main(void) {
+    const uint64_t N = test_quick() ? N_FULL / 2 : N_FULL;
     /* 1. Haff's law at t = tau (eps = 0.95, density 0.1, unit mass and diameter) with
      *    the first Sonine correction of the cooling rate, each replica against its own
      *    initial temperature. */

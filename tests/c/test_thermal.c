@@ -11,7 +11,8 @@
 
 #define Z32 6.07
 #define REPS 32
-#define N0 20000u
+/* monomers of the model-family runs (a fifth under valgrind: see test_quick) */
+#define N0_FULL 20000u
 
 static coag_thermal *make(const coag_thermal_config *c, uint64_t n0, double t0, double volume) {
     coag_thermal *h = NULL;
@@ -35,6 +36,7 @@ static size_t state_of(const coag_thermal *h, uint64_t *out, size_t cap) {
 }
 
 int main(void) {
+    const uint64_t N0 = test_quick() ? N0_FULL / 5 : N0_FULL;
     /* 1. The model family (c = 1, gamma = 1/2) from n1(0) = 1, T1(0) = 1: N(4) and the
      *    mean temperature against the closed form, on both engines. */
     double n_exact, t_exact;
