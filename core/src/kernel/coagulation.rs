@@ -24,6 +24,51 @@ pub(crate) fn cbrt(x: f64) -> f64 {
     y - (y - x / (y * y)) * (1.0 / 3.0)
 }
 
+/// Sizes whose cube roots are tabulated (the sizes of most collisions).
+pub(crate) const CBRT_TABLE: usize = 1024;
+
+/// `CUBE_ROOTS[i] = i^{1/3}` for `i < CBRT_TABLE`, computed at compile time by Newton's
+/// method from an integer first guess (the tests compare it with `libm::cbrt`).
+static CUBE_ROOTS: [f64; CBRT_TABLE] = {
+    let mut t = [0.0; CBRT_TABLE];
+    let mut i = 1;
+    while i < CBRT_TABLE {
+        let x = i as f64;
+        let mut y = 1.0;
+        while (y + 1.0) * (y + 1.0) * (y + 1.0) <= x {
+            y += 1.0;
+        }
+        let mut k = 0;
+        while k < 60 {
+            y -= (y * y * y - x) / (3.0 * y * y);
+            k += 1;
+        }
+        t[i] = y;
+        i += 1;
+    }
+    t
+};
+
+/// `i^{1/3}` of a size: from the table below [`CBRT_TABLE`], else [`cbrt`].
+#[inline]
+pub(crate) fn size_cbrt(i: u64) -> f64 {
+    match CUBE_ROOTS.get(i as usize) {
+        Some(&c) if i > 0 => c,
+        _ => cbrt(i as f64),
+    }
+}
+
+/// `x^{1/3}`: from the table when `x` is an integer below [`CBRT_TABLE`] (the sizes of
+/// most collisions of an integer-size scheme; within an ulp of [`cbrt`]), else [`cbrt`].
+#[inline]
+fn cbrt_of(x: f64) -> f64 {
+    if x >= 1.0 && x < CBRT_TABLE as f64 && x == (x as u64) as f64 {
+        CUBE_ROOTS[x as usize]
+    } else {
+        cbrt(x)
+    }
+}
+
 /// `c²` of the free-molecular majorant `h(x) = c (x^{2/3} + x^{-1/2})`, valid for all
 /// `x > 0`: the supremum of `K(x,y) / ((x^{2/3}+x^{-1/2})(y^{2/3}+y^{-1/2}))` is
 /// 1.421874 (attained near x = 2.14, y = 0.467; found by maximisation and checked on a
@@ -413,7 +458,7 @@ impl Coagulation {
                 pow(big, g) * homogeneous_unit(g, small / big)
             }
             Kind::FreeMolecular => {
-                let s = cbrt(x) + cbrt(y);
+                let s = cbrt_of(x) + cbrt_of(y);
                 sqrt(1.0 / x + 1.0 / y) * s * s
             }
             Kind::Brownian => (cbrt(x) + cbrt(y)) * (1.0 / cbrt(x) + 1.0 / cbrt(y)),

@@ -42,46 +42,12 @@
 //! assert!(r.collision <= bound);
 //! ```
 
-use super::coagulation::cbrt;
+pub(crate) use super::coagulation::size_cbrt;
 use crate::error::{Error, Result};
 use libm::{exp, log, pow, sqrt};
 
 /// `sqrt(π/2)`.
 const SQRT_HALF_PI: f64 = 1.253_314_137_315_500_3;
-
-/// Sizes whose cube roots are tabulated (the sizes of most collisions).
-const CBRT_TABLE: usize = 1024;
-
-/// `CUBE_ROOTS[i] = i^{1/3}` for `i < CBRT_TABLE`, computed at compile time by Newton's
-/// method from an integer first guess (the tests compare it with `libm::cbrt`).
-static CUBE_ROOTS: [f64; CBRT_TABLE] = {
-    let mut t = [0.0; CBRT_TABLE];
-    let mut i = 1;
-    while i < CBRT_TABLE {
-        let x = i as f64;
-        let mut y = 1.0;
-        while (y + 1.0) * (y + 1.0) * (y + 1.0) <= x {
-            y += 1.0;
-        }
-        let mut k = 0;
-        while k < 60 {
-            y -= (y * y * y - x) / (3.0 * y * y);
-            k += 1;
-        }
-        t[i] = y;
-        i += 1;
-    }
-    t
-};
-
-/// `i^{1/3}` of a size: from the table below [`CBRT_TABLE`].
-#[inline]
-pub(crate) fn size_cbrt(i: u64) -> f64 {
-    match CUBE_ROOTS.get(i as usize) {
-        Some(&c) if i > 0 => c,
-        _ => cbrt(i as f64),
-    }
-}
 
 /// The rates of one pair `(i, T_i), (j, T_j)`: per unit of `n_i n_j` (each unordered
 /// pair of an i- and a j-cluster in volume V collides at rate `collision / V`).
@@ -477,6 +443,7 @@ pub fn integrate<K: TemperatureKernel + ?Sized>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::kernel::coagulation::{CBRT_TABLE, cbrt};
     use alloc::vec;
     use alloc::vec::Vec;
     use approx::assert_relative_eq;
