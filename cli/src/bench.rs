@@ -563,7 +563,7 @@ fn figures() -> Vec<Figure> {
         .collect()
 }
 
-/// Our row of the Golovin problem: particles, seconds per run, RMS relative errors of
+/// Our row of a peers problem: particles, seconds per run, RMS relative errors of
 /// M0 and M2.
 struct Ours {
     n: u64,
@@ -572,15 +572,36 @@ struct Ours {
     m2: f64,
 }
 
-/// `coagula bench peers`: see the command's help.
-pub fn peers(seeds: u64, max_log2n: u32, authors: bool) -> Result<(), coagula_core::Error> {
+/// `coagula bench peers`: see the command's help (`constant`: the constant kernel to
+/// t = 10 instead of Golovin's to t = 5.4).
+pub fn peers(
+    seeds: u64,
+    max_log2n: u32,
+    authors: bool,
+    constant: bool,
+) -> Result<(), coagula_core::Error> {
     use coagula_core::exact::Exact;
     let figs = figures();
-    let t = 5.4;
-    let exact = Exact::additive_exponential();
+    let (problem, t, exact, kernel, name) = if constant {
+        (
+            "constant-exp",
+            10.0,
+            Exact::constant_exponential(1.0)?,
+            Coagulation::constant(1.0)?,
+            "The constant kernel K = 1",
+        )
+    } else {
+        (
+            "golovin-exp",
+            5.4,
+            Exact::additive_exponential(),
+            Coagulation::additive(),
+            "Golovin's kernel K = x + y",
+        )
+    };
     let (e0, e2) = (exact.moment(0, t)?, exact.moment(2, t)?);
     println!(
-        "Golovin's kernel K = x + y from c(x,0) = e^-x to t = {t}: lowrank-sizes here ({seeds} seeds,\n\
+        "{name} from c(x,0) = e^-x to t = {t}: lowrank-sizes here ({seeds} seeds,\n\
          midpoint quantiles of Exp(1), one thread, seconds per run) against the peers' recorded\n\
          figures (CPU seconds of stepping; RMS relative errors over their seeds)\n"
     );
@@ -588,55 +609,83 @@ pub fn peers(seeds: u64, max_log2n: u32, authors: bool) -> Result<(), coagula_co
         "{:>10} {:>12} {:>10} {:>10}",
         "N", "s/run", "M0 err", "M2 err"
     );
+    // the constant kernel also on the bucketed layout over integer sizes (a grid of
+    // 1/64 of the mean; K = 1 has degree 0, so its coefficient is unchanged)
+    let layouts: &[(&str, SchemeId)] = if constant {
+        &[
+            ("lowrank-sizes", SchemeId::LowRankSizes),
+            ("lowrank (sizes on a 1/64 grid)", SchemeId::LowRank),
+        ]
+    } else {
+        &[("lowrank-sizes", SchemeId::LowRankSizes)]
+    };
+    const GRID: f64 = 64.0;
     let mut ours = Vec::new();
-    for lg in (12..=max_log2n).step_by(2) {
-        let n = 1u64 << lg;
-        let sizes: Vec<f64> = (0..n)
-            .map(|i| -(-((i as f64 + 0.5) / n as f64)).ln_1p())
-            .collect();
-        let (mut s0, mut s2, mut secs) = (0.0, 0.0, 0.0);
-        for seed in 0..seeds {
-            let start = Instant::now();
-            let init = Init::Sizes {
-                sizes: &sizes,
-                mass: 1.0,
+    for &(label, id) in layouts {
+        println!("{label}:");
+        for lg in (12..=max_log2n).step_by(2) {
+            let n = 1u64 << lg;
+            let sizes: Vec<f64> = (0..n)
+                .map(|i| -(-((i as f64 + 0.5) / n as f64)).ln_1p())
+                .collect();
+            let mut counts: Vec<u64> = Vec::new();
+            if id == SchemeId::LowRank {
+                for &x in &sizes {
+                    let k = ((x * GRID).round() as usize).max(1);
+                    if counts.len() < k {
+                        counts.resize(k, 0);
+                    }
+                    counts[k - 1] += 1;
+                }
+            }
+            let (kernel, m2_unit) = if id == SchemeId::LowRank {
+                (kernel.with_min_size(1.0)?, GRID * GRID)
+            } else {
+                (kernel, 1.0)
             };
-            let mut sim: Box<Sim> = registry::build(
-                SchemeId::LowRankSizes,
-                Coagulation::additive(),
-                NoFragmentation,
-                &init,
-                &options(),
-            )?;
-            sim.advance_to(t, &mut generator(seed, 0))?;
-            secs += start.elapsed().as_secs_f64();
-            s0 += (sim.moment(0.0) / e0 - 1.0).powi(2);
-            s2 += (sim.moment(2.0) / e2 - 1.0).powi(2);
+            let (mut s0, mut s2, mut secs) = (0.0, 0.0, 0.0);
+            for seed in 0..seeds {
+                let start = Instant::now();
+                let init = if id == SchemeId::LowRank {
+                    Init::Counts {
+                        counts: &counts,
+                        volume: n as f64,
+                    }
+                } else {
+                    Init::Sizes {
+                        sizes: &sizes,
+                        mass: 1.0,
+                    }
+                };
+                let mut sim: Box<Sim> =
+                    registry::build(id, kernel, NoFragmentation, &init, &options())?;
+                sim.advance_to(t, &mut generator(seed, 0))?;
+                secs += start.elapsed().as_secs_f64();
+                s0 += (sim.moment(0.0) / e0 - 1.0).powi(2);
+                s2 += (sim.moment(2.0) / m2_unit / e2 - 1.0).powi(2);
+            }
+            let k = seeds as f64;
+            let o = Ours {
+                n,
+                seconds: secs / k,
+                m0: (s0 / k).sqrt(),
+                m2: (s2 / k).sqrt(),
+            };
+            println!(
+                "{:>10} {:>12.4} {:>9.2}% {:>9.2}%",
+                format!("2^{lg}"),
+                o.seconds,
+                100.0 * o.m0,
+                100.0 * o.m2
+            );
+            ours.push(o);
         }
-        let k = seeds as f64;
-        let o = Ours {
-            n,
-            seconds: secs / k,
-            m0: (s0 / k).sqrt(),
-            m2: (s2 / k).sqrt(),
-        };
-        println!(
-            "{:>10} {:>12.4} {:>9.2}% {:>9.2}%",
-            format!("2^{lg}"),
-            o.seconds,
-            100.0 * o.m0,
-            100.0 * o.m2
-        );
-        ours.push(o);
     }
     println!(
         "\n{:<10} {:>8} {:>10} {:>9} {:>9} | {:>10} {:>10} {:>9}",
         "peer", "N", "CPU s", "M0 err", "M2 err", "our N", "our s", "ratio"
     );
-    for f in figs
-        .iter()
-        .filter(|f| f.problem == "golovin-exp" && f.t == t)
-    {
+    for f in figs.iter().filter(|f| f.problem == problem && f.t == t) {
         let Some((m0, m2)) = f.errors else { continue };
         let best = ours
             .iter()
@@ -660,7 +709,7 @@ pub fn peers(seeds: u64, max_log2n: u32, authors: bool) -> Result<(), coagula_co
             100.0 * m2
         );
     }
-    if let Some(f) = figs.iter().find(|f| f.problem == "golovin-exp") {
+    if let Some(f) = figs.iter().find(|f| f.problem == problem) {
         println!(
             "(peer figures: {} {}, measured {}; ratio = peer CPU / ours at the cheapest of our rows with both errors at most the peer's; '-': none of ours up to 2^{max_log2n})",
             f.code, f.version, f.date

@@ -389,8 +389,8 @@ enum BenchKind {
     },
     /// Ours next to the figures measured for the peers (PySDM, PyPartMC) and for the
     /// authors' own code (Osinsky's Fortran), read from docs/results/peer-figures.csv
-    /// (built in): Golovin's kernel from the exponential start with low-rank over
-    /// sizes, at equal or better M0 and M2 error; with --authors, the paper's 13 rows
+    /// (built in): Golovin's or the constant kernel from the exponential start with
+    /// low-rank over sizes, at equal or better M0 and M2 error; with --authors, the paper's 13 rows
     /// from 1e7 monomers with the bucketed layout.
     Peers {
         /// Seeds per particle number (RMS errors over them).
@@ -403,7 +403,20 @@ enum BenchKind {
         /// minute).
         #[arg(long)]
         authors: bool,
+        /// The peers' problem: Golovin's kernel to t = 5.4, or the constant kernel to
+        /// t = 10, from the exponential start.
+        #[arg(long, value_enum, default_value_t = PeerProblem::Golovin)]
+        problem: PeerProblem,
     },
+}
+
+/// A problem of `coagula bench peers`.
+#[derive(Clone, Copy, ValueEnum)]
+enum PeerProblem {
+    /// K = x + y to t = 5.4
+    Golovin,
+    /// K = 1 to t = 10
+    Constant,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -793,8 +806,14 @@ fn main() -> ExitCode {
                     seeds,
                     max_log2n,
                     authors,
+                    problem,
                 },
-        } => bench::peers(seeds, max_log2n, authors),
+        } => bench::peers(
+            seeds,
+            max_log2n,
+            authors,
+            matches!(problem, PeerProblem::Constant),
+        ),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
