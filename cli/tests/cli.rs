@@ -827,3 +827,51 @@ fn bench_peers_prints_the_recorded_figures() {
         .unwrap();
     assert!(ours.matches('%').count() == 2, "{ours}");
 }
+
+/// `coagula bench peers --problem constant`: the constant kernel's recorded peer rows,
+/// and our two layouts (continuous sizes and the 1/64 grid), each with errors small
+/// enough to show the moments are read in the right units (a grid M2 not divided by
+/// 64² would be off by a factor of 4096).
+#[test]
+fn bench_peers_runs_the_constant_kernel_problem() {
+    let out = coagula()
+        .args([
+            "bench",
+            "peers",
+            "--problem",
+            "constant",
+            "--seeds",
+            "2",
+            "--max-log2n",
+            "12",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("to t = 10"), "{text}");
+    for code in ["PySDM", "PyPartMC"] {
+        let rows = text.lines().filter(|l| l.starts_with(code)).count();
+        assert_eq!(rows, 5, "{code} rows in\n{text}");
+    }
+    assert!(text.contains("1/64 grid"), "{text}");
+    let ours: Vec<&str> = text
+        .lines()
+        .filter(|l| l.trim_start().starts_with("2^12"))
+        .collect();
+    assert_eq!(ours.len(), 2, "{text}");
+    for row in ours {
+        // 2^12 particles, 2 seeds: M0 and M2 within 10 % (about 5 standard errors)
+        let errs: Vec<f64> = row
+            .split_whitespace()
+            .filter_map(|w| w.strip_suffix('%'))
+            .map(|w| w.parse().unwrap())
+            .collect();
+        assert_eq!(errs.len(), 2, "{row}");
+        assert!(errs.iter().all(|&e| e < 10.0), "{row}");
+    }
+}
