@@ -423,6 +423,12 @@ impl CoagulationKernel for Coagulation {
         self.min_size
     }
 
+    /// Every built-in kernel's factors are constants or powers `c x^p` (see
+    /// `unit_factors`), monotone in x.
+    fn monotone_factors(&self) -> bool {
+        true
+    }
+
     fn low_rank_is_exact(&self) -> bool {
         !matches!(self.kind, Kind::FreeMolecular | Kind::Homogeneous(_))
     }

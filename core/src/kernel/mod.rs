@@ -88,6 +88,18 @@ pub trait CoagulationKernel {
         if self.low_rank_is_exact() { 1.0 } else { 0.0 }
     }
 
+    /// True when every factor `a_k`, `b_k` is monotone in x (non-decreasing or
+    /// non-increasing on `x ≥ min_size`), so that its extremes over a range of sizes are
+    /// at the range's two ends. A bucketed scheme then bounds a bucket of sizes from
+    /// its two ends instead of evaluating every size in it (O(1) instead of O(width)
+    /// per bucket, so a growing largest size M costs O(log M) factor evaluations, not
+    /// O(M)). The default, false, evaluates every size. A kernel that claims it falsely
+    /// gets bounds below its factors and errors out ([`crate::Error::BoundExceeded`]) or
+    /// biases the results.
+    fn monotone_factors(&self) -> bool {
+        false
+    }
+
     /// `sup K(x, y)` over `lo ≤ x, y ≤ hi`, if known (acceptance–rejection needs it).
     fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
         None
