@@ -377,6 +377,86 @@ pub fn lowrank_small(
     Ok(())
 }
 
+/// `coagula bench lowrank-small --host-steps S`: `cells` constant-kernel cells of `n0`
+/// monomers each (volume n0), built once, then advanced together through `S` steps of
+/// about one event per cell (`t ← t (1 + 4/(3 n0))` from t = 1: the rate of a cell
+/// between doublings is about 3 n0 / (4 t)), on the per-size tree, the bucketed layout
+/// and continuous sizes. The counts layouts' largest size M grows like t while the
+/// particle number stays near n0, so their cost per event shows any O(M) work.
+pub fn lowrank_host_steps(n0s: &[u64], cells: u64, steps: u64) -> Result<(), coagula_core::Error> {
+    if cells == 0 || steps == 0 || n0s.contains(&0) {
+        return Err(coagula_core::Error::OutOfRange {
+            name: "--replicas / --host-steps / --n0",
+            value: 0.0,
+            range: "[1, inf)",
+        });
+    }
+    let k = Coagulation::constant(1.0)?;
+    println!(
+        "constant kernel, {cells} cells of N0 monomers (volume N0) built once, then {steps} host steps of about one event per cell"
+    );
+    println!(
+        "{:>8} {:>9} | {:>12} {:>12} {:>12} {:>10} {:>10}",
+        "N0", "layout", "build ns", "ns/event", "events/call", "t end", "M end"
+    );
+    for &n0 in n0s {
+        let counts = [n0];
+        let ones = vec![1.0; n0 as usize];
+        for (layout, id) in [
+            ("tree", SchemeId::LowRankTree),
+            ("bucketed", SchemeId::LowRank),
+            ("sizes", SchemeId::LowRankSizes),
+        ] {
+            let init = if id == SchemeId::LowRankSizes {
+                // (M1 = 1: volume Σ sizes / M1 = N0, as the counts layouts')
+                Init::Sizes {
+                    sizes: &ones,
+                    mass: 1.0,
+                }
+            } else {
+                Init::Counts {
+                    counts: &counts,
+                    volume: n0 as f64,
+                }
+            };
+            let start = Instant::now();
+            let mut sims: Vec<Box<Sim>> = (0..cells)
+                .map(|_| registry::build(id, k, NoFragmentation, &init, &options()))
+                .collect::<Result<_, _>>()?;
+            let build = start.elapsed().as_secs_f64();
+            let mut rngs: Vec<Generator> =
+                (0..cells).map(|c| generator(c ^ (n0 << 32), 0)).collect();
+            let (mut t, mut events, mut calls) = (1.0f64, 0u64, 0u64);
+            let start = Instant::now();
+            for _ in 0..steps {
+                t *= 1.0 + 4.0 / (3.0 * n0 as f64);
+                for (sim, rng) in sims.iter_mut().zip(&mut rngs) {
+                    events += sim.advance_to(t, rng)?.events;
+                    calls += 1;
+                }
+            }
+            let secs = start.elapsed().as_secs_f64();
+            let m = sims
+                .iter()
+                .map(|s| s.max_size().unwrap_or(0))
+                .max()
+                .unwrap_or(0);
+            println!(
+                "{n0:>8} {layout:>9} | {:>12.0} {:>12.1} {:>12.2} {t:>10.3e} {:>10}",
+                build * 1e9 / cells as f64,
+                secs * 1e9 / events.max(1) as f64,
+                events as f64 / calls as f64,
+                if id == SchemeId::LowRankSizes {
+                    "-".to_string()
+                } else {
+                    m.to_string()
+                }
+            );
+        }
+    }
+    Ok(())
+}
+
 /// One row of `coagula bench scenario`: a scheme (and a varied setting) on the scenario.
 struct BenchRow {
     label: String,

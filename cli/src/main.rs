@@ -386,6 +386,14 @@ enum BenchKind {
         /// Replicas per layout.
         #[arg(long, default_value_t = 1000)]
         replicas: u64,
+        /// Instead: a host's stepping. The replicas are built once (cells), then all
+        /// advanced through this many steps of about one event per cell each (times
+        /// growing geometrically from 1, as the event rate falls like 1/t), the three
+        /// layouts (per-size tree, bucketed, continuous sizes) side by side. Prints
+        /// build cost per cell and stepping cost per event; shows the cost's growth
+        /// with the largest size M.
+        #[arg(long)]
+        host_steps: Option<u64>,
     },
     /// Ours next to the figures measured for the peers (PySDM, PyPartMC) and for the
     /// authors' own code (Osinsky's Fortran), read from docs/results/peer-figures.csv
@@ -798,8 +806,12 @@ fn main() -> ExitCode {
                     len,
                     t,
                     replicas,
+                    host_steps,
                 },
-        } => bench::lowrank_small(&n0, len, t, replicas),
+        } => match host_steps {
+            Some(steps) => bench::lowrank_host_steps(&n0, replicas, steps),
+            None => bench::lowrank_small(&n0, len, t, replicas),
+        },
         Command::Bench {
             which:
                 BenchKind::Peers {
