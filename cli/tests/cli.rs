@@ -875,3 +875,37 @@ fn bench_peers_runs_the_constant_kernel_problem() {
         assert!(errs.iter().all(|&e| e < 10.0), "{row}");
     }
 }
+
+/// `coagula bench lowrank-small --host-steps`: cells built once and stepped, the three
+/// layouts each printing a row with events per call near the one event it aims at.
+#[test]
+fn bench_lowrank_small_steps_cells_like_a_host() {
+    let out = coagula()
+        .args([
+            "bench",
+            "lowrank-small",
+            "--n0",
+            "64",
+            "--replicas",
+            "20",
+            "--host-steps",
+            "20",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    for layout in ["tree", "bucketed", "sizes"] {
+        let row = text
+            .lines()
+            .find(|l| l.split_whitespace().nth(1) == Some(layout))
+            .unwrap_or_else(|| panic!("{layout} in\n{text}"));
+        // N0, layout, '|', build ns, ns/event, events/call, t, M
+        let per_call: f64 = row.split_whitespace().nth(5).unwrap().parse().unwrap();
+        assert!((0.3..3.0).contains(&per_call), "{row}");
+    }
+}
