@@ -847,11 +847,7 @@ fn bench_peers_runs_the_constant_kernel_problem() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("to t = 10"), "{text}");
     for code in ["PySDM", "PyPartMC"] {
@@ -893,11 +889,7 @@ fn bench_lowrank_small_steps_cells_like_a_host() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = String::from_utf8(out.stdout).unwrap();
     for layout in ["tree", "bucketed", "sizes"] {
         let row = text

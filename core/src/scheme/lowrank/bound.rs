@@ -194,6 +194,19 @@ mod tests {
         }
     }
 
+    /// Bucket b's extremes (as bits) from the two ends and from every size.
+    fn both<const R: usize, const W: usize>(
+        k: &Coagulation,
+        slow: &Exhaustive,
+        b: usize,
+    ) -> (alloc::vec::Vec<u64>, alloc::vec::Vec<u64>) {
+        let bits = |e: [[f64; W]; 2]| e.iter().flatten().map(|x| x.to_bits()).collect();
+        (
+            bits(bucket_extremes::<_, R, W>(k, b).unwrap()),
+            bits(bucket_extremes::<_, R, W>(slow, b).unwrap()),
+        )
+    }
+
     /// The built-in kernels' bucket bounds from the two ends of each bucket equal those
     /// from every size, bit for bit, for every bucket up to sizes 2^20 (a factor that
     /// is not monotone, or a rounding that is not, would show here).
@@ -215,37 +228,11 @@ mod tests {
             assert!(!slow.monotone_factors());
             for b in 0..=bucket_of(1 << 20) {
                 let (fast, every) = match k.rank() {
-                    1 => (
-                        bucket_extremes::<_, 1, 2>(&k, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                        bucket_extremes::<_, 1, 2>(&slow, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                    ),
-                    2 => (
-                        bucket_extremes::<_, 2, 4>(&k, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                        bucket_extremes::<_, 2, 4>(&slow, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                    ),
-                    _ => (
-                        bucket_extremes::<_, 3, 6>(&k, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                        bucket_extremes::<_, 3, 6>(&slow, b)
-                            .unwrap()
-                            .map(|r| r.to_vec()),
-                    ),
+                    1 => both::<1, 2>(&k, &slow, b),
+                    2 => both::<2, 4>(&k, &slow, b),
+                    _ => both::<3, 6>(&k, &slow, b),
                 };
-                let bits = |v: &[alloc::vec::Vec<f64>; 2]| {
-                    v.iter()
-                        .flat_map(|r| r.iter().map(|x| x.to_bits()))
-                        .collect::<alloc::vec::Vec<_>>()
-                };
-                assert_eq!(bits(&fast), bits(&every), "{} bucket {b}", k.name());
+                assert_eq!(fast, every, "{} bucket {b}", k.name());
             }
         }
     }
