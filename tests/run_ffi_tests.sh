@@ -49,6 +49,9 @@ if [ "${COAG_VALGRIND:-0}" = 1 ]; then
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
     done
     jobs_max=${COAG_VALGRIND_JOBS:-2}
+    case $jobs_max in
+        '' | *[!0-9]* | 0) echo "COAG_VALGRIND_JOBS=$jobs_max: not a positive integer, using 2"; jobs_max=2 ;;
+    esac
     for t in $vg_tests; do
         while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
         (

@@ -384,11 +384,19 @@ pub fn lowrank_small(
 /// and continuous sizes. The counts layouts' largest size M grows like t while the
 /// particle number stays near n0, so their cost per event shows any O(M) work.
 pub fn lowrank_host_steps(n0s: &[u64], cells: u64, steps: u64) -> Result<(), coagula_core::Error> {
-    if cells == 0 || steps == 0 || n0s.contains(&0) {
+    if cells == 0 || steps == 0 {
         return Err(coagula_core::Error::OutOfRange {
-            name: "--replicas / --host-steps / --n0",
+            name: "--replicas / --host-steps",
             value: 0.0,
             range: "[1, inf)",
+        });
+    }
+    // (small cells are the point; the continuous-sizes layout holds N0 sizes per cell)
+    if let Some(&n0) = n0s.iter().find(|&&n| n == 0 || n > 1 << 24) {
+        return Err(coagula_core::Error::OutOfRange {
+            name: "--n0 (with --host-steps)",
+            value: n0 as f64,
+            range: "[1, 2^24]",
         });
     }
     let k = Coagulation::constant(1.0)?;
@@ -646,6 +654,7 @@ fn figures() -> Vec<Figure> {
 /// Our row of a peers problem: particles, seconds per run, RMS relative errors of
 /// M0 and M2.
 struct Ours {
+    layout: &'static str,
     n: u64,
     seconds: f64,
     m0: f64,
@@ -681,9 +690,14 @@ pub fn peers(
     };
     let (e0, e2) = (exact.moment(0, t)?, exact.moment(2, t)?);
     println!(
-        "{name} from c(x,0) = e^-x to t = {t}: lowrank-sizes here ({seeds} seeds,\n\
+        "{name} from c(x,0) = e^-x to t = {t}: {} here ({seeds} seeds,\n\
          midpoint quantiles of Exp(1), one thread, seconds per run) against the peers' recorded\n\
-         figures (CPU seconds of stepping; RMS relative errors over their seeds)\n"
+         figures (CPU seconds of stepping; RMS relative errors over their seeds)\n",
+        if constant {
+            "lowrank-sizes and the bucketed layout on a 1/64 grid"
+        } else {
+            "lowrank-sizes"
+        }
     );
     println!(
         "{:>10} {:>12} {:>10} {:>10}",
@@ -746,6 +760,11 @@ pub fn peers(
             }
             let k = seeds as f64;
             let o = Ours {
+                layout: if id == SchemeId::LowRank {
+                    "grid"
+                } else {
+                    "sizes"
+                },
                 n,
                 seconds: secs / k,
                 m0: (s0 / k).sqrt(),
@@ -763,7 +782,7 @@ pub fn peers(
     }
     println!(
         "\n{:<10} {:>8} {:>10} {:>9} {:>9} | {:>10} {:>10} {:>9}",
-        "peer", "N", "CPU s", "M0 err", "M2 err", "our N", "our s", "ratio"
+        "peer", "N", "CPU s", "M0 err", "M2 err", "ours", "our s", "ratio"
     );
     for f in figs.iter().filter(|f| f.problem == problem && f.t == t) {
         let Some((m0, m2)) = f.errors else { continue };
@@ -774,7 +793,7 @@ pub fn peers(
         let lg = f.n.log2().round();
         let (on, os, ratio) = match best {
             Some(o) => (
-                format!("2^{}", o.n.trailing_zeros()),
+                format!("{} 2^{}", o.layout, o.n.trailing_zeros()),
                 format!("{:.4}", o.seconds),
                 format!("{:.1}x", f.seconds / o.seconds),
             ),

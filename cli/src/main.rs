@@ -391,7 +391,7 @@ enum BenchKind {
         /// growing geometrically from 1, as the event rate falls like 1/t), the three
         /// layouts (per-size tree, bucketed, continuous sizes) side by side. Prints
         /// build cost per cell and stepping cost per event; shows the cost's growth
-        /// with the largest size M.
+        /// with the largest size M. `--len` and `--t` do not apply.
         #[arg(long)]
         host_steps: Option<u64>,
     },

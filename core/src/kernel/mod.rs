@@ -89,8 +89,9 @@ pub trait CoagulationKernel {
     }
 
     /// True when every factor `a_k`, `b_k` is monotone in x (non-decreasing or
-    /// non-increasing on `x ≥ min_size`), so that its extremes over a range of sizes are
-    /// at the range's two ends. A bucketed scheme then bounds a bucket of sizes from
+    /// non-increasing) on all of `x ≥ 1`, whatever [`min_size`](Self::min_size) says
+    /// (the buckets of integer sizes start at 1), so that its extremes over a range of
+    /// sizes are at the range's two ends. A bucketed scheme then bounds a bucket of sizes from
     /// its two ends instead of evaluating every size in it (O(1) instead of O(width)
     /// per bucket, so a growing largest size M costs O(log M) factor evaluations, not
     /// O(M)). The default, false, evaluates every size. A kernel that claims it falsely

@@ -322,7 +322,8 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     }
 
     /// Computes the exact factor extremes of the buckets needed for sizes up to `m`
-    /// (all sizes of a bucket are evaluated: no monotonicity is assumed).
+    /// (every size of a bucket is evaluated, or its two ends when the kernel's factors
+    /// are monotone: see `bound::bucket_extremes`).
     fn extend_buckets<K: CoagulationKernel>(&mut self, kernel: &K, m: u64) -> Result<()> {
         let nb = bucket_of(m) + 1;
         let mut raw = Vec::new();
