@@ -808,10 +808,18 @@ pub fn peers(
             100.0 * m2
         );
     }
-    if let Some(f) = figs.iter().find(|f| f.problem == problem) {
+    // every peer's version and date, once each
+    let mut seen: Vec<String> = Vec::new();
+    for f in figs.iter().filter(|f| f.problem == problem) {
+        let who = format!("{} {}, measured {}", f.code, f.version, f.date);
+        if !seen.contains(&who) {
+            seen.push(who);
+        }
+    }
+    if !seen.is_empty() {
         println!(
-            "(peer figures: {} {}, measured {}; ratio = peer CPU / ours at the cheapest of our rows with both errors at most the peer's; '-': none of ours up to 2^{max_log2n})",
-            f.code, f.version, f.date
+            "(peer figures: {}; ratio = peer CPU / ours at the cheapest of our rows with both errors at most the peer's; '-': none of ours up to 2^{max_log2n})",
+            seen.join("; ")
         );
     }
     if !authors {
