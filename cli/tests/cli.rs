@@ -798,24 +798,27 @@ fn a_size_list_starts_direct_schemes_from_its_particles() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// `coagula bench peers` parses its built-in figures and prints every peer row next to
-/// ours (a short run: 2 seeds, 2^12 particles).
-#[test]
-fn bench_peers_prints_the_recorded_figures() {
-    let out = coagula()
-        .args(["bench", "peers", "--seeds", "2", "--max-log2n", "12"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let text = String::from_utf8(out.stdout).unwrap();
+/// The standard output of a `coagula` run that must succeed.
+fn stdout_of(args: &[&str]) -> String {
+    let out = coagula().args(args).output().unwrap();
+    succeeded(&out);
+    String::from_utf8(out.stdout).unwrap()
+}
+
+/// Both peers' five recorded rows are printed.
+fn assert_peer_rows(text: &str) {
     for code in ["PySDM", "PyPartMC"] {
         let rows = text.lines().filter(|l| l.starts_with(code)).count();
         assert_eq!(rows, 5, "{code} rows in\n{text}");
     }
+}
+
+/// `coagula bench peers` parses its built-in figures and prints every peer row next to
+/// ours (a short run: 2 seeds, 2^12 particles).
+#[test]
+fn bench_peers_prints_the_recorded_figures() {
+    let text = stdout_of(&["bench", "peers", "--seeds", "2", "--max-log2n", "12"]);
+    assert_peer_rows(&text);
     assert!(
         text.contains("3.0.1") && text.contains("2026-12-03"),
         "{text}"
@@ -834,26 +837,18 @@ fn bench_peers_prints_the_recorded_figures() {
 /// 64² would be off by a factor of 4096).
 #[test]
 fn bench_peers_runs_the_constant_kernel_problem() {
-    let out = coagula()
-        .args([
-            "bench",
-            "peers",
-            "--problem",
-            "constant",
-            "--seeds",
-            "2",
-            "--max-log2n",
-            "12",
-        ])
-        .output()
-        .unwrap();
-    succeeded(&out);
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = stdout_of(&[
+        "bench",
+        "peers",
+        "--problem",
+        "constant",
+        "--seeds",
+        "2",
+        "--max-log2n",
+        "12",
+    ]);
     assert!(text.contains("to t = 10"), "{text}");
-    for code in ["PySDM", "PyPartMC"] {
-        let rows = text.lines().filter(|l| l.starts_with(code)).count();
-        assert_eq!(rows, 5, "{code} rows in\n{text}");
-    }
+    assert_peer_rows(&text);
     assert!(text.contains("1/64 grid"), "{text}");
     let ours: Vec<&str> = text
         .lines()
@@ -876,21 +871,16 @@ fn bench_peers_runs_the_constant_kernel_problem() {
 /// layouts each printing a row with events per call near the one event it aims at.
 #[test]
 fn bench_lowrank_small_steps_cells_like_a_host() {
-    let out = coagula()
-        .args([
-            "bench",
-            "lowrank-small",
-            "--n0",
-            "64",
-            "--replicas",
-            "20",
-            "--host-steps",
-            "20",
-        ])
-        .output()
-        .unwrap();
-    succeeded(&out);
-    let text = String::from_utf8(out.stdout).unwrap();
+    let text = stdout_of(&[
+        "bench",
+        "lowrank-small",
+        "--n0",
+        "64",
+        "--replicas",
+        "20",
+        "--host-steps",
+        "20",
+    ]);
     for layout in ["tree", "bucketed", "sizes"] {
         let row = text
             .lines()
