@@ -113,7 +113,7 @@ impl<'a> Writer<'a> {
 }
 
 /// Reads the fields of a checkpoint back.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Reader<'a> {
     buf: &'a [u8],
     pos: usize,
@@ -265,6 +265,7 @@ pub(crate) mod tag {
     pub const UNIFORM: u64 = 11;
     pub const DSMC: u64 = 12;
     pub const LOWRANK_SIZES: u64 = 13;
+    pub const BUCKETED_COUNTED: u64 = 14;
 }
 
 /// Writes a [`crate::scheme::StepReport`].

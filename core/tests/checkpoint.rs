@@ -6,7 +6,7 @@ use coagula_core::kernel::{BinaryUniform, Coagulation};
 use coagula_core::qmc::Randomization;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
-use coagula_core::scheme::lowrank::{Bucketed, LowRank};
+use coagula_core::scheme::lowrank::{AutoBucketed, BucketMode, Bucketed, BucketedCounted, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use rand_pcg::Pcg64Mcg;
 
@@ -152,35 +152,140 @@ fn bucketed_small_large_and_pipelined() {
     );
 }
 
+/// The counted bucketed engine: split = unbroken through M doublings and particle
+/// doublings (its tree holds incremental sums, so the checkpoint keeps them), rank 1
+/// and rank 3.
+#[test]
+fn bucketed_counted_split() {
+    split_equals_unbroken(
+        || BucketedCounted::<_, 1, 2>::monodisperse(Coagulation::additive(), 3000).unwrap(),
+        1.0,
+        3.0,
+        |s| s.counts().into_owned(),
+    );
+    let k = Coagulation::free_molecular().with_min_size(1.0).unwrap();
+    split_equals_unbroken(
+        || BucketedCounted::<_, 3, 6>::monodisperse(k, 500).unwrap(),
+        2.0,
+        40.0,
+        |s| s.counts().into_owned(),
+    );
+}
+
+/// The registry's `lowrank` restores a checkpoint into whichever engine wrote it
+/// (a host's clone builds a blank small system and restores into it), continues the
+/// same run bit for bit, and chooses the engine again when the counts are replaced.
+#[test]
+fn auto_bucketed_restores_across_engines() {
+    let k = Coagulation::constant(1.0).unwrap();
+    for n0 in [40_000u64, 900] {
+        let mut a = AutoBucketed::<_, 1, 2>::new(k, &[n0], n0 as f64).unwrap();
+        let mode = if n0 > 16_384 {
+            BucketMode::Slots
+        } else {
+            BucketMode::Counted
+        };
+        assert_eq!(a.mode(), mode);
+        let mut rng = Pcg64Mcg::new(5);
+        a.advance_to(1.0, &mut rng).unwrap();
+        let mut buf = vec![0u8; a.checkpoint_len()];
+        a.save_to(&mut buf).unwrap();
+        let rng_at_save = rng.clone();
+        a.advance_to(2.0, &mut rng).unwrap();
+        // a blank of the other engine takes the checkpoint
+        let blank = if n0 > 16_384 { 2 } else { 1 << 15 };
+        let mut b = AutoBucketed::<_, 1, 2>::new(k, &[blank], 1.0).unwrap();
+        assert_ne!(b.mode(), mode);
+        b.restore_from(&buf).unwrap();
+        assert_eq!(b.mode(), mode);
+        let mut rng_b = rng_at_save;
+        b.advance_to(2.0, &mut rng_b).unwrap();
+        assert_eq!(a.counts(), b.counts());
+        assert_eq!(a.time().to_bits(), b.time().to_bits());
+        // a corrupted checkpoint of the other engine is refused, the target unchanged
+        let mut c = AutoBucketed::<_, 1, 2>::new(k, &[blank], 1.0).unwrap();
+        let mut bad = buf.clone();
+        let at = bad.len() / 2;
+        bad[at] ^= 0x40;
+        assert!(c.restore_from(&bad).is_err());
+        assert_ne!(c.mode(), mode);
+        assert_eq!(
+            c.counts().into_owned(),
+            vec![blank]
+                .into_iter()
+                .chain(std::iter::repeat_n(0, c.max_size() - 1))
+                .collect::<Vec<_>>()
+        );
+    }
+    // replacing the counts chooses the engine again; time and totals carry over
+    let mut s = AutoBucketed::<_, 1, 2>::new(k, &[1000], 1000.0).unwrap();
+    s.advance_to(0.5, &mut Pcg64Mcg::new(1)).unwrap();
+    let (t, events) = (s.time(), coagula_core::observe::Observe::totals(&s).events);
+    s.set_counts(&[50_000], 50_000.0).unwrap();
+    assert_eq!(s.mode(), BucketMode::Slots);
+    assert_eq!(
+        (s.time(), coagula_core::observe::Observe::totals(&s).events),
+        (t, events)
+    );
+    s.set_counts(&[300], 300.0).unwrap();
+    assert_eq!(s.mode(), BucketMode::Counted);
+    assert_eq!(coagula_core::observe::Observe::particles(&s), 300);
+}
+
 /// Review of issue 13: a checkpoint whose list entry names a size past M (the bucket of
 /// M runs past it) was accepted, and the next `counts()` panicked. Restore now refuses
-/// it, and the target is unchanged.
-#[test]
-fn bucketed_restore_refuses_a_particle_past_the_maximum_size() {
-    let k = Coagulation::constant(1.0).unwrap();
+/// it, and the target is unchanged: for both bucketed engines, from 1000 monomers and
+/// one particle of size 64 = M, alone in the list bucket 64..=65. `offset_at` finds
+/// that particle's offset in the checkpoint; it is set to 1 (size 65 > M) and the
+/// checkpoint resealed, so that the state's own check is what refuses it.
+fn refuses_a_particle_past_the_maximum_size<S: Scheme + Checkpoint>(
+    make: impl Fn(&[u64], f64) -> S,
+    counts: impl Fn(&S) -> Vec<u64>,
+    offset_at: impl Fn(&[u8]) -> usize,
+) {
     let mut init = vec![0u64; 64];
     init[0] = 1000;
-    init[63] = 1; // one particle of size 64 = M, alone in the list bucket 64..=65
-    let a = Bucketed::<_, 1, 2>::new(k, &init, 1001.0).unwrap();
-    assert_eq!(a.max_size(), 64);
+    init[63] = 1;
+    let a = make(&init, 1001.0);
     let mut buf = vec![0u8; a.checkpoint_len()];
     a.save_to(&mut buf).unwrap();
-    let mut b = Bucketed::<_, 1, 2>::new(k, &init, 1001.0).unwrap();
+    let mut b = make(&init, 1001.0);
     b.restore_from(&buf).unwrap();
-    assert_eq!(a.counts(), b.counts());
-    // the word before the overflow stream (3 words) and the checksum is that
-    // particle's offset in its bucket: 1 means size 65 > M (resealed, so that the
-    // state's own check is what refuses it)
-    let at = buf.len() - 8 - 24 - 8;
+    assert_eq!(counts(&a), counts(&b));
+    let at = offset_at(&buf);
     assert_eq!(u64::from_le_bytes(buf[at..at + 8].try_into().unwrap()), 0);
     buf[at] = 1;
     let body = buf.len() - 8;
     let sum = coagula_core::checkpoint::checksum(&buf[..body]);
     buf[body..].copy_from_slice(&sum.to_le_bytes());
-    let mut c = Bucketed::<_, 1, 2>::monodisperse(k, 10).unwrap();
-    let before = c.counts().into_owned();
+    let mut c = make(&[10], 10.0);
+    let before = counts(&c);
     assert!(c.restore_from(&buf).is_err());
-    assert_eq!(c.counts().into_owned(), before);
+    assert_eq!(counts(&c), before);
+}
+
+#[test]
+fn bucketed_restore_refuses_a_particle_past_the_maximum_size() {
+    let k = Coagulation::constant(1.0).unwrap();
+    refuses_a_particle_past_the_maximum_size(
+        |init, v| Bucketed::<_, 1, 2>::new(k, init, v).unwrap(),
+        |s| s.counts().into_owned(),
+        // the word before the overflow stream (3 words) and the checksum
+        |buf| buf.len() - 8 - 24 - 8,
+    );
+    refuses_a_particle_past_the_maximum_size(
+        |init, v| BucketedCounted::<_, 1, 2>::new(k, init, v).unwrap(),
+        |s| s.counts().into_owned(),
+        // after the bucket's count (1) and its list's length (1): the only such run
+        |buf| {
+            let pattern: Vec<u8> = [1u64, 1, 0].iter().flat_map(|w| w.to_le_bytes()).collect();
+            let hits: Vec<usize> = (0..buf.len() - 24)
+                .filter(|&i| buf[i..i + 24] == pattern[..])
+                .collect();
+            assert_eq!(hits.len(), 1, "{hits:?}");
+            hits[0] + 16
+        },
+    );
 }
 
 /// Low-rank over particle sizes from continuous sizes (buckets holding many sizes, so

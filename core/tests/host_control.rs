@@ -144,7 +144,17 @@ fn a_budget_interrupts_and_the_next_call_continues_the_same_run() {
 
 #[test]
 fn a_cancellation_callback_stops_the_call() {
-    let mut s = counts_sim(SchemeId::LowRank, Coagulation::constant(1.0).unwrap()).unwrap();
+    // (enough particles that the run to t = 1e6 takes more than 2 POLL_EVERY
+    // proposals: about 4 10^4 events)
+    let counts = [20_000, 40, 0, 7];
+    let init = Init::Counts {
+        counts: &counts,
+        volume: 20_000.0,
+    };
+    let opts = Options::default().with_batched_clock(false);
+    let k = Coagulation::constant(1.0).unwrap();
+    let mut s: Box<Sim> =
+        registry::build(SchemeId::LowRank, k, NoFragmentation, &init, &opts).unwrap();
     let mut rng = Pcg64Mcg::new(1);
     let mut polls = 0;
     let mut cancel = || {

@@ -10,7 +10,7 @@
 use coagula_core::kernel::{BinaryUniform, Coagulation, CoagulationKernel};
 use coagula_core::qmc::Randomization;
 use coagula_core::scheme::baseline::{AcceptanceRejection, Inverse};
-use coagula_core::scheme::lowrank::{Bucketed, LowRank};
+use coagula_core::scheme::lowrank::{Bucketed, BucketedCounted, LowRank};
 use coagula_core::scheme::massflow::{MassFlow, PointSource};
 use coagula_core::scheme::{Scheme, StepReport};
 use rand_pcg::Pcg64Mcg;
@@ -58,7 +58,7 @@ fn size_count_schemes_are_value_stable() {
     fn all<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
         name: &str,
         k: K,
-        want: [Pin; 4],
+        want: [Pin; 5],
         failures: &mut String,
     ) {
         let n0 = 2000;
@@ -77,11 +77,19 @@ fn size_count_schemes_are_value_stable() {
             } else {
                 (0, 0, 0, 0, 0)
             },
+            counts_pin(
+                BucketedCounted::<K, R, W>::monodisperse(k, n0).unwrap(),
+                |s| s.counts().into_owned(),
+            ),
         ];
-        for (i, scheme) in ["LowRank", "Bucketed", "Inverse", "AcceptanceRejection"]
-            .iter()
-            .enumerate()
-        {
+        let names = [
+            "LowRank",
+            "Bucketed",
+            "Inverse",
+            "AcceptanceRejection",
+            "BucketedCounted",
+        ];
+        for (i, scheme) in names.iter().enumerate() {
             check(&format!("{name} {scheme}"), got[i], want[i], failures);
         }
     }
@@ -94,6 +102,7 @@ fn size_count_schemes_are_value_stable() {
             (832, 986, 154, 0, 13158605767358922332),
             (885, 885, 0, 0, 14576362283316678503),
             (860, 860, 0, 0, 2032075766861111642),
+            (850, 850, 0, 0, 6531131345283194385),
         ],
         &mut failures,
     );
@@ -105,6 +114,7 @@ fn size_count_schemes_are_value_stable() {
             (2204, 2631, 427, 2, 2167236001803353035),
             (2250, 2250, 0, 2, 8515852320400115809),
             (2220, 36318, 34098, 2, 14969627286106257695),
+            (2124, 2127, 3, 2, 17367301671838741731),
         ],
         &mut failures,
     );
@@ -116,6 +126,7 @@ fn size_count_schemes_are_value_stable() {
             (2051, 2418, 367, 2, 7405196712709603969),
             (2057, 2057, 0, 2, 7889359025669339345),
             (2070, 2377, 307, 2, 806088874076014372),
+            (2002, 2004, 2, 2, 11052555270129327972),
         ],
         &mut failures,
     );
@@ -127,6 +138,7 @@ fn size_count_schemes_are_value_stable() {
             (2796, 4495, 1699, 2, 12836370239848841393),
             (2775, 2775, 0, 2, 14471779863178766222),
             (2738, 5263, 2525, 2, 1015803066374961111),
+            (2796, 3812, 1016, 2, 17820453303645770141),
         ],
         &mut failures,
     );

@@ -32,7 +32,7 @@
 use super::baseline::{AcceptanceRejection, Inverse};
 use super::eventflow::{Dsa, DsaCounts, Mfa};
 use super::lowrank::{
-    BinaryTree, Bucketed, EventRule, LowRank, LowRankMc, LowRankSizes, ProposalEngine,
+    AutoBucketed, BinaryTree, EventRule, LowRank, LowRankMc, LowRankSizes, ProposalEngine,
 };
 use super::massflow::{MassFlow, PointSource, Sorting};
 use super::{Budget, Scheme, StepReport};
@@ -616,7 +616,7 @@ where
         }
         (SchemeId::LowRank, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
-                let s = Bucketed::<K, R, W>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                let s = AutoBucketed::<K, R, W>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
                     .with_size_limit(opts.size_limit)
                     .with_batched_clock(opts.batched_clock);
                 Ok(boxed::<_, K, F, G>(s, id))
@@ -963,6 +963,7 @@ macro_rules! counts_facet {
 }
 
 counts_facet!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>, |s| s.counts());
+counts_facet!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts());
 counts_facet!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] DsaCounts<K>, |s| s.counts());

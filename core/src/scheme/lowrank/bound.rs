@@ -132,7 +132,8 @@ pub(crate) fn bucket_extremes<K: CoagulationKernel + ?Sized, const R: usize, con
     let ends = [lo, hi];
     let all = lo..=hi;
     let sizes: &mut dyn Iterator<Item = u64> = if kernel.monotone_factors() {
-        &mut ends.into_iter()
+        // (a singleton's two ends are one size)
+        &mut ends.into_iter().take(if lo == hi { 1 } else { 2 })
     } else {
         &mut all.into_iter()
     };

@@ -56,6 +56,14 @@
 //! (below 4096 particles, where almost every event changes the rates, one ziggurat
 //! exponential per proposal).
 //!
+//! **Small systems.** A small system changes its distribution at almost every event,
+//! so this engine keeps growing buckets and resyncing and rebuilding its tables (a
+//! 1000-particle run paid 2–3× the per-event cost of a 10^6-particle one). The
+//! [`CountedEngine`](super::CountedEngine) keeps the same buckets and bound with the
+//! buckets' exact counts in a sum tree instead; the registry's `lowrank` scheme
+//! ([`AutoBucketed`](super::AutoBucketed)) runs it up to
+//! [`COUNTED_UP_TO`](super::COUNTED_UP_TO) initial particles.
+//!
 //! Why the layout is shaped so — the measurements behind each step — is in
 //! `docs/design/bucketed-layout.md`.
 //!
@@ -81,6 +89,7 @@
 use super::bound::{
     SINGLE, bucket_extremes, bucket_of, bucket_range, count_len, quantise_up, quantum, width_bits,
 };
+use super::counted::each_in_list;
 use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
 use super::rule::Outcome;
 use crate::checkpoint::{Reader, Writer};
@@ -1097,7 +1106,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
     }
 
     fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
-        let mut offsets: Vec<u32> = Vec::new();
+        let mut scratch: Vec<u32> = Vec::new();
         for (b, bk) in self.buckets.iter().enumerate() {
             if bk.n == 0 {
                 continue;
@@ -1109,21 +1118,8 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 .and_then(|l| self.lists.get(l))
                 .filter(|_| !bk.grid);
             match list {
-                Some(list) => {
-                    // a list bucket: its particles' offsets, sorted and counted
-                    offsets.clear();
-                    offsets.extend_from_slice(list);
-                    offsets.sort_unstable();
-                    let mut i = 0;
-                    while i < offsets.len() {
-                        let j = i + offsets[i..]
-                            .iter()
-                            .take_while(|&&o| o == offsets[i])
-                            .count();
-                        f(lo + u64::from(offsets[i]), (j - i) as u64);
-                        i = j;
-                    }
-                }
+                // a list bucket: its particles' offsets, sorted and counted
+                Some(list) => each_in_list(lo, list, &mut scratch, f),
                 None => {
                     for s in lo..=hi {
                         let c = self.counts[s as usize];
@@ -1506,38 +1502,10 @@ mod tests {
     /// weights' headroom are checked after every step, for the reported cases.
     #[test]
     fn small_systems_keep_their_weights_bounded() {
-        use crate::kernel::Coagulation;
-        fn run<K: CoagulationKernel + Copy, const R: usize, const W: usize>(
-            k: K,
-            n0: u64,
-            len: usize,
-            t_end: f64,
-        ) {
-            let mut init = vec![0u64; len];
-            init[0] = n0;
-            let mut s = Bucketed::<K, R, W>::new(k, &init, n0 as f64).unwrap();
-            let mut rng = rand_pcg::Pcg64Mcg::new(n0 as u128 * 7 + len as u128);
-            let mut t = 0.0;
-            while t < t_end {
-                t += t_end / 400.0;
-                s.advance_to(t, &mut rng).unwrap();
-                s.check_invariants();
-            }
-            assert!(
-                s.totals().doublings >= 6,
-                "N0 {n0}: {}",
-                s.totals().doublings
-            );
-        }
-        let k1 = Coagulation::constant(1.0).unwrap();
-        for n0 in [32, 64, 100] {
-            run::<_, 1, 2>(k1, n0, 1, 300.0);
-        }
-        run::<_, 1, 2>(k1, 32, 4096, 300.0);
-        run::<_, 1, 2>(k1, 1000, 1 << 20, 300.0);
-        for n0 in [50, 100, 200] {
-            run::<_, 2, 4>(Coagulation::brownian(), n0, 1, 200.0);
-        }
+        super::super::tests::through_small_systems::<BucketedEngine<1, 2>, BucketedEngine<2, 4>>(
+            |s| s.check_invariants(),
+            |s| s.check_invariants(),
+        );
     }
 
     /// Issue 12, defect 2: below N ≈ 256 almost every proposal landed on an empty
@@ -1547,18 +1515,8 @@ mod tests {
     /// has 0.96–0.99: see `coagula bench lowrank-small`).
     #[test]
     fn small_systems_accept_most_proposals() {
-        use crate::kernel::Coagulation;
-        let k = Coagulation::constant(1.0).unwrap();
         for n0 in [32u64, 128, 256] {
-            let (mut events, mut proposals) = (0u64, 0u64);
-            for seed in 0..50u128 {
-                let mut s = Bucketed::<_, 1, 2>::monodisperse(k, n0).unwrap();
-                let mut rng = rand_pcg::Pcg64Mcg::new(seed * 1000 + u128::from(n0));
-                let rep = s.advance_to(64.0, &mut rng).unwrap();
-                events += rep.events;
-                proposals += rep.proposals;
-            }
-            let acc = events as f64 / proposals as f64;
+            let acc = super::super::tests::small_system_acceptance::<BucketedEngine<1, 2>>(n0);
             assert!(acc > 0.5, "N0 = {n0}: acceptance {acc}");
         }
     }
@@ -1626,32 +1584,11 @@ mod tests {
                 }
             }
         }
-        let (mut chi2, mut df, mut pooled_o, mut pooled_e) = (0.0, 0u64, 0.0, 0.0);
-        let mut over_e = 0.0;
-        for c in 0..exp.len() {
-            let e = exp[c] / total * draws as f64;
-            if c % 4 != 0 {
-                over_e += e;
-            }
-            if e >= 5.0 {
-                chi2 += (obs[c] as f64 - e).powi(2) / e;
-                df += 1;
-            } else {
-                assert!(e > 0.0 || obs[c] == 0, "a pair of rate 0 was proposed");
-                pooled_o += obs[c] as f64;
-                pooled_e += e;
-            }
-        }
-        if pooled_e > 0.0 {
-            chi2 += (pooled_o - pooled_e).powi(2) / pooled_e;
-            df += 1;
-        }
-        let df = (df - 1) as f64;
-        // the chi-square's mean is df, its sd √(2 df): 6 sd is a 1e-6 false alarm
-        assert!(
-            chi2 < df + 6.0 * libm::sqrt(2.0 * df),
-            "chi2 {chi2} for {df} df"
-        );
+        let over_e: f64 = (0..exp.len())
+            .filter(|c| c % 4 != 0)
+            .map(|c| exp[c] / total * draws as f64)
+            .sum();
+        super::super::tests::assert_chi_square(&obs, &exp, draws);
         // the overflow stream's own share (every grown-slot pair is its)
         let se = libm::sqrt(over_e * (1.0 - over_e / draws as f64));
         let seen: u64 = (0..obs.len()).filter(|c| c % 4 != 0).map(|c| obs[c]).sum();

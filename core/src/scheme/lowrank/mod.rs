@@ -53,8 +53,10 @@
 //! assert!((m0 - 1.0 / 1.5).abs() < 0.02);
 //! ```
 
+mod auto;
 pub mod bound;
 pub mod bucketed;
+mod counted;
 pub mod dsmc;
 pub mod proposal;
 pub mod rule;
@@ -65,7 +67,9 @@ pub mod trees;
 pub mod uniform;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
+pub use auto::{AutoBucketed, BucketMode};
 pub use bucketed::{BucketedEngine, MAX_PARTICLES};
+pub use counted::CountedEngine;
 pub use proposal::{Candidate, ProposalEngine};
 pub use rule::{Coagulate, EventRule, Outcome, Reweighed, SPOT_CHECK};
 pub use sizes::LowRankSizes;
@@ -154,9 +158,18 @@ impl Clock {
 /// for comparison).
 pub type LowRank<K, const R: usize, T = WideTree<R>> = LowRankMc<K, R, TreeEngine<R, T>>;
 
-/// Low-rank MC over size buckets, the default and fastest layout (see [`bucketed`]).
-/// `W` must be `2R`.
+/// Low-rank MC over size buckets, the default and fastest layout for large systems (see
+/// [`bucketed`]). `W` must be `2R`.
 pub type Bucketed<K, const R: usize, const W: usize> = LowRankMc<K, R, BucketedEngine<R, W>>;
+
+/// Low-rank MC over size buckets with exact bucket counts in a sum tree: the bucketed
+/// layout for small systems (see [`CountedEngine`]). `W` must be `2R`.
+pub type BucketedCounted<K, const R: usize, const W: usize> = LowRankMc<K, R, CountedEngine<R, W>>;
+
+/// Initial particle numbers up to this run on [`BucketedCounted`] in an
+/// [`AutoBucketed`] (the registry's `lowrank`); above, on [`Bucketed`]. Measured
+/// crossover: `docs/design/bucketed-layout.md`.
+pub const COUNTED_UP_TO: u64 = 1 << 14;
 
 impl<K, const R: usize, E, Rl> core::fmt::Debug for LowRankMc<K, R, E, Rl> {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
@@ -383,8 +396,8 @@ where
             return Ok(false);
         };
         let spot = (self.totals.proposals.wrapping_add(rep.proposals)).is_multiple_of(SPOT_CHECK);
-        let engine = &self.engine;
-        let bounds = || engine.bounds(&c.at);
+        let pair = self.engine.bounds(&c.at);
+        let bounds = move || pair;
         let Some(outcome) =
             self.rule
                 .decide(&self.kernel, &c, bounds, E::LOW_IS_BOUND, spot, rng)?

@@ -55,11 +55,19 @@ pub trait ProposalEngine<const R: usize>: Sized {
     fn refresh<G: Rng + ?Sized>(&mut self, pop: &Population, rng: &mut G) -> Result<f64>;
 
     /// Whether proposal times may be drawn in batches (the rate stays fixed until an
-    /// accepted event asks for a refresh).
-    fn batches(&self, pop: &Population) -> bool;
+    /// accepted event asks for a refresh). By default no: every event changes the
+    /// rate.
+    #[inline]
+    fn batches(&self, _pop: &Population) -> bool {
+        false
+    }
 
     /// An accepted event changed the proposal rate: refresh before the next proposal.
-    fn needs_refresh(&self) -> bool;
+    /// By default always.
+    #[inline]
+    fn needs_refresh(&self) -> bool {
+        true
+    }
 
     /// Whether the engine's bound at a pair is the kernel's factor bound itself, so that
     /// `low = bound` always (the per-size layout; a coarsened bound has `low ≤ bound`).

@@ -13,6 +13,91 @@ use alloc::string::String;
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 
+/// A chi-square test of `obs` (counts of `draws` draws per cell) against cell weights
+/// `exp` (any scale): cells expecting fewer than 5 are pooled, a cell of weight 0 must
+/// stay empty, and the statistic must lie within 6 sd (`√(2 df)`) of its mean df — a
+/// 1e-6 false alarm. Returns the degrees of freedom.
+pub(super) fn assert_chi_square(obs: &[u64], exp: &[f64], draws: u64) -> f64 {
+    let total: f64 = exp.iter().sum();
+    let (mut chi2, mut df, mut pooled_o, mut pooled_e) = (0.0, 0u64, 0.0, 0.0);
+    for (c, (&o, &w)) in obs.iter().zip(exp).enumerate() {
+        let e = w / total * draws as f64;
+        if e >= 5.0 {
+            chi2 += (o as f64 - e).powi(2) / e;
+            df += 1;
+        } else {
+            assert!(e > 0.0 || o == 0, "a pair of rate 0 was proposed: cell {c}");
+            pooled_o += o as f64;
+            pooled_e += e;
+        }
+    }
+    if pooled_e > 0.0 {
+        chi2 += (pooled_o - pooled_e).powi(2) / pooled_e;
+        df += 1;
+    }
+    let df = (df - 1) as f64;
+    assert!(
+        chi2 < df + 6.0 * libm::sqrt(2.0 * df),
+        "chi2 {chi2} for {df} df"
+    );
+    df
+}
+
+/// The small systems that once broke the bucketed layout's weights (issue 12), each
+/// stepped to its end in 400 steps with `check1` / `check2` (rank 1 / rank 2) after
+/// every step, through at least 6 particle doublings: the constant kernel from 32, 64
+/// and 100 monomers, from 32 in a count vector of 4096 and from 1000 in one of 2^20;
+/// the Brownian kernel from 50, 100 and 200.
+pub(super) fn through_small_systems<E1: ProposalEngine<1>, E2: ProposalEngine<2>>(
+    check1: impl Fn(&LowRankMc<Coagulation, 1, E1>),
+    check2: impl Fn(&LowRankMc<Coagulation, 2, E2>),
+) {
+    fn run<const R: usize, E: ProposalEngine<R>>(
+        k: Coagulation,
+        n0: u64,
+        len: usize,
+        t_end: f64,
+        check: &impl Fn(&LowRankMc<Coagulation, R, E>),
+    ) {
+        let mut init = alloc::vec![0u64; len];
+        init[0] = n0;
+        let mut s = LowRankMc::<_, R, E>::new(k, &init, n0 as f64).unwrap();
+        let mut rng = Pcg64Mcg::new(n0 as u128 * 7 + len as u128);
+        let mut t = 0.0;
+        while t < t_end {
+            t += t_end / 400.0;
+            s.advance_to(t, &mut rng).unwrap();
+            check(&s);
+        }
+        let d = s.totals().doublings;
+        assert!(d >= 6, "N0 {n0}: {d} doublings");
+    }
+    let k1 = Coagulation::constant(1.0).unwrap();
+    for n0 in [32, 64, 100] {
+        run(k1, n0, 1, 300.0, &check1);
+    }
+    run(k1, 32, 4096, 300.0, &check1);
+    run(k1, 1000, 1 << 20, 300.0, &check1);
+    for n0 in [50, 100, 200] {
+        run(Coagulation::brownian(), n0, 1, 200.0, &check2);
+    }
+}
+
+/// The acceptance (events per proposal, a property of the algorithm, not a timing)
+/// of the constant kernel from `n0` monomers to t = 64 over 50 seeds, on engine `E`.
+pub(super) fn small_system_acceptance<E: ProposalEngine<1>>(n0: u64) -> f64 {
+    let k = Coagulation::constant(1.0).unwrap();
+    let (mut events, mut proposals) = (0u64, 0u64);
+    for seed in 0..50u128 {
+        let mut s = LowRankMc::<_, 1, E>::monodisperse(k, n0).unwrap();
+        let mut rng = Pcg64Mcg::new(seed * 1000 + u128::from(n0));
+        let rep = s.advance_to(64.0, &mut rng).unwrap();
+        events += rep.events;
+        proposals += rep.proposals;
+    }
+    events as f64 / proposals as f64
+}
+
 const REPLICAS: u64 = 16;
 const N0: u64 = 1 << 13;
 /// Tolerance in standard errors, from 16 replicas' own SE: Student t with 15 degrees of

@@ -52,6 +52,80 @@ fn scale<const R: usize>(w: &Weights<R>, c: f64) -> Weights<R> {
     out
 }
 
+/// A restored tree against the one its counts and kernel build: it may differ by the
+/// rounding of its incremental updates (relative to the largest finite weight; a
+/// weight emptied by differences may sit a rounding below 0), never by more — a
+/// corrupted weight (NaN, infinite, off) is refused. Sums that overflow to infinity in
+/// the fresh tree too are the state the scheme holds (it refuses to advance until new
+/// counts or a new kernel rebuild it), so a clone or a restart of that state restores
+/// (fuzzing finding 9).
+pub(super) fn check_restored<const R: usize, T: ProposalTree<R>>(got: &T, fresh: &T) -> Result<()> {
+    let (got, want) = (got.values(), fresh.values());
+    let scale = want
+        .iter()
+        .filter(|w| w.is_finite())
+        .fold(0.0f64, |a, &b| a.max(b));
+    if got.len() != want.len()
+        || got.iter().zip(&want).any(|(&g, &w)| {
+            !(g == w || (g.is_finite() && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
+        })
+    {
+        return Err(Error::Checkpoint {
+            what: "tree weights do not match the counts and the kernel",
+        });
+    }
+    Ok(())
+}
+
+/// `S_A = Σ_k U_k V_k` from a tree's totals.
+#[inline]
+pub(super) fn tree_rate<const R: usize>(root: &Weights<R>) -> f64 {
+    let mut sa = 0.0;
+    for k in 0..R {
+        sa += root[0][k] * root[1][k];
+    }
+    sa
+}
+
+/// [`tree_rate`], an error when it is not finite (weights past `f64::MAX`: no waiting
+/// time can be drawn).
+pub(super) fn checked_rate<const R: usize>(root: &Weights<R>) -> Result<f64> {
+    let sa = tree_rate(root);
+    if sa.is_finite() {
+        Ok(sa)
+    } else {
+        Err(rate_overflow(sa))
+    }
+}
+
+/// The leaves of one proposal: component k ∝ `U_k V_k`, then side u's leaf ∝ its
+/// `u^k` weight and side v's ∝ its `v^k` weight (three random words).
+#[inline(always)]
+pub(super) fn descend_leaves<const R: usize, T: ProposalTree<R>, G: Rng + ?Sized>(
+    tree: &T,
+    rng: &mut G,
+) -> (usize, usize) {
+    let root = tree.totals();
+    let mut weights = [0.0; R];
+    let mut sa = 0.0;
+    for k in 0..R {
+        weights[k] = root[0][k] * root[1][k];
+        sa += weights[k];
+    }
+    let mut r = sa * open_unit(rng);
+    let mut k = R - 1;
+    for (kk, &w) in weights.iter().enumerate() {
+        r -= w;
+        if r <= 0.0 && w > 0.0 {
+            k = kk;
+            break;
+        }
+    }
+    let tu = root[0][k] * unit_f64(rng.next_u64());
+    let tv = root[1][k] * unit_f64(rng.next_u64());
+    tree.descend_pair(k, tu, tv)
+}
+
 impl<const R: usize, T: ProposalTree<R>> TreeEngine<R, T> {
     /// Bytes of the per-size arrays and the tree for maximum size `m`.
     fn bytes_for(m: usize) -> Option<usize> {
@@ -142,59 +216,16 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
 
     #[inline]
     fn rate_now(&self) -> Option<f64> {
-        let root = self.tree.totals();
-        let mut sa = 0.0;
-        for k in 0..R {
-            sa += root[0][k] * root[1][k];
-        }
-        Some(sa)
+        Some(tree_rate(&self.tree.totals()))
     }
 
     fn refresh<G: Rng + ?Sized>(&mut self, _pop: &Population, _rng: &mut G) -> Result<f64> {
-        let root = self.tree.totals();
-        let mut sa = 0.0;
-        for k in 0..R {
-            sa += root[0][k] * root[1][k];
-        }
-        if !sa.is_finite() {
-            // weights past f64::MAX: no waiting time can be drawn
-            return Err(rate_overflow(sa));
-        }
-        Ok(sa)
-    }
-
-    /// No: every event changes the tree's totals.
-    #[inline]
-    fn batches(&self, _pop: &Population) -> bool {
-        false
-    }
-
-    #[inline]
-    fn needs_refresh(&self) -> bool {
-        true
+        checked_rate(&self.tree.totals())
     }
 
     #[inline]
     fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<(usize, usize)>> {
-        let root = self.tree.totals();
-        let mut weights = [0.0; R];
-        let mut sa = 0.0;
-        for k in 0..R {
-            weights[k] = root[0][k] * root[1][k];
-            sa += weights[k];
-        }
-        let mut r = sa * open_unit(rng);
-        let mut k = R - 1;
-        for (kk, &w) in weights.iter().enumerate() {
-            r -= w;
-            if r <= 0.0 && w > 0.0 {
-                k = kk;
-                break;
-            }
-        }
-        let tu = root[0][k] * unit_f64(rng.next_u64());
-        let tv = root[1][k] * unit_f64(rng.next_u64());
-        let (i, j) = self.tree.descend_pair(k, tu, tv);
+        let (i, j) = descend_leaves(&self.tree, rng);
         if self.counts[i] == 0 || self.counts[j] == 0 {
             // a ghost weight left by rounding (see `trees`): thinning rejects it
             return None;
@@ -347,28 +378,9 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         }
         within_budget(Self::bytes_for(m), pop.memory_budget)?;
         let tree = T::load(m, r)?;
-        // the tree as the counts and the kernel make it: the restored one may differ
-        // by the rounding of its incremental updates (relative to the largest finite
-        // weight; a weight emptied by differences may sit a rounding below 0), never by
-        // more — a corrupted weight (NaN, infinite, off) is refused. Sums that overflow
-        // to infinity in the fresh tree too are the state the scheme holds (it refuses
-        // to advance until new counts or a new kernel rebuild it), so a clone or a
-        // restart of that state restores (fuzzing finding 9).
+        // the tree as the counts and the kernel make it
         let fresh = Self::build(kernel, &counts, pop)?;
-        let (got, want) = (tree.values(), fresh.tree.values());
-        let scale = want
-            .iter()
-            .filter(|w| w.is_finite())
-            .fold(0.0f64, |a, &b| a.max(b));
-        if got.len() != want.len()
-            || got.iter().zip(&want).any(|(&g, &w)| {
-                !(g == w || (g.is_finite() && (g - w).abs() <= 1e-6 * w + 1e-9 * scale))
-            })
-        {
-            return Err(Error::Checkpoint {
-                what: "tree weights do not match the counts and the kernel",
-            });
-        }
+        check_restored(&tree, &fresh.tree)?;
         let mut s = TreeEngine {
             counts,
             fab: Vec::new(),

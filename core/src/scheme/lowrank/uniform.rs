@@ -160,16 +160,6 @@ impl<const R: usize> ProposalEngine<R> for UniformEngine<R> {
     }
 
     #[inline]
-    fn batches(&self, _pop: &Population) -> bool {
-        false
-    }
-
-    #[inline]
-    fn needs_refresh(&self) -> bool {
-        true
-    }
-
-    #[inline]
     fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<(usize, usize)>> {
         let n = self.sizes.len() as u64;
         if n < 2 {

@@ -1,0 +1,292 @@
+//! The registry's `lowrank` scheme: the bucketed layout with the engine chosen by the
+//! system's size — [`BucketedCounted`] up to [`COUNTED_UP_TO`] initial particles (exact
+//! bucket counts in a sum tree: nothing stale when almost every event changes the
+//! distribution), [`Bucketed`] above (slots and alias tables: O(1) per proposal).
+//!
+//! The choice is made per scheme, not per proposal: each variant is a whole
+//! [`LowRankMc`] with its own event loop, so neither pays for the other's code (a
+//! dispatch inside the engine cost the large systems 20 %; see
+//! `docs/design/bucketed-layout.md`). Replacing the counts chooses again, and a
+//! checkpoint restores into whichever engine wrote it.
+
+use super::{Bucketed, BucketedCounted, COUNTED_UP_TO, Coagulate, LowRankMc, ProposalEngine};
+use crate::checkpoint::{Checkpoint, Reader, Writer};
+use crate::error::Result;
+use crate::kernel::CoagulationKernel;
+use crate::observe::Observe;
+use crate::scheme::{Budget, Scheme, StepReport};
+use alloc::borrow::Cow;
+use rand_core::Rng;
+
+/// Which engine an [`AutoBucketed`] runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BucketMode {
+    /// [`Bucketed`]: slots and alias tables.
+    Slots,
+    /// [`BucketedCounted`]: exact bucket counts in a sum tree.
+    Counted,
+}
+
+/// The bucketed layout with its engine chosen by the initial particle number (see the
+/// module docs). `W` must be `2R`.
+///
+/// # Example
+/// ```
+/// use coagula_core::kernel::Coagulation;
+/// use coagula_core::scheme::{Scheme, lowrank::{AutoBucketed, BucketMode}};
+/// let k = Coagulation::constant(1.0).unwrap();
+/// let small = AutoBucketed::<_, 1, 2>::new(k, &[500], 500.0).unwrap();
+/// let large = AutoBucketed::<_, 1, 2>::new(k, &[1 << 20], 1e6).unwrap();
+/// assert_eq!((small.mode(), large.mode()), (BucketMode::Counted, BucketMode::Slots));
+/// ```
+#[allow(clippy::large_enum_variant)] // (one per simulation; boxing adds a pointer chase)
+pub enum AutoBucketed<K, const R: usize, const W: usize> {
+    /// Above [`COUNTED_UP_TO`] initial particles.
+    Slots(Bucketed<K, R, W>),
+    /// Up to [`COUNTED_UP_TO`] initial particles.
+    Counted(BucketedCounted<K, R, W>),
+}
+
+/// `$body` with `$s` bound to whichever scheme is in use.
+macro_rules! either {
+    ($self:expr, $s:ident => $body:expr) => {
+        match $self {
+            AutoBucketed::Slots($s) => $body,
+            AutoBucketed::Counted($s) => $body,
+        }
+    };
+}
+
+/// The engine for `n0` initial particles.
+fn mode_for(n0: u64) -> BucketMode {
+    if n0 > COUNTED_UP_TO {
+        BucketMode::Slots
+    } else {
+        BucketMode::Counted
+    }
+}
+
+/// A scheme on engine `E` with `from`'s kernel, limits, clock option, time and totals,
+/// holding `counts` in `volume` (as `set_counts` would).
+fn carried<K: CoagulationKernel + Clone, const R: usize, E1, E2>(
+    from: &LowRankMc<K, R, E1>,
+    counts: &[u64],
+    volume: f64,
+) -> Result<LowRankMc<K, R, E2>>
+where
+    E1: ProposalEngine<R>,
+    E2: ProposalEngine<R>,
+{
+    let mut s = LowRankMc::<K, R, E2>::new_with_memory_budget(
+        from.kernel.clone(),
+        &[2],
+        1.0,
+        from.pop.memory_budget,
+    )?
+    .with_size_limit(from.pop.size_limit)
+    .with_batched_clock(from.batched);
+    s.set_counts(counts, volume)?;
+    s.time = from.time;
+    s.totals = from.totals;
+    Ok(s)
+}
+
+impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<K, R, W> {
+    /// Starts from `counts[i − 1] = N_i` in `volume` (errors as
+    /// [`LowRankMc::new`]), on the engine for `Σ N_i` particles.
+    pub fn new(kernel: K, counts: &[u64], volume: f64) -> Result<Self> {
+        Self::new_with_memory_budget(kernel, counts, volume, super::DEFAULT_MEMORY_BUDGET)
+    }
+
+    /// [`new`](Self::new) with the growing tables capped at `budget` bytes.
+    pub fn new_with_memory_budget(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        budget: usize,
+    ) -> Result<Self> {
+        let n0 = counts
+            .iter()
+            .try_fold(0u64, |a, &c| a.checked_add(c))
+            .unwrap_or(u64::MAX);
+        Ok(match mode_for(n0) {
+            BucketMode::Slots => AutoBucketed::Slots(Bucketed::new_with_memory_budget(
+                kernel, counts, volume, budget,
+            )?),
+            BucketMode::Counted => AutoBucketed::Counted(BucketedCounted::new_with_memory_budget(
+                kernel, counts, volume, budget,
+            )?),
+        })
+    }
+
+    /// See [`LowRankMc::with_size_limit`].
+    pub fn with_size_limit(self, limit: u64) -> Self {
+        match self {
+            AutoBucketed::Slots(s) => AutoBucketed::Slots(s.with_size_limit(limit)),
+            AutoBucketed::Counted(s) => AutoBucketed::Counted(s.with_size_limit(limit)),
+        }
+    }
+
+    /// See [`LowRankMc::with_batched_clock`].
+    pub fn with_batched_clock(self, on: bool) -> Self {
+        match self {
+            AutoBucketed::Slots(s) => AutoBucketed::Slots(s.with_batched_clock(on)),
+            AutoBucketed::Counted(s) => AutoBucketed::Counted(s.with_batched_clock(on)),
+        }
+    }
+
+    /// The engine in use.
+    pub fn mode(&self) -> BucketMode {
+        match self {
+            AutoBucketed::Slots(_) => BucketMode::Slots,
+            AutoBucketed::Counted(_) => BucketMode::Counted,
+        }
+    }
+
+    /// See [`LowRankMc::counts`].
+    pub fn counts(&self) -> Cow<'_, [u64]> {
+        either!(self, s => s.counts())
+    }
+
+    /// See [`LowRankMc::max_size`].
+    pub fn max_size(&self) -> usize {
+        either!(self, s => s.max_size())
+    }
+
+    /// See [`LowRankMc::for_each_count`].
+    pub fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
+        either!(self, s => s.for_each_count(f))
+    }
+
+    /// See [`LowRankMc::set_kernel`].
+    pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        either!(self, s => s.set_kernel(kernel))
+    }
+
+    /// See [`LowRankMc::set_time`].
+    pub fn set_time(&mut self, t: f64) -> Result<()> {
+        either!(self, s => s.set_time(t))
+    }
+
+    /// See [`LowRankMc::set_counts`]; the engine is chosen again for the new particle
+    /// number (time, totals and limits carry over). Errors leave the scheme unchanged.
+    pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
+        let n0 = counts
+            .iter()
+            .try_fold(0u64, |a, &c| a.checked_add(c))
+            .unwrap_or(u64::MAX);
+        match (mode_for(n0), &mut *self) {
+            (BucketMode::Slots, AutoBucketed::Slots(s)) => s.set_counts(counts, volume),
+            (BucketMode::Counted, AutoBucketed::Counted(s)) => s.set_counts(counts, volume),
+            (BucketMode::Slots, AutoBucketed::Counted(s)) => {
+                *self = AutoBucketed::Slots(carried(s, counts, volume)?);
+                Ok(())
+            }
+            (BucketMode::Counted, AutoBucketed::Slots(s)) => {
+                *self = AutoBucketed::Counted(carried(s, counts, volume)?);
+                Ok(())
+            }
+        }
+    }
+
+    /// See [`LowRankMc::set_pairs`] (the engine chosen as by
+    /// [`set_counts`](Self::set_counts)).
+    pub fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
+        let (limit, budget) = either!(&*self, s => (s.pop.size_limit, s.pop.memory_budget));
+        let dense = crate::scheme::population::dense_from_pairs(sizes, counts, limit, budget)?;
+        self.set_counts(&dense, volume)
+    }
+
+    /// The other engine's scheme, blank, with this one's kernel and options (to restore
+    /// a checkpoint it wrote).
+    fn other_blank(&self) -> Result<Self> {
+        Ok(match self {
+            AutoBucketed::Slots(s) => AutoBucketed::Counted(carried(s, &[2], 1.0)?),
+            AutoBucketed::Counted(s) => AutoBucketed::Slots(carried(s, &[2], 1.0)?),
+        })
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for AutoBucketed<K, R, W> {
+    fn time(&self) -> f64 {
+        either!(self, s => s.time())
+    }
+
+    fn advance_within<G: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport> {
+        either!(self, s => s.advance_within(t, budget, rng))
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, const W: usize> Observe for AutoBucketed<K, R, W> {
+    fn volume(&self) -> f64 {
+        either!(self, s => s.volume())
+    }
+    fn particles(&self) -> u64 {
+        either!(self, s => s.particles())
+    }
+    fn moment(&self, order: f64) -> f64 {
+        either!(self, s => s.moment(order))
+    }
+    fn concentration(&self, a: f64, b: f64) -> f64 {
+        either!(self, s => s.concentration(a, b))
+    }
+    fn number_density(&self, x: f64) -> f64 {
+        either!(self, s => s.number_density(x))
+    }
+    fn gel_mass(&self) -> Option<f64> {
+        either!(self, s => s.gel_mass())
+    }
+    fn totals(&self) -> StepReport {
+        either!(self, s => Observe::totals(s))
+    }
+}
+
+impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
+    for AutoBucketed<K, R, W>
+{
+    fn save(&self, w: &mut Writer) {
+        either!(self, s => s.save(w))
+    }
+
+    /// Into whichever engine wrote the checkpoint (its tag says which); errors leave
+    /// the scheme unchanged.
+    fn restore(&mut self, r: &mut Reader) -> Result<()> {
+        let mut probe = r.clone();
+        let tag = (probe.u64(), probe.u64(), probe.u64());
+        let ours = match self {
+            AutoBucketed::Slots(_) => LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag(),
+            AutoBucketed::Counted(_) => {
+                LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag()
+            }
+        };
+        let other_mode = matches!(tag, (Ok(_), Ok(_), Ok(t)) if t != ours);
+        if other_mode {
+            let mut other = self.other_blank()?;
+            let theirs = match &other {
+                AutoBucketed::Slots(_) => LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag(),
+                AutoBucketed::Counted(_) => {
+                    LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag()
+                }
+            };
+            if matches!(tag, (Ok(_), Ok(_), Ok(t)) if t == theirs) {
+                either!(&mut other, s => s.restore(r))?;
+                *self = other;
+                return Ok(());
+            }
+        }
+        either!(self, s => s.restore(r))
+    }
+}
+
+impl<K: CoagulationKernel, const R: usize, const W: usize> core::fmt::Debug
+    for AutoBucketed<K, R, W>
+{
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        either!(self, s => s.fmt(f))
+    }
+}
