@@ -1,7 +1,8 @@
 //! The bucketed layout for small systems: the same buckets and the same bound (each
 //! bucket's largest factors), but the proposal weights are the buckets' exact particle
 //! counts, `u^k_b = â_k(b) n_b` and `v^k_b = b̂_k(b) n_b`, in an 8-ary sum tree over the
-//! buckets (≤ 1024 leaves, three levels) that every event updates along three paths.
+//! buckets (three levels up to 512 buckets, four up to the 897 of 2^32 sizes) that every
+//! event updates along three paths.
 //!
 //! A small system changes its distribution at almost every event. The slot engine
 //! ([`BucketedEngine`](super::BucketedEngine)) then keeps growing buckets, refreshing
@@ -71,11 +72,16 @@ pub struct CountedEngine<const R: usize, const W: usize> {
     m: u64,
 }
 
-/// Bytes charged to the memory budget for maximum size `m` with `n` particles: the
-/// tables over the buckets, the lists, and the dense vector of M counts that
-/// `counts()` returns (so that a budget also bounds M, as the slot mode's count
-/// array does).
+/// Bytes charged to the memory budget for maximum size `m` and up to `n` particles
+/// (the doubling reference: doublings fill the lists up to it): the tables over the
+/// buckets, the lists, and the dense vector of M counts that `counts()` returns (so
+/// that a budget also bounds M, as the slot engine's count array does); `None` past
+/// M = 2^36 (list offsets are `u32`).
 fn bytes_for<const R: usize, const W: usize>(m: u64, n: u64) -> Option<usize> {
+    // (list offsets are u32: a bucket of M at most 2^32 wide)
+    if m > 1 << 36 {
+        return None;
+    }
     let buckets = bucket_of(m) + 1;
     let dense = usize::try_from(m)
         .ok()?
@@ -149,7 +155,7 @@ impl<const R: usize, const W: usize> CountedEngine<R, W> {
         pop: &Population,
     ) -> Result<Self> {
         let m = (counts.len() as u64).next_power_of_two().max(64);
-        within_budget(bytes_for::<R, W>(m, pop.n), pop.memory_budget)?;
+        within_budget(bytes_for::<R, W>(m, pop.n0), pop.memory_budget)?;
         let mut s = Self::empty(kernel, m)?;
         for (i, &c) in counts.iter().enumerate() {
             let x = i as u64 + 1;
@@ -361,7 +367,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
         };
         if size > self.m {
             let nb = bucket_of(2 * self.m) + 1;
-            within_budget(bytes_for::<R, W>(2 * self.m, pop.n), pop.memory_budget)?;
+            within_budget(bytes_for::<R, W>(2 * self.m, pop.n0), pop.memory_budget)?;
             // the larger tree first (the new buckets are empty: zero leaves)
             let leaves = leaves_for(nb);
             let tree = WideTree::build(leaves, |l| self.leaf(l))?;
@@ -466,11 +472,12 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
         r: &mut Reader,
     ) -> Result<Self> {
         let bad = |what| Error::Checkpoint { what };
-        if !m.is_power_of_two() || m < 64 || pop.n > pop.n0 {
+        // (doubling keeps n below n0; n0 bounds what the lists may grow to)
+        if !m.is_power_of_two() || m < 64 || pop.n > pop.n0 || pop.n0 > MAX_PARTICLES {
             return Err(bad("invalid maximum size or particle number"));
         }
         let nb = bucket_of(m) + 1;
-        within_budget(bytes_for::<R, W>(m, pop.n), pop.memory_budget)?;
+        within_budget(bytes_for::<R, W>(m, pop.n0), pop.memory_budget)?;
         let n = r.u64s()?;
         if n.len() != nb
             || n[0] != 0
@@ -531,17 +538,6 @@ mod tests {
         let mut rng = <rand_pcg::Pcg64Mcg as rand_core::SeedableRng>::seed_from_u64(seed);
         let m = init.len();
         let none = m * m;
-        let mut obs = alloc::vec![0u64; m * m + 1];
-        let draws = 2_000_000u64;
-        for _ in 0..draws {
-            match s.propose(&mut rng) {
-                Some(c) => {
-                    assert_eq!(c.x, s.occupant(c.at.0.0, c.at.0.1));
-                    obs[(c.x as usize - 1) * m + c.y as usize - 1] += 1;
-                }
-                None => obs[none] += 1,
-            }
-        }
         let rate = |x: usize, y: usize| {
             let (eu, ev) = (
                 bucket_extremes::<K, R, W>(&kernel, bucket_of(x as u64)).unwrap(),
@@ -549,6 +545,21 @@ mod tests {
             );
             (0..R).map(|k| eu[0][k] * ev[0][R + k]).sum::<f64>()
         };
+        let mut obs = alloc::vec![0u64; m * m + 1];
+        let draws = 2_000_000u64;
+        for _ in 0..draws {
+            match s.propose(&mut rng) {
+                Some(c) => {
+                    assert_eq!(c.x, s.occupant(c.at.0.0, c.at.0.1));
+                    // the thinning bound is the proposal rate of the pair, both ways
+                    let want = rate(c.x as usize, c.y as usize) + rate(c.y as usize, c.x as usize);
+                    let got = s.bounds(&c.at).0;
+                    assert!((got - want).abs() <= 1e-12 * want, "bound {got} vs {want}");
+                    obs[(c.x as usize - 1) * m + c.y as usize - 1] += 1;
+                }
+                None => obs[none] += 1,
+            }
+        }
         let mut exp = alloc::vec![0.0f64; m * m + 1];
         for x in 1..=m {
             for y in 1..=m {

@@ -396,8 +396,8 @@ where
             return Ok(false);
         };
         let spot = (self.totals.proposals.wrapping_add(rep.proposals)).is_multiple_of(SPOT_CHECK);
-        let pair = self.engine.bounds(&c.at);
-        let bounds = move || pair;
+        let engine = &self.engine;
+        let bounds = || engine.bounds(&c.at);
         let Some(outcome) =
             self.rule
                 .decide(&self.kernel, &c, bounds, E::LOW_IS_BOUND, spot, rng)?

@@ -460,6 +460,13 @@ fn bucketed_wide_buckets_agree_with_size_trees() {
     );
     assert!(doublings > 0, "particle doubling not exercised");
     compare("additive", &tree, &bucket);
+    let counted = stats(
+        || BucketedCounted::<_, 1, 2>::new(add, &init, volume).unwrap(),
+        &times,
+        6,
+        |s| obs(&s.counts(), s.volume()),
+    );
+    compare("additive counted", &tree, &counted);
     let fm = Coagulation::free_molecular().with_min_size(1.0).unwrap();
     let times = [0.05, 0.3];
     let tree = stats(
@@ -475,6 +482,13 @@ fn bucketed_wide_buckets_agree_with_size_trees() {
         |s| obs(&s.counts(), s.volume()),
     );
     compare("ballistic", &tree, &bucket);
+    let counted = stats(
+        || BucketedCounted::<_, 3, 6>::new(fm, &init, volume).unwrap(),
+        &times,
+        5,
+        |s| obs(&s.counts(), s.volume()),
+    );
+    compare("ballistic counted", &tree, &counted);
     assert!(failures.is_empty(), "{failures}");
 }
 
