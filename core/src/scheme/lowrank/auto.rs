@@ -57,8 +57,12 @@ macro_rules! either {
     };
 }
 
-/// The engine for `n0` initial particles.
-fn mode_for(n0: u64) -> BucketMode {
+/// The engine for `Σ counts` initial particles.
+fn mode_for(counts: &[u64]) -> BucketMode {
+    let n0 = counts
+        .iter()
+        .try_fold(0u64, |a, &c| a.checked_add(c))
+        .unwrap_or(u64::MAX);
     if n0 > COUNTED_UP_TO {
         BucketMode::Slots
     } else {
@@ -105,11 +109,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         volume: f64,
         budget: usize,
     ) -> Result<Self> {
-        let n0 = counts
-            .iter()
-            .try_fold(0u64, |a, &c| a.checked_add(c))
-            .unwrap_or(u64::MAX);
-        Ok(match mode_for(n0) {
+        Ok(match mode_for(counts) {
             BucketMode::Slots => AutoBucketed::Slots(Bucketed::new_with_memory_budget(
                 kernel, counts, volume, budget,
             )?),
@@ -171,11 +171,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
     /// See [`LowRankMc::set_counts`]; the engine is chosen again for the new particle
     /// number (time, totals and limits carry over). Errors leave the scheme unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        let n0 = counts
-            .iter()
-            .try_fold(0u64, |a, &c| a.checked_add(c))
-            .unwrap_or(u64::MAX);
-        match (mode_for(n0), &mut *self) {
+        match (mode_for(counts), &mut *self) {
             (BucketMode::Slots, AutoBucketed::Slots(s)) => s.set_counts(counts, volume),
             (BucketMode::Counted, AutoBucketed::Counted(s)) => s.set_counts(counts, volume),
             (BucketMode::Slots, AutoBucketed::Counted(s)) => {
@@ -258,26 +254,18 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
         let mut probe = r.clone();
         let tag = (probe.u64(), probe.u64(), probe.u64());
-        let ours = match self {
-            AutoBucketed::Slots(_) => LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag(),
-            AutoBucketed::Counted(_) => {
-                LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag()
-            }
+        let slots = LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag();
+        let counted = LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag();
+        let theirs = match (self.mode(), tag) {
+            (BucketMode::Counted, (Ok(_), Ok(_), Ok(t))) => t == slots,
+            (BucketMode::Slots, (Ok(_), Ok(_), Ok(t))) => t == counted,
+            _ => false,
         };
-        let other_mode = matches!(tag, (Ok(_), Ok(_), Ok(t)) if t != ours);
-        if other_mode {
+        if theirs {
             let mut other = self.other_blank()?;
-            let theirs = match &other {
-                AutoBucketed::Slots(_) => LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag(),
-                AutoBucketed::Counted(_) => {
-                    LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag()
-                }
-            };
-            if matches!(tag, (Ok(_), Ok(_), Ok(t)) if t == theirs) {
-                either!(&mut other, s => s.restore(r))?;
-                *self = other;
-                return Ok(());
-            }
+            either!(&mut other, s => s.restore(r))?;
+            *self = other;
+            return Ok(());
         }
         either!(self, s => s.restore(r))
     }
