@@ -20,6 +20,8 @@ module coagula
        COAG_RANDOMIZATION_MATOUSEK = 2, COAG_RANDOMIZATION_OWEN = 3
   integer(c_int32_t), parameter :: COAG_METHOD_LOWRANK = 0, COAG_METHOD_INVERSE = 1, &
        COAG_METHOD_REJECTION = 2, COAG_METHOD_LOWRANK_TREE = 3, COAG_METHOD_DSA_COUNTS = 4
+  integer(c_int32_t), parameter :: COAG_BUCKET_AUTO = 0, COAG_BUCKET_SLOTS = 1, &
+       COAG_BUCKET_COUNTED = 2
   integer(c_int32_t), parameter :: COAG_EVENTFLOW_MFA = 0, COAG_EVENTFLOW_DSA = 1, &
        COAG_EVENTFLOW_LOWRANK = 2
   integer(c_int32_t), parameter :: COAG_SAMPLER_DEFAULT = 0, COAG_SAMPLER_TREE = 1, &
@@ -96,6 +98,7 @@ module coagula
      integer(c_int64_t) :: seed
      integer(c_int64_t) :: stream
      integer(c_int32_t) :: batched_clock
+     integer(c_int32_t) :: bucket_mode
   end type coag_counts_config
 
   type, bind(c) :: coag_eventflow_config
@@ -517,6 +520,12 @@ module coagula
        integer(c_size_t), value :: workspace_bytes
        type(c_ptr), intent(out) :: out
        integer(c_int32_t) :: coag_eventflow_new_in
+     end function
+     function coag_sim_bucket_mode(sim, out) bind(c, name="coag_sim_bucket_mode")
+       import :: c_ptr, c_int32_t
+       type(c_ptr), value :: sim
+       integer(c_int32_t), intent(out) :: out
+       integer(c_int32_t) :: coag_sim_bucket_mode
      end function
      function coag_sim_method(sim, out) bind(c, name="coag_sim_method")
        import :: c_ptr, c_int32_t

@@ -232,6 +232,25 @@
 #define COAG_METHOD_DSA_COUNTS 4
 
 /*
+ `coag_counts_config.bucket_mode`: the bucketed low-rank method chooses its engine by
+ the initial particle number (exact bucket counts up to 16384 particles, slots and
+ alias tables above), and again when the counts are replaced.
+ */
+#define COAG_BUCKET_AUTO 0
+
+/*
+ The slot engine (slots and alias tables: O(1) per proposal, fastest for large
+ systems), kept through `coag_sim_set_counts`.
+ */
+#define COAG_BUCKET_SLOTS 1
+
+/*
+ The counted engine (exact bucket counts in a sum tree: fastest for small systems),
+ kept through `coag_sim_set_counts`.
+ */
+#define COAG_BUCKET_COUNTED 2
+
+/*
  Eibeck & Wagner's event-driven mass flow algorithm (particles carry mass `M1 / N`).
  */
 #define COAG_EVENTFLOW_MFA 0
@@ -752,6 +771,14 @@ typedef struct {
    gets 0.)
    */
   int32_t batched_clock;
+  /*
+   `COAG_BUCKET_*`: the bucketed low-rank method's engine (`COAG_METHOD_LOWRANK`
+   only; other methods need `COAG_BUCKET_AUTO`). A pinned sim keeps its engine and
+   restores only checkpoints that engine wrote. (Appended in 0.1, in the tail
+   padding of the struct before it: fill the struct with
+   `coag_counts_default_config`.)
+   */
+  int32_t bucket_mode;
 } coag_counts_config;
 
 /*
@@ -1322,6 +1349,16 @@ int32_t coag_counts_new(const coag_counts_config *config, const coag_kernel *ker
  `sim` must be NULL or live; `out` NULL or writable.
  */
 int32_t coag_sim_method(const coag_sim *sim, int32_t *out);
+
+/*
+ The engine a bucketed low-rank sim runs now: `COAG_BUCKET_SLOTS` or
+ `COAG_BUCKET_COUNTED` (chosen by size unless the config pinned it;
+ `COAG_UNSUPPORTED` for any other method).
+
+ # Safety
+ `sim` must be NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_bucket_mode(const coag_sim *sim, int32_t *out);
 
 /*
  Releases a sim (NULL is a no-op).

@@ -318,6 +318,13 @@ class Sim {
         check(coag_sim_method(s_.get(), &m));
         return m;
     }
+    /// The `COAG_BUCKET_SLOTS` or `_COUNTED` engine of a bucketed low-rank sim (throws
+    /// for any other method).
+    int bucket_mode() const {
+        std::int32_t m = -1;
+        check(coag_sim_bucket_mode(s_.get(), &m));
+        return m;
+    }
     double moment(double m) const {
         double v;
         check(coag_sim_moment(s_.get(), m, &v));

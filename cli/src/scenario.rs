@@ -207,6 +207,18 @@ pub struct SchemeSpec {
     /// How particles are drawn by weight (mfa, dsa): `tree` (sum trees; dsa's default)
     /// or `groups` (the paper's group acceptance–rejection; mfa's default).
     pub sampler: Option<SamplerName>,
+    /// The bucketed low-rank scheme's engine (lowrank only): `slots` (slots and alias
+    /// tables, fastest for large systems) or `counted` (exact bucket counts, fastest for
+    /// small ones); default: chosen by the initial particle number.
+    pub engine: Option<EngineName>,
+}
+
+/// `scheme.engine`.
+#[derive(Clone, Copy, Debug, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "kebab-case")]
+pub enum EngineName {
+    Slots,
+    Counted,
 }
 
 /// `scheme.sampler`.
@@ -1078,6 +1090,14 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             "only mfa, dsa and dsa-counts count violations of the product majorant (the other schemes refuse them)",
         )?;
     }
+    if scheme != SchemeId::LowRank {
+        refuse(
+            src,
+            "scheme.engine",
+            &s.scheme.engine,
+            "only lowrank (the bucketed layout) has engines to choose",
+        )?;
+    }
     if counts_scheme || mass_flow || low_rank_sizes {
         refuse(
             src,
@@ -1719,6 +1739,12 @@ fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
             SamplerName::Tree => coagula_core::scheme::eventflow::Sampler::SumTree,
         });
     }
+    if let Some(e) = s.scheme.engine {
+        options = options.with_bucket_mode(Some(match e {
+            EngineName::Slots => coagula_core::scheme::lowrank::BucketMode::Slots,
+            EngineName::Counted => coagula_core::scheme::lowrank::BucketMode::Counted,
+        }));
+    }
     if let Some(c) = s.scheme.capacity {
         let c = usize::try_from(c).map_err(|_| src.at("scheme.capacity", "too large"))?;
         options = options.with_capacity(c);
@@ -1893,6 +1919,7 @@ mod tests {
         "scheme.dt",
         "scheme.points",
         "scheme.size-limit",
+        "scheme.engine",
         "output.times",
         "output.t-end",
         "output.t-start",
@@ -1996,6 +2023,38 @@ mod tests {
             approx::assert_relative_eq!(gel_at_2(scheme), ml, max_relative = 1e-12);
         }
         approx::assert_relative_eq!(gel_at_2("mfa"), flory, max_relative = 1e-12);
+    }
+
+    /// `scheme.engine` pins the bucketed engine, and only lowrank takes it.
+    #[test]
+    fn engine_key() {
+        let (name, text) = crate::examples::get("quickstart-constant").unwrap();
+        let with = |scheme: &str, engine: &str| {
+            let ov = vec![
+                (
+                    "scheme.name".to_string(),
+                    toml::Value::String(scheme.into()),
+                ),
+                (
+                    "scheme.engine".to_string(),
+                    toml::Value::String(engine.into()),
+                ),
+            ];
+            load(&Source {
+                name,
+                text,
+                overrides: &ov,
+                drops: &[],
+            })
+        };
+        use coagula_core::scheme::lowrank::BucketMode;
+        let plan = with("lowrank", "slots").unwrap();
+        assert_eq!(plan.options.bucket_mode, Some(BucketMode::Slots));
+        let plan = with("lowrank", "counted").unwrap();
+        assert_eq!(plan.options.bucket_mode, Some(BucketMode::Counted));
+        assert!(with("lowrank", "alias").is_err());
+        let e = with("lowrank-tree", "slots").unwrap_err();
+        assert!(e.message.contains("engines"), "{}", e.message);
     }
 
     #[test]

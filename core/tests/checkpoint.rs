@@ -234,6 +234,102 @@ fn auto_bucketed_restores_across_engines() {
     assert_eq!(coagula_core::observe::Observe::particles(&s), 300);
 }
 
+/// A pinned engine: chosen against the size, kept through `set_counts`, switched in
+/// place with the state, time and totals carried over, and a checkpoint of the other
+/// engine refused with the scheme unchanged; the registry's option pins it too.
+#[test]
+fn auto_bucketed_pinned_engine() {
+    let k = Coagulation::constant(1.0).unwrap();
+    let budget = coagula_core::scheme::lowrank::DEFAULT_MEMORY_BUDGET;
+    for pin in [BucketMode::Slots, BucketMode::Counted] {
+        for n0 in [900u64, 40_000] {
+            let s = AutoBucketed::<_, 1, 2>::new_with_mode(k, &[n0], n0 as f64, budget, Some(pin))
+                .unwrap();
+            assert_eq!((s.mode(), s.pinned()), (pin, Some(pin)));
+        }
+    }
+    let mut s = AutoBucketed::<_, 1, 2>::new_with_mode(
+        k,
+        &[40_000],
+        40_000.0,
+        budget,
+        Some(BucketMode::Counted),
+    )
+    .unwrap();
+    s.set_counts(&[300], 300.0).unwrap();
+    s.set_counts(&[50_000], 50_000.0).unwrap();
+    assert_eq!(s.mode(), BucketMode::Counted);
+    // switching in place carries the state over exactly
+    let mut rng = Pcg64Mcg::new(3);
+    s.advance_to(0.5, &mut rng).unwrap();
+    let (counts, t, events) = (
+        s.counts().into_owned(),
+        s.time(),
+        coagula_core::observe::Observe::totals(&s).events,
+    );
+    assert!(events > 0);
+    s.set_mode(Some(BucketMode::Slots)).unwrap();
+    assert_eq!(
+        (s.mode(), s.pinned()),
+        (BucketMode::Slots, Some(BucketMode::Slots))
+    );
+    assert_eq!(s.counts().into_owned(), counts);
+    assert_eq!(
+        (s.time(), coagula_core::observe::Observe::totals(&s).events),
+        (t, events)
+    );
+    // unpinned: the engine stays until the counts are replaced, then follows the size
+    s.set_mode(None).unwrap();
+    assert_eq!((s.mode(), s.pinned()), (BucketMode::Slots, None));
+    s.set_counts(&[300], 300.0).unwrap();
+    assert_eq!(s.mode(), BucketMode::Counted);
+    // the counted engine's checkpoint into a scheme pinned to slots: refused, unchanged
+    let mut a = AutoBucketed::<_, 1, 2>::new(k, &[900], 900.0).unwrap();
+    a.advance_to(1.0, &mut Pcg64Mcg::new(4)).unwrap();
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    a.save_to(&mut buf).unwrap();
+    let mut p = AutoBucketed::<_, 1, 2>::new(k, &[700], 700.0)
+        .unwrap()
+        .with_mode(Some(BucketMode::Slots))
+        .unwrap();
+    let mut before = vec![0u8; p.checkpoint_len()];
+    p.save_to(&mut before).unwrap();
+    let err = p.restore_from(&buf).unwrap_err();
+    assert!(
+        matches!(err, coagula_core::Error::Checkpoint { .. }),
+        "{err:?}"
+    );
+    let mut after = vec![0u8; p.checkpoint_len()];
+    p.save_to(&mut after).unwrap();
+    assert_eq!(before, after);
+    // its own engine's checkpoint restores
+    let mut b = AutoBucketed::<_, 1, 2>::new(k, &[700], 700.0)
+        .unwrap()
+        .with_mode(Some(BucketMode::Counted))
+        .unwrap();
+    b.restore_from(&buf).unwrap();
+    assert_eq!(b.counts(), a.counts());
+    // through the registry
+    use coagula_core::kernel::NoFragmentation;
+    use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+    for (pin, want) in [
+        (None, BucketMode::Counted),
+        (Some(BucketMode::Slots), BucketMode::Slots),
+    ] {
+        let init = Init::Counts {
+            counts: &[900],
+            volume: 900.0,
+        };
+        let opts = Options::default().with_bucket_mode(pin);
+        let sim: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> =
+            registry::build(SchemeId::LowRank, k, NoFragmentation, &init, &opts).unwrap();
+        assert_eq!(sim.bucket_mode(), Some(want));
+        let tree: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> =
+            registry::build(SchemeId::LowRankTree, k, NoFragmentation, &init, &opts).unwrap();
+        assert_eq!(tree.bucket_mode(), None);
+    }
+}
+
 /// Review of issue 13: a checkpoint whose list entry names a size past M (the bucket of
 /// M runs past it) was accepted, and the next `counts()` panicked. Restore now refuses
 /// it, and the target is unchanged: for both bucketed engines, from 1000 monomers and

@@ -11,6 +11,7 @@ use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::kernel::CoagulationKernel;
 use coagula_core::qmc::Randomization;
 use coagula_core::random::{Purpose, generator, substream};
+use coagula_core::scheme::lowrank::BucketMode;
 use coagula_core::scheme::massflow::{PointSource, Sorting};
 use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State};
 use coagula_core::scheme::{Budget, StepReport};
@@ -43,6 +44,17 @@ pub const COAG_METHOD_LOWRANK_TREE: i32 = 3;
 /// Direct simulation (Marcus–Lushnikov, Eibeck & Wagner 2000) over size counts: the
 /// finite-N process itself, no particle doubling (the kernel needs a product majorant).
 pub const COAG_METHOD_DSA_COUNTS: i32 = 4;
+
+/// `coag_counts_config.bucket_mode`: the bucketed low-rank method chooses its engine by
+/// the initial particle number (exact bucket counts up to 16384 particles, slots and
+/// alias tables above), and again when the counts are replaced.
+pub const COAG_BUCKET_AUTO: i32 = 0;
+/// The slot engine (slots and alias tables: O(1) per proposal, fastest for large
+/// systems), kept through `coag_sim_set_counts`.
+pub const COAG_BUCKET_SLOTS: i32 = 1;
+/// The counted engine (exact bucket counts in a sum tree: fastest for small systems),
+/// kept through `coag_sim_set_counts`.
+pub const COAG_BUCKET_COUNTED: i32 = 2;
 
 /// The `COAG_METHOD_*` codes and the registry's schemes they name.
 const METHODS: [(i32, SchemeId); 5] = [
@@ -132,6 +144,12 @@ pub struct coag_counts_config {
     /// in one call. (Appended in 0.1: a caller compiled against a header without it
     /// gets 0.)
     pub batched_clock: i32,
+    /// `COAG_BUCKET_*`: the bucketed low-rank method's engine (`COAG_METHOD_LOWRANK`
+    /// only; other methods need `COAG_BUCKET_AUTO`). A pinned sim keeps its engine and
+    /// restores only checkpoints that engine wrote. (Appended in 0.1, in the tail
+    /// padding of the struct before it: fill the struct with
+    /// `coag_counts_default_config`.)
+    pub bucket_mode: i32,
 }
 
 /// Configuration of the event-driven schemes over particle sizes: the mass flow
@@ -410,6 +428,7 @@ fn default_counts() -> coag_counts_config {
         seed: 0,
         stream: 0,
         batched_clock: 0,
+        bucket_mode: COAG_BUCKET_AUTO,
     }
 }
 
@@ -1094,6 +1113,16 @@ pub unsafe extern "C" fn coag_counts_new(
             c.volume = total.max(1) as f64;
         }
         c.batched_clock = i32::from(c.batched_clock != 0);
+        let mode = bucket_mode_of(c.bucket_mode)?;
+        if mode.is_some() && id != SchemeId::LowRank {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!(
+                    "bucket_mode {}: only the bucketed low-rank method (COAG_METHOD_LOWRANK) has engines; pass COAG_BUCKET_AUTO",
+                    c.bucket_mode
+                ),
+            );
+        }
         if c.size_limit == 0 {
             c.size_limit = Options::default().size_limit;
         }
@@ -1101,7 +1130,7 @@ pub unsafe extern "C" fn coag_counts_new(
             counts: n,
             volume: c.volume,
         };
-        let sim = registry::build(id, k, Fragmentation::None, &init, &counts_options(&c))?;
+        let sim = registry::build(id, k, Fragmentation::None, &init, &counts_options(&c)?)?;
         let mut given = given;
         given.batched_clock = c.batched_clock;
         // SAFETY: `out` checked non-null; writable (contract).
@@ -1112,16 +1141,30 @@ pub unsafe extern "C" fn coag_counts_new(
     })
 }
 
+/// The engine a `COAG_BUCKET_*` code pins (`None`: chosen by size).
+fn bucket_mode_of(code: i32) -> Result<Option<BucketMode>, Fail> {
+    match code {
+        COAG_BUCKET_AUTO => Ok(None),
+        COAG_BUCKET_SLOTS => Ok(Some(BucketMode::Slots)),
+        COAG_BUCKET_COUNTED => Ok(Some(BucketMode::Counted)),
+        m => fail(
+            COAG_INVALID_ARGUMENT,
+            format!("unknown bucket_mode {m} (COAG_BUCKET_AUTO, _SLOTS or _COUNTED)"),
+        ),
+    }
+}
+
 /// The registry options of a counts config (volume and size limit resolved).
-fn counts_options(c: &coag_counts_config) -> Options {
+fn counts_options(c: &coag_counts_config) -> Result<Options, Fail> {
     let budget = match c.memory_budget {
         0 => coagula_core::scheme::population::machine_memory_budget(),
         b => usize::try_from(b).unwrap_or(usize::MAX),
     };
-    Options::default()
+    Ok(Options::default()
         .with_memory_budget(budget)
         .with_size_limit(c.size_limit)
         .with_batched_clock(c.batched_clock != 0)
+        .with_bucket_mode(bucket_mode_of(c.bucket_mode)?))
 }
 
 /// The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).
@@ -1140,6 +1183,37 @@ pub unsafe extern "C" fn coag_sim_method(sim: *const coag_sim, out: *mut i32) ->
                 COAG_UNSUPPORTED,
                 "method: a sim over particle sizes (mass flow, mfa, dsa, lowrank-sizes) has no COAG_METHOD (an event-driven sim's is in coag_sim_eventflow_config)",
             );
+        };
+        // SAFETY: checked non-null; writable (contract).
+        unsafe { write(out, m) };
+        Ok(())
+    })
+}
+
+/// The engine a bucketed low-rank sim runs now: `COAG_BUCKET_SLOTS` or
+/// `COAG_BUCKET_COUNTED` (chosen by size unless the config pinned it;
+/// `COAG_UNSUPPORTED` for any other method).
+///
+/// # Safety
+/// `sim` must be NULL or live; `out` NULL or writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_bucket_mode(sim: *const coag_sim, out: *mut i32) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        non_null(out, "out")?;
+        let m = match s.sim.bucket_mode() {
+            Some(BucketMode::Slots) => COAG_BUCKET_SLOTS,
+            Some(BucketMode::Counted) => COAG_BUCKET_COUNTED,
+            None => {
+                return fail(
+                    COAG_UNSUPPORTED,
+                    format!(
+                        "bucket_mode: a {} sim has no bucket engines (only COAG_METHOD_LOWRANK)",
+                        s.sim.id().name()
+                    ),
+                );
+            }
         };
         // SAFETY: checked non-null; writable (contract).
         unsafe { write(out, m) };
@@ -2382,7 +2456,7 @@ pub unsafe extern "C" fn coag_sim_clone(sim: *const coag_sim, out: *mut *mut coa
                     counts: blank,
                     volume: 1.0,
                 };
-                registry::build(id, s.kernel, s.frag, &init, &counts_options(&c))?
+                registry::build(id, s.kernel, s.frag, &init, &counts_options(&c)?)?
             }
             _ => return fail(COAG_UNSUPPORTED, "clone: unknown state"),
         };

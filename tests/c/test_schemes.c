@@ -162,6 +162,117 @@ static int same_sizes(coag_sim *a, coag_sim *b) {
     return eq;
 }
 
+/* The bucketed low-rank method's two engines: chosen by size (COAG_BUCKET_AUTO) or pinned;
+ * each pinned engine against the exact M0(2) of the constant kernel; the pin kept through
+ * set_counts and clone; a checkpoint of the other engine refused by a pinned sim. */
+static void bucket_engines(void) {
+    coag_kernel *k;
+    OK(coag_kernel_new_constant(1.0, &k));
+    double e_m0;
+    OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 2.0, &e_m0));
+    const int modes[3] = {COAG_BUCKET_AUTO, COAG_BUCKET_SLOTS, COAG_BUCKET_COUNTED};
+    /* 8192 particles: the size choice is the counted engine */
+    const int runs[3] = {COAG_BUCKET_COUNTED, COAG_BUCKET_SLOTS, COAG_BUCKET_COUNTED};
+    for (int mi = 0; mi < 3; mi++) {
+        stats m0 = {0};
+        for (int r = 0; r < REPLICAS; r++) {
+            coag_counts_config c;
+            OK(coag_counts_default_config(&c, sizeof c));
+            CHECK(c.bucket_mode == COAG_BUCKET_AUTO, "default bucket_mode %d", c.bucket_mode);
+            c.bucket_mode = modes[mi];
+            c.seed = 2000 + r;
+            uint64_t counts[1] = {1 << 13};
+            coag_sim *s;
+            OK(coag_counts_new(&c, k, counts, 1, &s));
+            int m = -1;
+            OK(coag_sim_bucket_mode(s, &m));
+            CHECK(m == runs[mi], "bucket_mode %d runs engine %d, expected %d", modes[mi], m, runs[mi]);
+            for (int h = 1; h <= 20; h++) OK(coag_sim_advance_to(s, 0.1 * h, NULL));
+            double v;
+            OK(coag_sim_moment(s, 0.0, &v));
+            stats_push(&m0, v);
+            coag_sim_free(s);
+        }
+        CHECK(fabs(m0.mean - e_m0) < Z_TOL * stats_se(&m0), "bucket_mode %d: M0 %g ± %g vs %g", modes[mi], m0.mean,
+              stats_se(&m0), e_m0);
+    }
+    /* by size: 20000 particles run on slots, and a replaced state chooses again; pinned
+     * engines stay */
+    uint64_t big[1] = {20000}, small[1] = {100};
+    coag_counts_config c;
+    OK(coag_counts_default_config(&c, sizeof c));
+    coag_sim *a, *p, *q;
+    int m = -1;
+    OK(coag_counts_new(&c, k, big, 1, &a));
+    OK(coag_sim_bucket_mode(a, &m));
+    CHECK(m == COAG_BUCKET_SLOTS, "20000 particles by size: engine %d", m);
+    OK(coag_sim_set_counts(a, small, 1, 100.0));
+    OK(coag_sim_bucket_mode(a, &m));
+    CHECK(m == COAG_BUCKET_COUNTED, "100 particles by size: engine %d", m);
+    c.bucket_mode = COAG_BUCKET_COUNTED;
+    OK(coag_counts_new(&c, k, big, 1, &p));
+    OK(coag_sim_bucket_mode(p, &m));
+    CHECK(m == COAG_BUCKET_COUNTED, "pinned counted at 20000: engine %d", m);
+    c.bucket_mode = COAG_BUCKET_SLOTS;
+    OK(coag_counts_new(&c, k, big, 1, &q));
+    OK(coag_sim_set_counts(q, small, 1, 100.0));
+    OK(coag_sim_bucket_mode(q, &m));
+    CHECK(m == COAG_BUCKET_SLOTS, "pinned slots after set_counts: engine %d", m);
+    /* a clone keeps the pin and continues the same run */
+    OK(coag_sim_advance_to(q, 0.5, NULL));
+    coag_sim *qc;
+    OK(coag_sim_clone(q, &qc));
+    OK(coag_sim_bucket_mode(qc, &m));
+    CHECK(m == COAG_BUCKET_SLOTS, "clone of a pinned sim: engine %d", m);
+    OK(coag_sim_advance_to(q, 1.0, NULL));
+    OK(coag_sim_advance_to(qc, 1.0, NULL));
+    CHECK(same_sim(q, qc), "a clone of a pinned sim ran differently");
+    /* the counted engine's checkpoint into a sim pinned to slots: refused, unchanged;
+     * into a sim chosen by size: taken (the engine follows the checkpoint) */
+    OK(coag_sim_set_counts(a, small, 1, 100.0));
+    OK(coag_sim_advance_to(a, 0.25, NULL));
+    size_t na, nq0, nq1;
+    uint8_t *ckpt = snapshot(a, &na);
+    uint8_t *before = snapshot(q, &nq0);
+    EXPECT(coag_sim_restore(q, ckpt, na), COAG_BAD_CHECKPOINT);
+    uint8_t *after = snapshot(q, &nq1);
+    CHECK(nq0 == nq1 && memcmp(before, after, nq0) == 0, "a refused restore changed the pinned sim");
+    coag_sim *fresh;
+    c.bucket_mode = COAG_BUCKET_AUTO;
+    OK(coag_counts_new(&c, k, big, 1, &fresh));
+    OK(coag_sim_set_counts(fresh, small, 1, 100.0));
+    OK(coag_sim_restore(fresh, ckpt, na));
+    CHECK(same_sim(a, fresh), "restored by-size sim differs");
+    /* bad codes; a pin on a method without engines; the query on such a sim */
+    coag_sim *none = NULL;
+    c.bucket_mode = 3;
+    EXPECT(coag_counts_new(&c, k, small, 1, &none), COAG_INVALID_ARGUMENT);
+    c.bucket_mode = -1;
+    EXPECT(coag_counts_new(&c, k, small, 1, &none), COAG_INVALID_ARGUMENT);
+    c.bucket_mode = COAG_BUCKET_SLOTS;
+    c.method = COAG_METHOD_INVERSE;
+    EXPECT(coag_counts_new(&c, k, small, 1, &none), COAG_INVALID_ARGUMENT);
+    CHECK(none == NULL, "a sim from a refused bucket_mode");
+    c.bucket_mode = COAG_BUCKET_AUTO;
+    coag_sim *inv;
+    OK(coag_counts_new(&c, k, small, 1, &inv));
+    m = 42;
+    EXPECT(coag_sim_bucket_mode(inv, &m), COAG_UNSUPPORTED);
+    CHECK(m == 42, "output written on error");
+    EXPECT(coag_sim_bucket_mode(NULL, &m), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_bucket_mode(a, NULL), COAG_NULL_PARAMETER);
+    free(ckpt);
+    free(before);
+    free(after);
+    coag_sim_free(inv);
+    coag_sim_free(fresh);
+    coag_sim_free(qc);
+    coag_sim_free(q);
+    coag_sim_free(p);
+    coag_sim_free(a);
+    coag_kernel_free(k);
+}
+
 /* An event-driven sim of `n` monomers (method, sampler, seed; mass 1). */
 static coag_sim *eventflow_sim(const coag_kernel *k, const coag_fragmentation *f, int method, int sampler,
                                double truncation, uint64_t seed, size_t n) {
@@ -737,6 +848,7 @@ int main(void) {
     massflow_in_caller_workspace();
     massflow_lecot();
     counts_schemes();
+    bucket_engines();
     eventflow_schemes();
     lowrank_sizes_scheme();
     change_kernel_between_steps();

@@ -28,6 +28,7 @@ int main() {
         c.seed = 31 + r;
         auto sim = coagula::Sim::counts(c, k, {1u << 13});
         if (r == 0) CHECK(sim.method() == COAG_METHOD_LOWRANK, "default method: bucketed low-rank");
+        if (r == 0) CHECK(sim.bucket_mode() == COAG_BUCKET_COUNTED, "8192 particles: the counted engine");
         for (int h = 1; h <= 10; ++h) sim.advance_to(0.2 * h);
         double m0 = sim.moment(0.0);
         sum += m0;

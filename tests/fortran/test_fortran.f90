@@ -148,6 +148,8 @@ program test_fortran
      if (r == 1) then
         call ok(coag_sim_method(sim, method))
         call check(method == COAG_METHOD_LOWRANK, "the default method is bucketed low-rank")
+        call ok(coag_sim_bucket_mode(sim, method))
+        call check(method == COAG_BUCKET_COUNTED, "8192 particles run on the counted engine")
      end if
      do h = 1, 10
         call ok(coag_sim_advance_to(sim, 0.2_c_double * h, rep))

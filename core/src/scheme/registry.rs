@@ -236,6 +236,9 @@ pub struct Options {
     /// Event-driven schemes: how particles are drawn by weight (`None`: the scheme's
     /// default, the faster in our measurements — groups for mfa, the sum tree for dsa).
     pub sampler: Option<super::eventflow::Sampler>,
+    /// The bucketed low-rank scheme's engine (`None`, the default: chosen by the
+    /// initial particle number; see [`AutoBucketed`]).
+    pub bucket_mode: Option<super::lowrank::BucketMode>,
 }
 
 impl Default for Options {
@@ -253,6 +256,7 @@ impl Default for Options {
             truncation: f64::INFINITY,
             strict_bound: false,
             sampler: None,
+            bucket_mode: None,
         }
     }
 }
@@ -303,6 +307,12 @@ impl Options {
         self
     }
 
+    /// Pins the bucketed low-rank scheme's engine (`None`: chosen by size).
+    pub fn with_bucket_mode(mut self, mode: Option<super::lowrank::BucketMode>) -> Self {
+        self.bucket_mode = mode;
+        self
+    }
+
     /// Makes a kernel above its product majorant an error (event-driven schemes).
     pub fn with_strict_bound(mut self, strict: bool) -> Self {
         self.strict_bound = strict;
@@ -349,6 +359,8 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
     fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()>;
     /// Largest size the state can hold now (size-count schemes' M), if any.
     fn max_size(&self) -> Option<u64>;
+    /// The engine the bucketed low-rank scheme runs (others: `None`).
+    fn bucket_mode(&self) -> Option<super::lowrank::BucketMode>;
     /// Replaces counts and volume (size-count schemes; others: `Unsupported`).
     fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>;
     /// Replaces the state by `counts[i]` particles of size `sizes[i]` in `volume`
@@ -386,6 +398,10 @@ pub trait Facet<K, F> {
     }
     /// Largest size the state can hold now.
     fn max_size(&self) -> Option<u64> {
+        None
+    }
+    /// The bucketed low-rank scheme's engine.
+    fn bucket_mode(&self) -> Option<super::lowrank::BucketMode> {
         None
     }
     /// Replaces counts and volume.
@@ -491,6 +507,9 @@ where
     }
     fn max_size(&self) -> Option<u64> {
         self.s.max_size()
+    }
+    fn bucket_mode(&self) -> Option<super::lowrank::BucketMode> {
+        self.s.bucket_mode()
     }
     fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
         self.s.set_counts(counts, volume)
@@ -616,7 +635,7 @@ where
         }
         (SchemeId::LowRank, Init::Counts { counts, volume }) => {
             by_rank!(kernel.rank(), R, W => {
-                let s = AutoBucketed::<K, R, W>::new_with_memory_budget(kernel, counts, volume, opts.memory_budget)?
+                let s = AutoBucketed::<K, R, W>::new_with_mode(kernel, counts, volume, opts.memory_budget, opts.bucket_mode)?
                     .with_size_limit(opts.size_limit)
                     .with_batched_clock(opts.batched_clock);
                 Ok(boxed::<_, K, F, G>(s, id))
@@ -933,8 +952,14 @@ impl<K: CoagulationKernel, F, const R: usize, const W: usize> Facet<K, F>
 
 /// [`Facet`] of a size-count scheme from its inherent methods.
 macro_rules! counts_facet {
-    ([$($g:tt)*] $ty:ty, $counts:expr) => {
+    ([$($g:tt)*] $ty:ty, $counts:expr $(, mode = $mode:expr)?) => {
         impl<$($g)*, F> Facet<K, F> for $ty {
+            $(
+                fn bucket_mode(&self) -> Option<super::lowrank::BucketMode> {
+                    let f: fn(&Self) -> super::lowrank::BucketMode = $mode;
+                    Some(f(self))
+                }
+            )?
             fn state(&self) -> State<'_> {
                 let f: fn(&Self) -> Cow<'_, [u64]> = $counts;
                 State::Counts(f(self), self.volume())
@@ -963,7 +988,7 @@ macro_rules! counts_facet {
 }
 
 counts_facet!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>, |s| s.counts());
-counts_facet!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts());
+counts_facet!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts(), mode = |s| s.mode());
 counts_facet!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));
 counts_facet!([K: CoagulationKernel] DsaCounts<K>, |s| s.counts());

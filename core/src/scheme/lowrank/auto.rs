@@ -7,7 +7,9 @@
 //! [`LowRankMc`] with its own event loop, so neither pays for the other's code (a
 //! dispatch inside the engine cost the large systems 20 %; see
 //! `docs/design/bucketed-layout.md`). Replacing the counts chooses again, and a
-//! checkpoint restores into whichever engine wrote it.
+//! checkpoint restores into whichever engine wrote it. A caller who measured its own
+//! crossover pins the engine with [`AutoBucketed::with_mode`]; a pinned scheme keeps its
+//! engine through `set_counts` and refuses a checkpoint the other engine wrote.
 
 use super::{Bucketed, BucketedCounted, COUNTED_UP_TO, Coagulate, LowRankMc, ProposalEngine};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
@@ -27,8 +29,8 @@ pub enum BucketMode {
     Counted,
 }
 
-/// The bucketed layout with its engine chosen by the initial particle number (see the
-/// module docs). `W` must be `2R`.
+/// The bucketed layout with its engine chosen by the initial particle number, or pinned
+/// (see the module docs). `W` must be `2R`.
 ///
 /// # Example
 /// ```
@@ -38,9 +40,19 @@ pub enum BucketMode {
 /// let small = AutoBucketed::<_, 1, 2>::new(k, &[500], 500.0).unwrap();
 /// let large = AutoBucketed::<_, 1, 2>::new(k, &[1 << 20], 1e6).unwrap();
 /// assert_eq!((small.mode(), large.mode()), (BucketMode::Counted, BucketMode::Slots));
+/// // pinned: the slot engine for a small system
+/// let pinned = small.with_mode(Some(BucketMode::Slots)).unwrap();
+/// assert_eq!((pinned.mode(), pinned.pinned()), (BucketMode::Slots, Some(BucketMode::Slots)));
 /// ```
+pub struct AutoBucketed<K, const R: usize, const W: usize> {
+    engine: Engine<K, R, W>,
+    /// The engine the caller pinned (`None`: chosen by size).
+    pin: Option<BucketMode>,
+}
+
+/// The scheme in use.
 #[allow(clippy::large_enum_variant)] // (one per simulation; boxing adds a pointer chase)
-pub enum AutoBucketed<K, const R: usize, const W: usize> {
+enum Engine<K, const R: usize, const W: usize> {
     /// Above [`COUNTED_UP_TO`] initial particles.
     Slots(Bucketed<K, R, W>),
     /// Up to [`COUNTED_UP_TO`] initial particles.
@@ -51,8 +63,8 @@ pub enum AutoBucketed<K, const R: usize, const W: usize> {
 macro_rules! either {
     ($self:expr, $s:ident => $body:expr) => {
         match $self {
-            AutoBucketed::Slots($s) => $body,
-            AutoBucketed::Counted($s) => $body,
+            Engine::Slots($s) => $body,
+            Engine::Counted($s) => $body,
         }
     };
 }
@@ -109,77 +121,128 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         volume: f64,
         budget: usize,
     ) -> Result<Self> {
-        Ok(match mode_for(counts) {
-            BucketMode::Slots => AutoBucketed::Slots(Bucketed::new_with_memory_budget(
+        Self::new_with_mode(kernel, counts, volume, budget, None)
+    }
+
+    /// [`new_with_memory_budget`](Self::new_with_memory_budget) on the engine `pin`
+    /// (`None`: chosen by the particle number), pinned as by
+    /// [`with_mode`](Self::with_mode).
+    pub fn new_with_mode(
+        kernel: K,
+        counts: &[u64],
+        volume: f64,
+        budget: usize,
+        pin: Option<BucketMode>,
+    ) -> Result<Self> {
+        let engine = match pin.unwrap_or_else(|| mode_for(counts)) {
+            BucketMode::Slots => Engine::Slots(Bucketed::new_with_memory_budget(
                 kernel, counts, volume, budget,
             )?),
-            BucketMode::Counted => AutoBucketed::Counted(BucketedCounted::new_with_memory_budget(
+            BucketMode::Counted => Engine::Counted(BucketedCounted::new_with_memory_budget(
                 kernel, counts, volume, budget,
             )?),
-        })
+        };
+        Ok(AutoBucketed { engine, pin })
+    }
+
+    /// Pins the engine (`Some`) or lets the size choose it (`None`, the default): the
+    /// state moves to the pinned engine if it is not there (time, totals and options
+    /// carry over); later `set_counts` keep it, and a checkpoint of the other engine is
+    /// refused. Meant at construction, for a caller who measured its own crossover. An
+    /// error (the other engine's memory budget) drops the scheme; see
+    /// [`set_mode`](Self::set_mode) to keep it.
+    pub fn with_mode(mut self, pin: Option<BucketMode>) -> Result<Self> {
+        self.set_mode(pin)?;
+        Ok(self)
+    }
+
+    /// [`with_mode`](Self::with_mode) in place; errors leave the scheme unchanged.
+    /// Unpinning (`None`) keeps the engine in use until the counts are replaced.
+    pub fn set_mode(&mut self, pin: Option<BucketMode>) -> Result<()> {
+        if let Some(mode) = pin
+            && mode != self.mode()
+        {
+            let counts = self.counts().into_owned();
+            let volume = self.volume();
+            self.engine = match &self.engine {
+                Engine::Slots(s) => Engine::Counted(carried(s, &counts, volume)?),
+                Engine::Counted(s) => Engine::Slots(carried(s, &counts, volume)?),
+            };
+        }
+        self.pin = pin;
+        Ok(())
     }
 
     /// See [`LowRankMc::with_size_limit`].
     pub fn with_size_limit(self, limit: u64) -> Self {
-        match self {
-            AutoBucketed::Slots(s) => AutoBucketed::Slots(s.with_size_limit(limit)),
-            AutoBucketed::Counted(s) => AutoBucketed::Counted(s.with_size_limit(limit)),
-        }
+        let engine = match self.engine {
+            Engine::Slots(s) => Engine::Slots(s.with_size_limit(limit)),
+            Engine::Counted(s) => Engine::Counted(s.with_size_limit(limit)),
+        };
+        AutoBucketed { engine, ..self }
     }
 
     /// See [`LowRankMc::with_batched_clock`].
     pub fn with_batched_clock(self, on: bool) -> Self {
-        match self {
-            AutoBucketed::Slots(s) => AutoBucketed::Slots(s.with_batched_clock(on)),
-            AutoBucketed::Counted(s) => AutoBucketed::Counted(s.with_batched_clock(on)),
-        }
+        let engine = match self.engine {
+            Engine::Slots(s) => Engine::Slots(s.with_batched_clock(on)),
+            Engine::Counted(s) => Engine::Counted(s.with_batched_clock(on)),
+        };
+        AutoBucketed { engine, ..self }
     }
 
     /// The engine in use.
     pub fn mode(&self) -> BucketMode {
-        match self {
-            AutoBucketed::Slots(_) => BucketMode::Slots,
-            AutoBucketed::Counted(_) => BucketMode::Counted,
+        match self.engine {
+            Engine::Slots(_) => BucketMode::Slots,
+            Engine::Counted(_) => BucketMode::Counted,
         }
+    }
+
+    /// The pinned engine, if any (see [`with_mode`](Self::with_mode)).
+    pub fn pinned(&self) -> Option<BucketMode> {
+        self.pin
     }
 
     /// See [`LowRankMc::counts`].
     pub fn counts(&self) -> Cow<'_, [u64]> {
-        either!(self, s => s.counts())
+        either!(&self.engine, s => s.counts())
     }
 
     /// See [`LowRankMc::max_size`].
     pub fn max_size(&self) -> usize {
-        either!(self, s => s.max_size())
+        either!(&self.engine, s => s.max_size())
     }
 
     /// See [`LowRankMc::for_each_count`].
     pub fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) {
-        either!(self, s => s.for_each_count(f))
+        either!(&self.engine, s => s.for_each_count(f))
     }
 
     /// See [`LowRankMc::set_kernel`].
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
-        either!(self, s => s.set_kernel(kernel))
+        either!(&mut self.engine, s => s.set_kernel(kernel))
     }
 
     /// See [`LowRankMc::set_time`].
     pub fn set_time(&mut self, t: f64) -> Result<()> {
-        either!(self, s => s.set_time(t))
+        either!(&mut self.engine, s => s.set_time(t))
     }
 
-    /// See [`LowRankMc::set_counts`]; the engine is chosen again for the new particle
-    /// number (time, totals and limits carry over). Errors leave the scheme unchanged.
+    /// See [`LowRankMc::set_counts`]; unless pinned, the engine is chosen again for the
+    /// new particle number (time, totals and limits carry over). Errors leave the scheme
+    /// unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        match (mode_for(counts), &mut *self) {
-            (BucketMode::Slots, AutoBucketed::Slots(s)) => s.set_counts(counts, volume),
-            (BucketMode::Counted, AutoBucketed::Counted(s)) => s.set_counts(counts, volume),
-            (BucketMode::Slots, AutoBucketed::Counted(s)) => {
-                *self = AutoBucketed::Slots(carried(s, counts, volume)?);
+        let mode = self.pin.unwrap_or_else(|| mode_for(counts));
+        match (mode, &mut self.engine) {
+            (BucketMode::Slots, Engine::Slots(s)) => s.set_counts(counts, volume),
+            (BucketMode::Counted, Engine::Counted(s)) => s.set_counts(counts, volume),
+            (BucketMode::Slots, Engine::Counted(s)) => {
+                self.engine = Engine::Slots(carried(s, counts, volume)?);
                 Ok(())
             }
-            (BucketMode::Counted, AutoBucketed::Slots(s)) => {
-                *self = AutoBucketed::Counted(carried(s, counts, volume)?);
+            (BucketMode::Counted, Engine::Slots(s)) => {
+                self.engine = Engine::Counted(carried(s, counts, volume)?);
                 Ok(())
             }
         }
@@ -188,24 +251,24 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
     /// See [`LowRankMc::set_pairs`] (the engine chosen as by
     /// [`set_counts`](Self::set_counts)).
     pub fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
-        let (limit, budget) = either!(&*self, s => (s.pop.size_limit, s.pop.memory_budget));
+        let (limit, budget) = either!(&self.engine, s => (s.pop.size_limit, s.pop.memory_budget));
         let dense = crate::scheme::population::dense_from_pairs(sizes, counts, limit, budget)?;
         self.set_counts(&dense, volume)
     }
 
     /// The other engine's scheme, blank, with this one's kernel and options (to restore
     /// a checkpoint it wrote).
-    fn other_blank(&self) -> Result<Self> {
-        Ok(match self {
-            AutoBucketed::Slots(s) => AutoBucketed::Counted(carried(s, &[2], 1.0)?),
-            AutoBucketed::Counted(s) => AutoBucketed::Slots(carried(s, &[2], 1.0)?),
+    fn other_blank(&self) -> Result<Engine<K, R, W>> {
+        Ok(match &self.engine {
+            Engine::Slots(s) => Engine::Counted(carried(s, &[2], 1.0)?),
+            Engine::Counted(s) => Engine::Slots(carried(s, &[2], 1.0)?),
         })
     }
 }
 
 impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for AutoBucketed<K, R, W> {
     fn time(&self) -> f64 {
-        either!(self, s => s.time())
+        either!(&self.engine, s => s.time())
     }
 
     fn advance_within<G: Rng + ?Sized>(
@@ -214,31 +277,31 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for AutoBucket
         budget: &mut Budget<'_>,
         rng: &mut G,
     ) -> Result<StepReport> {
-        either!(self, s => s.advance_within(t, budget, rng))
+        either!(&mut self.engine, s => s.advance_within(t, budget, rng))
     }
 }
 
 impl<K: CoagulationKernel, const R: usize, const W: usize> Observe for AutoBucketed<K, R, W> {
     fn volume(&self) -> f64 {
-        either!(self, s => s.volume())
+        either!(&self.engine, s => s.volume())
     }
     fn particles(&self) -> u64 {
-        either!(self, s => s.particles())
+        either!(&self.engine, s => s.particles())
     }
     fn moment(&self, order: f64) -> f64 {
-        either!(self, s => s.moment(order))
+        either!(&self.engine, s => s.moment(order))
     }
     fn concentration(&self, a: f64, b: f64) -> f64 {
-        either!(self, s => s.concentration(a, b))
+        either!(&self.engine, s => s.concentration(a, b))
     }
     fn number_density(&self, x: f64) -> f64 {
-        either!(self, s => s.number_density(x))
+        either!(&self.engine, s => s.number_density(x))
     }
     fn gel_mass(&self) -> Option<f64> {
-        either!(self, s => s.gel_mass())
+        either!(&self.engine, s => s.gel_mass())
     }
     fn totals(&self) -> StepReport {
-        either!(self, s => Observe::totals(s))
+        either!(&self.engine, s => Observe::totals(s))
     }
 }
 
@@ -246,7 +309,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
     for AutoBucketed<K, R, W>
 {
     fn save(&self, w: &mut Writer) {
-        either!(self, s => s.save(w))
+        either!(&self.engine, s => s.save(w))
     }
 
     /// Into whichever engine wrote the checkpoint (its tag says which); errors leave
@@ -262,12 +325,24 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
             _ => false,
         };
         if theirs {
+            if let Some(pin) = self.pin {
+                return Err(crate::error::Error::Checkpoint {
+                    what: match pin {
+                        BucketMode::Slots => {
+                            "the counted engine's; this scheme is pinned to the slot engine"
+                        }
+                        BucketMode::Counted => {
+                            "the slot engine's; this scheme is pinned to the counted engine"
+                        }
+                    },
+                });
+            }
             let mut other = self.other_blank()?;
             either!(&mut other, s => s.restore(r))?;
-            *self = other;
+            self.engine = other;
             return Ok(());
         }
-        either!(self, s => s.restore(r))
+        either!(&mut self.engine, s => s.restore(r))
     }
 }
 
@@ -275,6 +350,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> core::fmt::Debug
     for AutoBucketed<K, R, W>
 {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        either!(self, s => s.fmt(f))
+        either!(&self.engine, s => s.fmt(f))
     }
 }
