@@ -5,15 +5,20 @@ use coagula::*;
 use std::ptr::null_mut;
 
 /// The scheme kinds the targets build: mass flow, then the `COAG_METHOD_*` (0–4 as
-/// 1–5), then the event-driven schemes over particles (MFA, DSA).
+/// 1–5), then the event-driven schemes over particles (MFA, DSA). The bucketed low-rank
+/// kind (1) has two engines: kind numbers `1 + KINDS·(2j + 1)` pin the slot engine,
+/// which a small system would not otherwise reach ([`SLOTS_KIND`]).
 pub const KINDS: usize = 8;
+
+/// The bucketed low-rank kind on the slot engine (see [`KINDS`]).
+pub const SLOTS_KIND: usize = 1 + KINDS;
 
 /// Statuses a call may return (anything else, in particular `COAG_PANIC`, is a bug).
 pub fn is_status(st: i32) -> bool {
     (COAG_OK..=COAG_RNG_FAILURE).contains(&st) && st != COAG_PANIC
 }
 
-/// A small sim of kind `kind % KINDS` under the additive kernel (mass flow and the
+/// A small sim of kind `kind % KINDS` (see [`KINDS`]) under the additive kernel (mass flow and the
 /// event-driven schemes over particles: 16 particles; counts: 300 monomers and a few
 /// larger), its growing tables capped at
 /// 16 MiB and every call at 20 000 proposals, so that an execution stays short.
@@ -69,6 +74,9 @@ pub unsafe fn sim_of(kind: usize, monomers: u64, budget: u64) -> *mut coag_sim {
                 COAG_METHOD_DSA_COUNTS,
             ][kind % KINDS - 1];
             c.memory_budget = budget;
+            if kind % KINDS == 1 && (kind / KINDS) % 2 == 1 {
+                c.bucket_mode = COAG_BUCKET_SLOTS;
+            }
             let n = [monomers, 20, 0, 3];
             assert_eq!(coag_counts_new(&c, k, n.as_ptr(), n.len(), &mut s), COAG_OK);
         }
@@ -176,15 +184,25 @@ pub fn checkpoint_restore(data: &[u8]) {
 }
 
 /// The seed inputs of `checkpoint_restore`, by file name: a checkpoint of every
-/// scheme, fresh and advanced to t = 0.3 and 1, under both modes (as written, and
+/// scheme (and of the slot engine), fresh and advanced to t = 0.3 and 1, under both modes (as written, and
 /// resealed after the mode byte). `cargo test` checks that the committed seeds are
 /// these (a format change must regenerate them with `seed_corpus`, or the campaign
 /// starts from checkpoints that are all refused at the configuration record).
 pub fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
-    for kind in 0..KINDS {
+    for kind in (0..KINDS).chain([SLOTS_KIND]) {
         unsafe {
             let s = small_sim(kind);
+            if kind % KINDS == 1 {
+                let mut m = -1;
+                assert_eq!(coag_sim_bucket_mode(s, &mut m), COAG_OK);
+                let want = if kind == SLOTS_KIND {
+                    COAG_BUCKET_SLOTS
+                } else {
+                    COAG_BUCKET_COUNTED
+                };
+                assert_eq!(m, want, "kind {kind}: the engine");
+            }
             for (step, t) in [0.0, 0.3, 1.0].into_iter().enumerate() {
                 let st = coag_sim_advance_to(s, t, std::ptr::null_mut());
                 assert_eq!(st, COAG_OK, "seed advance: {}", last_error());
