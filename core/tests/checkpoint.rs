@@ -139,8 +139,8 @@ fn bucketed_small_large_and_pipelined() {
         2.5,
         |s| s.counts().into_owned(),
     );
-    // a count array past 2^18 sizes: side u is drawn a proposal ahead, and that draw
-    // is part of the state
+    // a count array past 2^18 sizes: proposals are drawn ahead, and those draws are
+    // part of the state
     let mut probe = Bucketed::<_, 1, 2>::monodisperse(a, 100_000).unwrap();
     probe.advance_to(5.2, &mut Pcg64Mcg::new(11)).unwrap();
     assert!(probe.max_size() >= 1 << 18, "M = {}", probe.max_size());
@@ -148,6 +148,15 @@ fn bucketed_small_large_and_pipelined() {
         || Bucketed::<_, 1, 2>::monodisperse(a, 100_000).unwrap(),
         5.2,
         5.6,
+        |s| s.counts().into_owned(),
+    );
+    // past 2^20 slots: whole proposals are drawn ahead from the start, and the queue
+    // of them is part of the state
+    let c = Coagulation::constant(1.0).unwrap();
+    split_equals_unbroken(
+        || Bucketed::<_, 1, 2>::monodisperse(c, 1 << 21).unwrap(),
+        0.2,
+        0.4,
         |s| s.counts().into_owned(),
     );
 }

@@ -186,9 +186,10 @@ pub struct BucketedEngine<const R: usize, const W: usize> {
     /// A bucket grew: the rates (not the tables) must be recomputed.
     rates_changed: bool,
     scratch: AliasScratch,
-    /// Side u of the next proposal, drawn ahead so its memory can be prefetched.
-    next_u: Option<(usize, usize, u64)>,
-    /// Draw side u ahead (the count array is at least [`PIPELINE_COUNTS`] long).
+    /// The next proposals' slots, drawn ahead so their memory can be prefetched.
+    ahead: heapless::Deque<Ahead, { AHEAD + 1 }>,
+    /// Draw proposals ahead (the count array is at least [`PIPELINE_COUNTS`] long, or
+    /// the slots at least [`PIPELINE_SLOTS`]).
     pipeline: bool,
     /// Events since the last resync.
     since_resync: u64,
@@ -230,10 +231,26 @@ fn tally<T: Copy + From<u8> + core::ops::AddAssign>(cs: &mut [T], list: &[u32]) 
     }
 }
 
-/// Count-array length (1 MiB of `u32`) from which side u is drawn a proposal ahead and
-/// prefetched: below it the counts stay in cache and the extra bookkeeping costs ~4 %;
-/// above it the prefetch saved 4–10 % (Brownian t = 1e4, 1e5; ballistic t = 5000).
+/// Count-array length (1 MiB of `u32`) from which proposals are drawn ahead and
+/// prefetched (`docs/design/bucketed-layout.md`).
 const PIPELINE_COUNTS: usize = 1 << 18;
+/// Slots (4 MiB of list entries) from which proposals are drawn ahead: the lists are
+/// then beyond the caches.
+const PIPELINE_SLOTS: u64 = 1 << 20;
+/// Proposals drawn ahead in a pipeline.
+const AHEAD: usize = 4;
+
+/// A main-stream proposal drawn ahead: component k, side u's bucket and slot, side v's
+/// bucket and slot (its slot drawn whatever the bucket: it may fill or empty before
+/// the draw is used).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Ahead {
+    k: usize,
+    bu: usize,
+    su: u64,
+    bv: usize,
+    sv: u64,
+}
 
 /// Hints the cache to fetch `r` (no effect on the program's meaning).
 #[inline(always)]
@@ -269,6 +286,12 @@ const OVER_MAX: usize = 32;
 pub const MAX_PARTICLES: u64 = u32::MAX as u64;
 
 impl<const R: usize, const W: usize> BucketedEngine<R, W> {
+    /// Whether proposals are drawn ahead (for tests).
+    #[cfg(test)]
+    pub(super) fn pipelined(&self) -> bool {
+        self.pipeline
+    }
+
     /// The engine over `counts[i − 1] = N_i` (see [`ProposalEngine::build`]); the
     /// doubling reference `pop.n0` sets the quantisation (`qmax · n0 ≤ 2^60`).
     fn with_counts<K: CoagulationKernel>(
@@ -310,7 +333,7 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
             countdown: u64::MAX,
             rates_changed: false,
             scratch: AliasScratch::default(),
-            next_u: None,
+            ahead: heapless::Deque::new(),
             pipeline: false,
             since_resync: 0,
             slots_total: 0,
@@ -590,8 +613,8 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
         self.over.clear();
         self.build_tables();
         // a side-u draw made against the old tables is void
-        self.next_u = None;
-        self.pipeline = self.counts.len() >= PIPELINE_COUNTS;
+        self.ahead.clear();
+        self.pipeline = self.counts.len() >= PIPELINE_COUNTS || self.slots_total >= PIPELINE_SLOTS;
     }
 
     /// Builds the alias tables from the buckets' `tab` slots and `main` (a function of
@@ -738,23 +761,29 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     fn draw_u<Rn: Rng + ?Sized>(&self, rng: &mut Rn, fetch: bool) -> (usize, usize, u64) {
         let id = self.joint.sample(rng.next_u64()) as usize;
         let (k, bu) = (id >> 16, id & 0xffff);
-        let bk = &self.buckets[bu];
-        let su = below(rng, bk.tab);
+        let su = below(rng, self.buckets[bu].tab);
         if fetch {
-            if bk.grid {
-                let x = bk.lo + (su & ((1 << bk.sh) - 1));
-                if let Some(c) = self.counts.get(x as usize) {
-                    prefetch(c);
-                }
-            } else if let Some(e) = self
-                .lists
-                .get(bu.wrapping_sub(SINGLE as usize))
-                .and_then(|l| l.get(su as usize))
-            {
-                prefetch(e);
-            }
+            self.prefetch_slot(bu, su);
         }
         (k, bu, su)
+    }
+
+    /// Prefetches the count or list entry of slot `s` of bucket `b`.
+    #[inline(always)]
+    fn prefetch_slot(&self, b: usize, s: u64) {
+        let bk = &self.buckets[b];
+        if bk.grid {
+            let x = bk.lo + (s & ((1 << bk.sh) - 1));
+            if let Some(c) = self.counts.get(x as usize) {
+                prefetch(c);
+            }
+        } else if let Some(e) = self
+            .lists
+            .get(b.wrapping_sub(SINGLE as usize))
+            .and_then(|l| l.get(s as usize))
+        {
+            prefetch(e);
+        }
     }
 
     /// Draws side v of a main-stream proposal of component k whose side u is in bucket
@@ -772,6 +801,17 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
             below(rng, bk.tab)
         };
         (bv, sv)
+    }
+
+    /// Draws a whole main-stream proposal ahead and prefetches its two slots (side v's
+    /// slot is drawn whatever the bucket: it may fill or empty before the draw is used).
+    #[inline(always)]
+    fn draw_ahead<Rn: Rng + ?Sized>(&self, rng: &mut Rn) -> Ahead {
+        let (k, bu, su) = self.draw_u(rng, true);
+        let bv = self.side_v[k].sample(rng.next_u64()) as usize;
+        let sv = below(rng, self.buckets[bv].tab);
+        self.prefetch_slot(bv, sv);
+        Ahead { k, bu, su, bv, sv }
     }
 
     /// `Σ_b q_r(b) n_b`: the weight of the real particles in row r.
@@ -797,25 +837,29 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     #[inline(always)]
     fn draw<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Option<Candidate<Loc>> {
         // Main stream: side u first, so an empty slot rejects before side v is drawn.
-        // With a count array beyond the caches, side u is drawn one proposal ahead and
-        // its slot prefetched: the draw depends only on the tables, which stay fixed
-        // until a refresh discards it.
+        // With slots or counts beyond the caches, whole proposals are drawn AHEAD
+        // proposals ahead and both their slots prefetched: a draw depends only on the
+        // tables, which stay fixed until a refresh discards it (occupancy is read when
+        // the proposal is used).
         let ((bu, su, xu), (bv, sv, xv)) = if self.countdown > 0 {
             self.countdown -= 1;
-            let (k, bu, su) = if self.pipeline {
-                let d = match self.next_u.take() {
-                    Some(d) => d,
-                    None => self.draw_u(rng, true),
-                };
-                self.next_u = Some(self.draw_u(rng, true));
-                d
+            if self.pipeline {
+                while !self.ahead.is_full() {
+                    let a = self.draw_ahead(rng);
+                    // (room: not full)
+                    let _ = self.ahead.push_back(a);
+                }
+                let a = self.ahead.pop_front()?;
+                let xu = self.occupant(a.bu, a.su)?;
+                let xv = self.occupant(a.bv, a.sv)?;
+                ((a.bu, a.su, xu), (a.bv, a.sv, xv))
             } else {
-                self.draw_u(rng, false)
-            };
-            let xu = self.occupant(bu, su)?;
-            let (bv, sv) = self.draw_v(k, bu, rng);
-            let xv = self.occupant(bv, sv)?;
-            ((bu, su, xu), (bv, sv, xv))
+                let (k, bu, su) = self.draw_u(rng, false);
+                let xu = self.occupant(bu, su)?;
+                let (bv, sv) = self.draw_v(k, bu, rng);
+                let xv = self.occupant(bv, sv)?;
+                ((bu, su, xu), (bv, sv, xv))
+            }
         } else {
             // the overflow stream's turn; then the count to its next one
             self.countdown = geometric(self.over_p, rng);
@@ -1167,14 +1211,18 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         ] {
             w.u64(v);
         }
-        match self.next_u {
-            Some((k, b, s)) => {
-                w.u64(1);
-                w.u64(k as u64);
-                w.u64(b as u64);
-                w.u64(s);
+        // the proposals drawn ahead: 0 (none), or 2, their number and each one's five
+        // words (1 was a format that drew one side u ahead: refused)
+        if self.ahead.is_empty() {
+            w.u64(0);
+        } else {
+            w.u64(2);
+            w.u64(self.ahead.len() as u64);
+            for a in self.ahead.iter() {
+                for v in [a.k as u64, a.bu as u64, a.su, a.bv as u64, a.sv] {
+                    w.u64(v);
+                }
             }
-            None => w.u64(0),
         }
         for &v in &self.base_slack {
             w.u64(v);
@@ -1238,11 +1286,27 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
             }
         };
         let (poisoned, stale, changed, pipeline) = (flag(r)?, flag(r)?, flag(r)?, flag(r)?);
-        let next_u = if flag(r)? {
-            Some((r.usize()?, r.usize()?, r.u64()?))
-        } else {
-            None
-        };
+        let mut ahead = heapless::Deque::<Ahead, { AHEAD + 1 }>::new();
+        match r.u64()? {
+            0 => {}
+            1 => {
+                return Err(bad(
+                    "a run drawing side u ahead (before proposals were drawn whole): not supported",
+                ));
+            }
+            2 => {
+                let n = r.u64()?;
+                if n == 0 || n > AHEAD as u64 + 1 {
+                    return Err(bad("draw ahead inconsistent"));
+                }
+                for _ in 0..n {
+                    let (k, bu, su) = (r.usize()?, r.usize()?, r.u64()?);
+                    let (bv, sv) = (r.usize()?, r.u64()?);
+                    let _ = ahead.push_back(Ahead { k, bu, su, bv, sv });
+                }
+            }
+            _ => return Err(bad("invalid flag")),
+        }
         let mut base_slack = [0u64; W];
         for v in &mut base_slack {
             *v = r.u64()?;
@@ -1347,8 +1411,10 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         {
             return Err(bad("overflow list inconsistent"));
         }
-        if let Some((k, b, su)) = next_u
-            && (k >= R || b >= nb || su >= s.buckets[b].tab)
+        let slot_ok = |b: usize, sl: u64| b < nb && sl < s.buckets[b].tab;
+        if ahead
+            .iter()
+            .any(|a| a.k >= R || !slot_ok(a.bu, a.su) || !slot_ok(a.bv, a.sv))
         {
             return Err(bad("draw ahead inconsistent"));
         }
@@ -1387,7 +1453,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         s.rates_stale = stale;
         s.rates_changed = changed;
         s.pipeline = pipeline;
-        s.next_u = next_u;
+        s.ahead = ahead;
         (s.over_rate, s.over_p, s.countdown) = (over_rate, over_p, countdown);
         if poisoned {
             s.poison();

@@ -271,6 +271,55 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
     assert!(failures.is_empty(), "{failures}");
 }
 
+/// The slot engine drawing whole proposals ahead (past `PIPELINE_SLOTS` slots) is the
+/// same process: 16 replicas of 2^21 monomers of the constant kernel (at least 2/3 of
+/// them left, above 2^20 slots throughout) against the exact n_1..n_4 and M0 at
+/// t = 0.5 and 1, at the suite's tolerance.
+#[test]
+fn pipelined_slot_engine_matches_exact_solution() {
+    use crate::observe::Observe;
+    let k = Coagulation::constant(1.0).unwrap();
+    let n0 = 1u64 << 21;
+    let times = [0.5, 1.0];
+    let kmax = 4;
+    let mut stats = alloc::vec![alloc::vec![Replicas::new(); kmax + 1]; times.len()];
+    for rep in 0..REPLICAS {
+        let mut rng = Pcg64Mcg::new(0xfeed_0000 + u128::from(rep));
+        let mut s = Bucketed::<_, 1, 2>::monodisperse(k, n0).unwrap();
+        for (ti, &t) in times.iter().enumerate() {
+            s.advance_to(t, &mut rng).unwrap();
+            assert!(s.engine.pipelined(), "replica {rep}: not drawing ahead");
+            for kk in 1..=kmax {
+                stats[ti][kk - 1].push(s.number_density(kk as f64));
+            }
+            stats[ti][kmax].push(s.moment(0.0));
+        }
+    }
+    let mut failures = String::new();
+    for (ti, &t) in times.iter().enumerate() {
+        for kk in 1..=kmax {
+            let e = Exact::constant(1.0)
+                .unwrap()
+                .number_density(kk as u64, t)
+                .unwrap();
+            within(
+                &format!("pipelined t={t} n_{kk}"),
+                &stats[ti][kk - 1],
+                e,
+                &mut failures,
+            );
+        }
+        let e = Exact::constant(1.0).unwrap().moment(0, t).unwrap();
+        within(
+            &format!("pipelined t={t} M0"),
+            &stats[ti][kmax],
+            e,
+            &mut failures,
+        );
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
 #[test]
 fn time_step_is_v_over_sa() {
     // A wrong factor 2 in the waiting time would give M0(2) = 0.667 or 0.333 instead
