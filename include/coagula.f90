@@ -98,6 +98,7 @@ module coagula
      integer(c_int64_t) :: seed
      integer(c_int64_t) :: stream
      integer(c_int32_t) :: batched_clock
+     integer(c_int32_t) :: reserved
      integer(c_int32_t) :: bucket_mode
   end type coag_counts_config
 

@@ -772,11 +772,16 @@ typedef struct {
    */
   int32_t batched_clock;
   /*
+   Ignored: the tail padding of the struct before `bucket_mode` was appended, which
+   an older caller passes uninitialised (so `bucket_mode` starts past its size).
+   */
+  int32_t reserved;
+  /*
    `COAG_BUCKET_*`: the bucketed low-rank method's engine (`COAG_METHOD_LOWRANK`
    only; other methods need `COAG_BUCKET_AUTO`). A pinned sim keeps its engine and
-   restores only checkpoints that engine wrote. (Appended in 0.1, in the tail
-   padding of the struct before it: fill the struct with
-   `coag_counts_default_config`.)
+   restores only checkpoints that engine wrote. (Appended in 0.1: a caller compiled
+   against a header without it passes a smaller `struct_size` and gets
+   `COAG_BUCKET_AUTO`.)
    */
   int32_t bucket_mode;
 } coag_counts_config;

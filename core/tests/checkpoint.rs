@@ -151,7 +151,8 @@ fn bucketed_small_large_and_pipelined() {
         |s| s.counts().into_owned(),
     );
     // past 2^20 slots: whole proposals are drawn ahead from the start, and the queue
-    // of them is part of the state
+    // of them is part of the state (that it is non-empty at a save, and each of its
+    // fields validated, is `bucketed::tests::restore_refuses_a_bad_queue_drawn_ahead`)
     let c = Coagulation::constant(1.0).unwrap();
     split_equals_unbroken(
         || Bucketed::<_, 1, 2>::monodisperse(c, 1 << 21).unwrap(),

@@ -144,11 +144,14 @@ pub struct coag_counts_config {
     /// in one call. (Appended in 0.1: a caller compiled against a header without it
     /// gets 0.)
     pub batched_clock: i32,
+    /// Ignored: the tail padding of the struct before `bucket_mode` was appended, which
+    /// an older caller passes uninitialised (so `bucket_mode` starts past its size).
+    pub reserved: i32,
     /// `COAG_BUCKET_*`: the bucketed low-rank method's engine (`COAG_METHOD_LOWRANK`
     /// only; other methods need `COAG_BUCKET_AUTO`). A pinned sim keeps its engine and
-    /// restores only checkpoints that engine wrote. (Appended in 0.1, in the tail
-    /// padding of the struct before it: fill the struct with
-    /// `coag_counts_default_config`.)
+    /// restores only checkpoints that engine wrote. (Appended in 0.1: a caller compiled
+    /// against a header without it passes a smaller `struct_size` and gets
+    /// `COAG_BUCKET_AUTO`.)
     pub bucket_mode: i32,
 }
 
@@ -428,6 +431,7 @@ fn default_counts() -> coag_counts_config {
         seed: 0,
         stream: 0,
         batched_clock: 0,
+        reserved: 0,
         bucket_mode: COAG_BUCKET_AUTO,
     }
 }
@@ -1093,7 +1097,9 @@ pub unsafe extern "C" fn coag_counts_new(
 ) -> i32 {
     guard(|| {
         // SAFETY (all three): NULL is checked; otherwise valid by the caller's contract.
-        let c = unsafe { read_config(config, "config", COUNTS_CONFIG_V1, default_counts()) }?;
+        let mut c = unsafe { read_config(config, "config", COUNTS_CONFIG_V1, default_counts()) }?;
+        // (an older caller's tail padding)
+        c.reserved = 0;
         let k = unsafe { handle(kernel, "kernel") }?.k;
         let n = unsafe { slice(counts, len, "counts") }?;
         non_null(out, "out")?;
@@ -1107,7 +1113,6 @@ pub unsafe extern "C" fn coag_counts_new(
         // the configuration as given is what a checkpoint must match (a host rebuilding
         // a sim to restore into may pass placeholder counts); resolved, what runs
         let given = c;
-        let mut c = c;
         if c.volume == 0.0 {
             // (an empty system: volume 1)
             c.volume = total.max(1) as f64;

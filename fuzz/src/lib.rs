@@ -204,19 +204,41 @@ pub fn seeds() -> Vec<(String, Vec<u8>)> {
                 assert_eq!(m, want, "kind {kind}: the engine");
             }
             for (step, t) in [0.0, 0.3, 1.0].into_iter().enumerate() {
-                let st = coag_sim_advance_to(s, t, std::ptr::null_mut());
-                assert_eq!(st, COAG_OK, "seed advance: {}", last_error());
-                let ck = checkpoint(s);
-                for reseal in 0..2u8 {
-                    let mut data = vec![(kind as u8) << 1 | reseal];
-                    data.extend_from_slice(&ck);
-                    out.push((format!("seed-{kind}-{step}-{reseal}"), data));
-                }
+                seed_at(s, kind, step, t, &mut out);
             }
             coag_sim_free(s);
         }
     }
+    // the slot engine drawing proposals ahead (2^21 monomers: past 2^20 slots), whose
+    // queue of them is in the checkpoint; restorable into the small sim of its kind
+    unsafe {
+        let s = sim_of(SLOTS_KIND, 1 << 21, 16 << 20);
+        seed_at(s, SLOTS_KIND, 3, 1e-3, &mut out);
+        coag_sim_free(s);
+    }
     out
+}
+
+/// Advances `s` to `t` and adds its checkpoint as seed `seed-{kind}-{step}-{reseal}`,
+/// as written and resealed.
+///
+/// # Safety
+/// `s` live.
+unsafe fn seed_at(
+    s: *mut coag_sim,
+    kind: usize,
+    step: usize,
+    t: f64,
+    out: &mut Vec<(String, Vec<u8>)>,
+) {
+    let st = unsafe { coag_sim_advance_to(s, t, std::ptr::null_mut()) };
+    assert_eq!(st, COAG_OK, "seed advance: {}", last_error());
+    let ck = unsafe { checkpoint(s) };
+    for reseal in 0..2u8 {
+        let mut data = vec![(kind as u8) << 1 | reseal];
+        data.extend_from_slice(&ck);
+        out.push((format!("seed-{kind}-{step}-{reseal}"), data));
+    }
 }
 
 #[path = "call_sequence.rs"]

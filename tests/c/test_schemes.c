@@ -1,6 +1,7 @@
 /* Drives every scheme step by step through the C ABI against exact solutions.
  * Statistical checks use R independent replicas and a tolerance of Z_TOL standard errors
  * (a wrong factor 2 in a rate moves the means by tens of standard errors). */
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -227,6 +228,10 @@ static void bucket_engines(void) {
     OK(coag_sim_advance_to(q, 1.0, NULL));
     OK(coag_sim_advance_to(qc, 1.0, NULL));
     CHECK(same_sim(q, qc), "a clone of a pinned sim ran differently");
+    /* (a clone rebuilt by size would take 100 particles onto the counted engine) */
+    OK(coag_sim_set_counts(qc, small, 1, 100.0));
+    OK(coag_sim_bucket_mode(qc, &m));
+    CHECK(m == COAG_BUCKET_SLOTS, "clone of a pinned sim after set_counts: engine %d", m);
     /* the counted engine's checkpoint into a sim pinned to slots: refused, unchanged;
      * into a sim chosen by size: taken (the engine follows the checkpoint) */
     OK(coag_sim_set_counts(a, small, 1, 100.0));
@@ -243,6 +248,25 @@ static void bucket_engines(void) {
     OK(coag_sim_set_counts(fresh, small, 1, 100.0));
     OK(coag_sim_restore(fresh, ckpt, na));
     CHECK(same_sim(a, fresh), "restored by-size sim differs");
+    /* a caller built before bucket_mode existed passes the smaller struct_size, with
+     * garbage where the field now is: it gets COAG_BUCKET_AUTO */
+    {
+        coag_counts_config old;
+        memset(&old, 0xab, sizeof old);
+        OK(coag_counts_default_config(&old, sizeof old));
+        old.struct_size = offsetof(coag_counts_config, bucket_mode);
+        old.reserved = 0x7777;
+        old.bucket_mode = 12345;
+        coag_sim *o;
+        OK(coag_counts_new(&old, k, small, 1, &o));
+        OK(coag_sim_bucket_mode(o, &m));
+        CHECK(m == COAG_BUCKET_COUNTED, "an older caller's sim: engine %d", m);
+        coag_counts_config back;
+        OK(coag_sim_counts_config(o, &back, sizeof back));
+        CHECK(back.bucket_mode == COAG_BUCKET_AUTO && back.reserved == 0, "older caller's config %d %d",
+              back.bucket_mode, back.reserved);
+        coag_sim_free(o);
+    }
     /* bad codes; a pin on a method without engines; the query on such a sim */
     coag_sim *none = NULL;
     c.bucket_mode = 3;

@@ -53,9 +53,9 @@ pub struct AutoBucketed<K, const R: usize, const W: usize> {
 /// The scheme in use.
 #[allow(clippy::large_enum_variant)] // (one per simulation; boxing adds a pointer chase)
 enum Engine<K, const R: usize, const W: usize> {
-    /// Above [`COUNTED_UP_TO`] initial particles.
+    /// Above [`COUNTED_UP_TO`] initial particles, or pinned.
     Slots(Bucketed<K, R, W>),
-    /// Up to [`COUNTED_UP_TO`] initial particles.
+    /// Up to [`COUNTED_UP_TO`] initial particles, or pinned.
     Counted(BucketedCounted<K, R, W>),
 }
 

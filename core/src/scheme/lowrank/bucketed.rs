@@ -51,7 +51,9 @@
 //!   without evaluating K (ρ = 1 for exact bounds, 1/√2 for the ballistic kernel).
 //!
 //! A proposal costs two alias draws, up to two slot draws and reads and a squeeze; a
-//! collision adds O(1) count/list work — independent of M. Proposal times come in
+//! collision adds O(1) count/list work — independent of M. Once the slots or the count
+//! array are beyond the caches, whole proposals are drawn a few ahead (both slots
+//! always) and their slots prefetched; the queue of them is part of the checkpoint. Proposal times come in
 //! batches (see `clock`): one gamma variate per batch, not an exponential per proposal
 //! (below 4096 particles, where almost every event changes the rates, one ziggurat
 //! exponential per proposal).
@@ -612,7 +614,7 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
         self.main = self.row_total;
         self.over.clear();
         self.build_tables();
-        // a side-u draw made against the old tables is void
+        // proposals drawn against the old tables are void
         self.ahead.clear();
         self.pipeline = self.counts.len() >= PIPELINE_COUNTS || self.slots_total >= PIPELINE_SLOTS;
     }
@@ -836,8 +838,8 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     /// One proposal: the two slots and their occupants (see [`ProposalEngine::propose`]).
     #[inline(always)]
     fn draw<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Option<Candidate<Loc>> {
-        // Main stream: side u first, so an empty slot rejects before side v is drawn.
-        // With slots or counts beyond the caches, whole proposals are drawn AHEAD
+        // Main stream, unpipelined: side u first, so an empty slot rejects before side
+        // v is drawn. With slots or counts beyond the caches, whole proposals are drawn AHEAD
         // proposals ahead and both their slots prefetched: a draw depends only on the
         // tables, which stay fixed until a refresh discards it (occupancy is read when
         // the proposal is used).
@@ -1295,10 +1297,11 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 ));
             }
             2 => {
-                let n = r.u64()?;
-                if n == 0 || n > AHEAD as u64 + 1 {
+                // (a queue is filled to AHEAD + 1 and one taken before anything else runs)
+                if r.u64()? != AHEAD as u64 {
                     return Err(bad("draw ahead inconsistent"));
                 }
+                let n = AHEAD;
                 for _ in 0..n {
                     let (k, bu, su) = (r.usize()?, r.usize()?, r.u64()?);
                     let (bv, sv) = (r.usize()?, r.u64()?);
@@ -1450,6 +1453,14 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 return Err(bad("slot weights overflow"));
             }
         }
+        // main-stream proposals need main-stream tables (a refresh draws the countdown
+        // 0 when the overflow carries the whole rate)
+        if !stale && s.joint.n == 0 && (countdown != 0 || !ahead.is_empty()) {
+            return Err(bad("main-stream proposals without main-stream tables"));
+        }
+        if !ahead.is_empty() && !pipeline {
+            return Err(bad("draw ahead inconsistent"));
+        }
         s.rates_stale = stale;
         s.rates_changed = changed;
         s.pipeline = pipeline;
@@ -1522,6 +1533,12 @@ mod tests {
                 assert!(t < 1 << 63, "row {r} weight {t}");
             }
             assert!(self.poisoned.is_none());
+            // the queue drawn ahead: empty, or AHEAD proposals within the tables' slots
+            assert!(self.ahead.is_empty() || (self.pipeline && self.ahead.len() == AHEAD));
+            for a in self.ahead.iter() {
+                assert!(a.k < R && a.bu < self.buckets.len() && a.bv < self.buckets.len());
+                assert!(a.su < self.buckets[a.bu].tab && a.sv < self.buckets[a.bv].tab);
+            }
             if !self.rates_stale {
                 // the tables' view and the overflow of grown buckets
                 for r in 0..W {
@@ -1596,6 +1613,7 @@ mod tests {
     fn streams_match_the_pair_rates<K: CoagulationKernel, const R: usize, const W: usize>(
         kernel: K,
         seed: u64,
+        ahead: bool,
     ) {
         let init: Vec<u64> = (0..120u64).map(|i| 1 + (i * 7) % 13).collect();
         let v = init.iter().sum::<u64>() as f64;
@@ -1623,6 +1641,10 @@ mod tests {
             let ((bu, su), (bv, sv)) = if open_unit(&mut rng) <= s.over_p {
                 from_over += 1;
                 s.overflow_slots(&mut rng).unwrap()
+            } else if ahead {
+                // (the law of a proposal drawn ahead, used at once)
+                let a = s.draw_ahead(&mut rng);
+                ((a.bu, a.su), (a.bv, a.sv))
             } else {
                 let (k, bu, su) = s.draw_u(&mut rng, false);
                 ((bu, su), s.draw_v(k, bu, &mut rng))
@@ -1672,7 +1694,9 @@ mod tests {
 
     #[test]
     fn streams_match_the_pair_rates_rank1() {
-        streams_match_the_pair_rates::<_, 1, 2>(crate::kernel::Coagulation::additive(), 21);
+        let k = crate::kernel::Coagulation::additive();
+        streams_match_the_pair_rates::<_, 1, 2>(k, 21, false);
+        streams_match_the_pair_rates::<_, 1, 2>(k, 23, true);
     }
 
     #[test]
@@ -1680,7 +1704,64 @@ mod tests {
         let k = crate::kernel::Coagulation::free_molecular()
             .with_min_size(1.0)
             .unwrap();
-        streams_match_the_pair_rates::<_, 3, 6>(k, 22);
+        streams_match_the_pair_rates::<_, 3, 6>(k, 22, false);
+        streams_match_the_pair_rates::<_, 3, 6>(k, 24, true);
+    }
+
+    /// A checkpoint taken with proposals drawn ahead holds them: each field of the
+    /// queue tampered with (and resealed) is refused, the target unchanged; the
+    /// untampered bytes restore the same state.
+    #[test]
+    fn restore_refuses_a_bad_queue_drawn_ahead() {
+        use crate::checkpoint::Checkpoint;
+        let k = crate::kernel::Coagulation::constant(1.0).unwrap();
+        let mut s = Bucketed::<_, 1, 2>::monodisperse(k, 1 << 21).unwrap();
+        s.advance_to(0.01, &mut rand_pcg::Pcg64Mcg::new(9)).unwrap();
+        assert!(s.engine.pipeline && s.engine.ahead.len() == AHEAD);
+        s.check_invariants();
+        let mut buf = vec![0u8; s.checkpoint_len()];
+        s.save_to(&mut buf).unwrap();
+        let words: Vec<u64> = buf
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        let mut pattern = vec![2u64, AHEAD as u64];
+        for a in s.engine.ahead.iter() {
+            pattern.extend([a.k as u64, a.bu as u64, a.su, a.bv as u64, a.sv]);
+        }
+        let at = words
+            .windows(pattern.len())
+            .position(|w| w == pattern.as_slice())
+            .expect("the queue in the checkpoint");
+        let (nb, a0) = (s.engine.buckets.len(), *s.engine.ahead.front().unwrap());
+        let tab = |b: usize| s.engine.buckets[b].tab;
+        let tampered: [(usize, u64); 8] = [
+            (at, 1),
+            (at, 3),
+            (at + 1, 0),
+            (at + 1, AHEAD as u64 + 1),
+            (at + 2, 1),
+            (at + 4, tab(a0.bu)),
+            (at + 5, nb as u64),
+            (at + 6, tab(a0.bv)),
+        ];
+        let mut target = Bucketed::<_, 1, 2>::monodisperse(k, 1000).unwrap();
+        let mut before = vec![0u8; target.checkpoint_len()];
+        target.save_to(&mut before).unwrap();
+        for (i, (w, v)) in tampered.into_iter().enumerate() {
+            let mut bad = buf.clone();
+            bad[8 * w..8 * w + 8].copy_from_slice(&v.to_le_bytes());
+            let body = bad.len() - 8;
+            let sum = crate::checkpoint::checksum(&bad[..body]);
+            bad[body..].copy_from_slice(&sum.to_le_bytes());
+            assert!(target.restore_from(&bad).is_err(), "tampering {i} accepted");
+            let mut after = vec![0u8; target.checkpoint_len()];
+            target.save_to(&mut after).unwrap();
+            assert_eq!(before, after, "tampering {i} changed the target");
+        }
+        target.restore_from(&buf).unwrap();
+        assert_eq!(target.engine.ahead, s.engine.ahead);
+        target.check_invariants();
     }
 
     #[test]
