@@ -1118,16 +1118,6 @@ pub unsafe extern "C" fn coag_counts_new(
             c.volume = total.max(1) as f64;
         }
         c.batched_clock = i32::from(c.batched_clock != 0);
-        let mode = bucket_mode_of(c.bucket_mode)?;
-        if mode.is_some() && id != SchemeId::LowRank {
-            return fail(
-                COAG_INVALID_ARGUMENT,
-                format!(
-                    "bucket_mode {}: only the bucketed low-rank method (COAG_METHOD_LOWRANK) has engines; pass COAG_BUCKET_AUTO",
-                    c.bucket_mode
-                ),
-            );
-        }
         if c.size_limit == 0 {
             c.size_limit = Options::default().size_limit;
         }
@@ -1160,7 +1150,18 @@ fn bucket_mode_of(code: i32) -> Result<Option<BucketMode>, Fail> {
 }
 
 /// The registry options of a counts config (volume and size limit resolved).
+/// Errors: an unknown `bucket_mode`, or a pin on a method without engines.
 fn counts_options(c: &coag_counts_config) -> Result<Options, Fail> {
+    let mode = bucket_mode_of(c.bucket_mode)?;
+    if mode.is_some() && c.method != COAG_METHOD_LOWRANK {
+        return fail(
+            COAG_INVALID_ARGUMENT,
+            format!(
+                "bucket_mode {}: only the bucketed low-rank method (COAG_METHOD_LOWRANK) has engines; pass COAG_BUCKET_AUTO",
+                c.bucket_mode
+            ),
+        );
+    }
     let budget = match c.memory_budget {
         0 => coagula_core::scheme::population::machine_memory_budget(),
         b => usize::try_from(b).unwrap_or(usize::MAX),
@@ -1169,7 +1170,7 @@ fn counts_options(c: &coag_counts_config) -> Result<Options, Fail> {
         .with_memory_budget(budget)
         .with_size_limit(c.size_limit)
         .with_batched_clock(c.batched_clock != 0)
-        .with_bucket_mode(bucket_mode_of(c.bucket_mode)?))
+        .with_bucket_mode(mode))
 }
 
 /// The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).

@@ -163,11 +163,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
             && mode != self.mode()
         {
             let counts = self.counts().into_owned();
-            let volume = self.volume();
-            self.engine = match &self.engine {
-                Engine::Slots(s) => Engine::Counted(carried(s, &counts, volume)?),
-                Engine::Counted(s) => Engine::Slots(carried(s, &counts, volume)?),
-            };
+            self.engine = self.on(mode, &counts, self.volume())?;
         }
         self.pin = pin;
         Ok(())
@@ -234,18 +230,11 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
     /// unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
         let mode = self.pin.unwrap_or_else(|| mode_for(counts));
-        match (mode, &mut self.engine) {
-            (BucketMode::Slots, Engine::Slots(s)) => s.set_counts(counts, volume),
-            (BucketMode::Counted, Engine::Counted(s)) => s.set_counts(counts, volume),
-            (BucketMode::Slots, Engine::Counted(s)) => {
-                self.engine = Engine::Slots(carried(s, counts, volume)?);
-                Ok(())
-            }
-            (BucketMode::Counted, Engine::Slots(s)) => {
-                self.engine = Engine::Counted(carried(s, counts, volume)?);
-                Ok(())
-            }
+        if mode == self.mode() {
+            return either!(&mut self.engine, s => s.set_counts(counts, volume));
         }
+        self.engine = self.on(mode, counts, volume)?;
+        Ok(())
     }
 
     /// See [`LowRankMc::set_pairs`] (the engine chosen as by
@@ -256,12 +245,16 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         self.set_counts(&dense, volume)
     }
 
-    /// The other engine's scheme, blank, with this one's kernel and options (to restore
-    /// a checkpoint it wrote).
-    fn other_blank(&self) -> Result<Engine<K, R, W>> {
-        Ok(match &self.engine {
-            Engine::Slots(s) => Engine::Counted(carried(s, &[2], 1.0)?),
-            Engine::Counted(s) => Engine::Slots(carried(s, &[2], 1.0)?),
+    /// A scheme on engine `mode` holding `counts` in `volume`, with this one's kernel,
+    /// options, time and totals (see `carried`).
+    fn on(&self, mode: BucketMode, counts: &[u64], volume: f64) -> Result<Engine<K, R, W>> {
+        Ok(match mode {
+            BucketMode::Slots => {
+                Engine::Slots(either!(&self.engine, s => carried(s, counts, volume))?)
+            }
+            BucketMode::Counted => {
+                Engine::Counted(either!(&self.engine, s => carried(s, counts, volume))?)
+            }
         })
     }
 }
@@ -337,7 +330,12 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
                     },
                 });
             }
-            let mut other = self.other_blank()?;
+            // (a blank of the other engine, with this one's kernel and options)
+            let other_mode = match self.mode() {
+                BucketMode::Slots => BucketMode::Counted,
+                BucketMode::Counted => BucketMode::Slots,
+            };
+            let mut other = self.on(other_mode, &[2], 1.0)?;
             either!(&mut other, s => s.restore(r))?;
             self.engine = other;
             return Ok(());

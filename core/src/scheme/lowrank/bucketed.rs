@@ -53,10 +53,10 @@
 //! A proposal costs two alias draws, up to two slot draws and reads and a squeeze; a
 //! collision adds O(1) count/list work — independent of M. Once the slots or the count
 //! array are beyond the caches, whole proposals are drawn a few ahead (both slots
-//! always) and their slots prefetched; the queue of them is part of the checkpoint. Proposal times come in
-//! batches (see `clock`): one gamma variate per batch, not an exponential per proposal
-//! (below 4096 particles, where almost every event changes the rates, one ziggurat
-//! exponential per proposal).
+//! always) and their slots prefetched; the queue of them is part of the checkpoint.
+//! Proposal times come in batches (see `clock`): one gamma variate per batch, not an
+//! exponential per proposal (below 4096 particles, where almost every event changes the
+//! rates, one ziggurat exponential per proposal).
 //!
 //! **Small systems.** A small system changes its distribution at almost every event,
 //! so this engine keeps growing buckets and resyncing and rebuilding its tables (a
@@ -839,10 +839,10 @@ impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     #[inline(always)]
     fn draw<Rn: Rng + ?Sized>(&mut self, rng: &mut Rn) -> Option<Candidate<Loc>> {
         // Main stream, unpipelined: side u first, so an empty slot rejects before side
-        // v is drawn. With slots or counts beyond the caches, whole proposals are drawn AHEAD
-        // proposals ahead and both their slots prefetched: a draw depends only on the
-        // tables, which stay fixed until a refresh discards it (occupancy is read when
-        // the proposal is used).
+        // v is drawn. With slots or counts beyond the caches, whole proposals are drawn
+        // AHEAD proposals ahead and both their slots prefetched: a draw depends only on
+        // the tables, which stay fixed until a refresh discards it (occupancy is read
+        // when the proposal is used).
         let ((bu, su, xu), (bv, sv, xv)) = if self.countdown > 0 {
             self.countdown -= 1;
             if self.pipeline {
@@ -1301,8 +1301,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
                 if r.u64()? != AHEAD as u64 {
                     return Err(bad("draw ahead inconsistent"));
                 }
-                let n = AHEAD;
-                for _ in 0..n {
+                for _ in 0..AHEAD {
                     let (k, bu, su) = (r.usize()?, r.usize()?, r.u64()?);
                     let (bv, sv) = (r.usize()?, r.u64()?);
                     let _ = ahead.push_back(Ahead { k, bu, su, bv, sv });
@@ -1415,9 +1414,10 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
             return Err(bad("overflow list inconsistent"));
         }
         let slot_ok = |b: usize, sl: u64| b < nb && sl < s.buckets[b].tab;
-        if ahead
-            .iter()
-            .any(|a| a.k >= R || !slot_ok(a.bu, a.su) || !slot_ok(a.bv, a.sv))
+        if (!ahead.is_empty() && !pipeline)
+            || ahead
+                .iter()
+                .any(|a| a.k >= R || !slot_ok(a.bu, a.su) || !slot_ok(a.bv, a.sv))
         {
             return Err(bad("draw ahead inconsistent"));
         }
@@ -1457,9 +1457,6 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         // 0 when the overflow carries the whole rate)
         if !stale && s.joint.n == 0 && (countdown != 0 || !ahead.is_empty()) {
             return Err(bad("main-stream proposals without main-stream tables"));
-        }
-        if !ahead.is_empty() && !pipeline {
-            return Err(bad("draw ahead inconsistent"));
         }
         s.rates_stale = stale;
         s.rates_changed = changed;
