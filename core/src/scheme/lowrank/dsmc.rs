@@ -132,138 +132,331 @@ pub struct Gas<S = NeverStick> {
 /// The particles of one speed class.
 #[derive(Clone, Debug)]
 struct Class {
-    q: i32,
     /// `2^{(q+1)/4}`, a little above (so that rounding never lets a speed pass it).
     w: f64,
     v: Vec<[f64; 3]>,
 }
 
+impl Class {
+    fn new(q: i32) -> Self {
+        Class {
+            w: class_bound(q),
+            v: Vec::new(),
+        }
+    }
+}
+
 /// The particles of one size, by speed class.
+///
+/// The classes are dense: `classes[d]` is class `base + d` (empty ones included), so a
+/// class is found by a subtraction. The counts and the sum `S = Σ_q n_q W_q` are kept
+/// up to date at every move: `W_q = R_r 2^h` with `q + 1 = 4h + r` and `R_r = 2^{r/4}`
+/// (rounded up), so `S = 2^a Σ_r R_r X_r` with integers `X_r = Σ_{q ≡ r} n_q 2^{h − a}`
+/// (`a` the lowest occupied `h`) that are updated exactly. `S` is their rounding: the
+/// same for the same particles however they came there (a restored checkpoint goes on
+/// bit for bit). A size whose speeds span so many octaves that an `X_r` does not fit
+/// in 128 bits falls back to summing its classes in order at every move.
 #[derive(Clone, Debug, Default)]
 struct Species {
+    /// The class of `classes[0]`.
+    base: i32,
     classes: Vec<Class>,
-    /// Particles, `Σ_q n_q W_q`, and the largest bound of a non-empty class.
+    /// Particles.
     n: usize,
+    /// `Σ_q n_q W_q` (0 when empty).
     s: f64,
+    /// The largest bound of an occupied class (0 when empty).
     top: f64,
+    /// The lowest and highest occupied classes (indices into `classes`; 0 when empty).
+    lo: usize,
+    hi: usize,
+    /// Whether `x` holds the sums (else `s` is summed class by class).
+    exact: bool,
+    /// The `h` of the lowest occupied class, and `X_r`.
+    anchor: i32,
+    x: [u128; 4],
 }
 
 /// A little above 1: class bounds are rounded up by it.
 const MARGIN: f64 = 1.0 + 1e-12;
 
+/// `2^{r/4}` for r = 0..3 (each within half an ulp; [`MARGIN`] covers it).
+const ROOTS: [f64; 4] = [
+    1.0,
+    1.189_207_115_002_721,
+    core::f64::consts::SQRT_2,
+    1.681_792_830_507_429,
+];
+
 /// The mantissa bits of √2.
 const SQRT2_MANTISSA: u64 = core::f64::consts::SQRT_2.to_bits() & ((1 << 52) - 1);
 
-/// The speed class of `v`: `q` with `|v|² ∈ [2^{q/2}, 2^{(q+1)/2})` (`i32::MIN` for
-/// `v = 0`).
+/// The lowest speed class: `|v|² < 2^{−1022}` (subnormal or zero), bound `2^{−511}`.
+const Q_MIN: i32 = -2045;
+
+/// The speed class of `v`: `q` with `|v|² ∈ [2^{q/2}, 2^{(q+1)/2})`, or [`Q_MIN`] for
+/// `|v|² < 2^{−1022}`. `|v|²` must be finite.
 #[inline]
 fn class_of(v: &[f64; 3]) -> i32 {
     let s = v[0] * v[0] + v[1] * v[1] + v[2] * v[2];
-    if s <= 0.0 || !s.is_finite() {
-        return i32::MIN;
-    }
     let bits = s.to_bits();
     let field = ((bits >> 52) & 0x7ff) as i32;
-    if field == 0 {
-        // subnormal |v|²: a speed below 1.5e-154
-        libm::floor(2.0 * libm::log2(s)) as i32
+    if field == 0 || !s.is_finite() {
+        Q_MIN
     } else {
         2 * (field - 1023) + i32::from(bits & ((1 << 52) - 1) >= SQRT2_MANTISSA)
     }
 }
 
-/// A velocity whose components and `|v|²` are finite (`|v|² = inf` would put a fast
-/// particle in the class of `v = 0`).
+/// A velocity whose components and `|v|²` are finite (`|v|² = inf` has no class).
 fn finite_speed(v: &[f64; 3]) -> bool {
     (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).is_finite()
 }
 
-/// The bound of class q: `2^{(q+1)/4}`, a little above (0 for the class of `v = 0`).
+/// `(h, r)` with `q + 1 = 4h + r`, `0 ≤ r < 4`.
+#[inline]
+fn class_parts(q: i32) -> (i32, usize) {
+    ((q + 1).div_euclid(4), (q + 1).rem_euclid(4) as usize)
+}
+
+/// The bound of class q: `2^{(q+1)/4}`, a little above.
 fn class_bound(q: i32) -> f64 {
-    if q == i32::MIN {
-        0.0
-    } else {
-        libm::exp2(f64::from(q + 1) / 4.0) * MARGIN
-    }
+    let (h, r) = class_parts(q);
+    libm::scalbn(ROOTS[r] * MARGIN, h)
 }
 
 impl Species {
-    /// Recomputes the counts and sums (in one pass, exactly: no drift) and drops the
-    /// empty classes when they are many.
-    fn refresh(&mut self) {
-        let (mut n, mut s, mut top, mut empty) = (0, 0.0, 0.0f64, 0);
-        for c in &self.classes {
-            let len = c.v.len();
-            n += len;
-            s += len as f64 * c.w;
-            if len > 0 {
-                top = top.max(c.w);
-            } else {
-                empty += 1;
+    /// The index of class `q` in `classes`, if within the range.
+    #[inline]
+    fn index(&self, q: i32) -> Option<usize> {
+        usize::try_from(i64::from(q) - i64::from(self.base))
+            .ok()
+            .filter(|&d| d < self.classes.len())
+    }
+
+    /// The class at index `d`.
+    #[inline]
+    fn q(&self, d: usize) -> i32 {
+        self.base + d as i32
+    }
+
+    /// `2^a Σ_r R_r X_r`, rounded.
+    fn exact_sum(&self) -> f64 {
+        let mut t = 0.0;
+        for (r, &x) in self.x.iter().enumerate() {
+            // (the same rounding as `x as f64`, in hardware when it fits 64 bits)
+            let x = u64::try_from(x).map_or(x as f64, |x| x as f64);
+            t += ROOTS[r] * MARGIN * x;
+        }
+        libm::scalbn(t, self.anchor)
+    }
+
+    /// Recomputes everything from the classes (a function of their contents only).
+    fn resum(&mut self) {
+        let occupied = || {
+            self.classes
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| !c.v.is_empty())
+        };
+        let (Some((lo, _)), Some((hi, _))) = (occupied().next(), occupied().next_back()) else {
+            (self.n, self.s, self.top, self.lo, self.hi) = (0, 0.0, 0.0, 0, 0);
+            (self.exact, self.anchor, self.x) = (true, 0, [0; 4]);
+            return;
+        };
+        let anchor = class_parts(self.q(lo)).0;
+        let (mut n, mut x, mut exact) = (0usize, [0u128; 4], true);
+        for (d, c) in occupied() {
+            n += c.v.len();
+            let (h, r) = class_parts(self.q(d));
+            let add = 1u128
+                .checked_shl((h - anchor) as u32)
+                .and_then(|p| p.checked_mul(c.v.len() as u128))
+                .and_then(|p| p.checked_add(x[r]));
+            match add {
+                Some(v) => x[r] = v,
+                None => exact = false,
             }
         }
-        (self.n, self.s, self.top) = (n, s, top);
-        if empty > 8 {
-            self.classes.retain(|c| !c.v.is_empty());
-        }
+        (self.n, self.lo, self.hi, self.top) = (n, lo, hi, self.classes[hi].w);
+        (self.exact, self.anchor, self.x) = (exact, anchor, x);
+        self.s = if exact {
+            self.exact_sum()
+        } else {
+            self.classes[lo..=hi]
+                .iter()
+                .map(|c| c.v.len() as f64 * c.w)
+                .sum()
+        };
     }
 
-    /// Reserves room for one more particle of class `q` (a new class if needed).
+    /// Reserves room for one more particle of class `q` (the range of classes grown to
+    /// it if needed).
     fn reserve(&mut self, q: i32) -> Result<()> {
         // (room for two: both particles of a bounce may go to one class)
-        match self.classes.iter_mut().find(|c| c.q == q) {
-            Some(c) => try_reserve(&mut c.v, 2),
-            None => try_reserve(&mut self.classes, 2),
+        let d = match self.index(q) {
+            Some(d) => d,
+            None if self.classes.is_empty() => {
+                try_reserve(&mut self.classes, 1)?;
+                self.base = q;
+                self.classes.push(Class::new(q));
+                0
+            }
+            None if q < self.base => {
+                // a few more below: speeds of a cooling gas keep falling
+                let from = q.saturating_sub(4).max(Q_MIN);
+                let more = (self.base - from) as usize;
+                try_reserve(&mut self.classes, more)?;
+                let new = (from..self.base).map(Class::new);
+                self.classes.splice(0..0, new);
+                self.base = from;
+                if self.n > 0 {
+                    self.lo += more;
+                    self.hi += more;
+                }
+                (q - from) as usize
+            }
+            None => {
+                let end = self.base + self.classes.len() as i32;
+                try_reserve(&mut self.classes, (q - end + 1) as usize)?;
+                self.classes.extend((end..=q).map(Class::new));
+                self.classes.len() - 1
+            }
+        };
+        try_reserve(&mut self.classes[d].v, 2)
+    }
+
+    /// Adds a particle (room reserved by `reserve`).
+    fn insert(&mut self, v: [f64; 3]) {
+        let q = class_of(&v);
+        let d = self.index(q).expect("class reserved");
+        self.classes[d].v.push(v);
+        self.n += 1;
+        let (h, r) = class_parts(q);
+        if self.n == 1 {
+            (self.lo, self.hi, self.top) = (d, d, self.classes[d].w);
+            (self.exact, self.anchor, self.x) = (true, h, [0; 4]);
+            self.x[r] = 1;
+            self.s = self.exact_sum();
+            return;
+        }
+        self.lo = self.lo.min(d);
+        if d > self.hi {
+            (self.hi, self.top) = (d, self.classes[d].w);
+        }
+        if !self.exact || !self.add_exact(h, r) {
+            self.resum();
+            return;
+        }
+        self.s = self.exact_sum();
+    }
+
+    /// Adds `2^h` to `X_r` (moving the anchor down if needed); false on overflow.
+    fn add_exact(&mut self, h: i32, r: usize) -> bool {
+        if h < self.anchor {
+            let shift = (self.anchor - h) as u32;
+            if self
+                .x
+                .iter()
+                .any(|&x| x != 0 && (shift >= 128 || x.leading_zeros() < shift))
+            {
+                return false;
+            }
+            for x in &mut self.x {
+                *x = x.checked_shl(shift).unwrap_or(0);
+            }
+            self.anchor = h;
+        }
+        match 1u128
+            .checked_shl((h - self.anchor) as u32)
+            .and_then(|p| p.checked_add(self.x[r]))
+        {
+            Some(v) => {
+                self.x[r] = v;
+                true
+            }
+            None => false,
         }
     }
 
-    /// Adds a particle (its class created if needed; room reserved by `reserve`).
-    fn insert(&mut self, v: [f64; 3]) {
-        let q = class_of(&v);
-        match self.classes.iter_mut().find(|c| c.q == q) {
-            Some(c) => c.v.push(v),
-            None => self.classes.push(Class {
-                q,
-                w: class_bound(q),
-                v: alloc::vec![v],
-            }),
+    /// Removes the particle at `idx` of class index `d` (swapping the last in).
+    fn remove(&mut self, d: usize, idx: usize) {
+        self.classes[d].v.swap_remove(idx);
+        self.n -= 1;
+        if self.n == 0 {
+            self.resum();
+            return;
+        }
+        if self.exact {
+            let (h, r) = class_parts(self.q(d));
+            self.x[r] -= 1u128 << (h - self.anchor);
+        }
+        if self.classes[d].v.is_empty() {
+            if d == self.lo {
+                self.lo = (d + 1..=self.hi)
+                    .find(|&e| !self.classes[e].v.is_empty())
+                    .unwrap_or(self.hi);
+                let h = class_parts(self.q(self.lo)).0;
+                if self.exact && h > self.anchor {
+                    // (exact: nothing is left below the new lowest class)
+                    let shift = (h - self.anchor) as u32;
+                    for x in &mut self.x {
+                        *x = x.checked_shr(shift).unwrap_or(0);
+                    }
+                    self.anchor = h;
+                }
+            }
+            if d == self.hi {
+                self.hi = (self.lo..d)
+                    .rev()
+                    .find(|&e| !self.classes[e].v.is_empty())
+                    .unwrap_or(self.lo);
+                self.top = self.classes[self.hi].w;
+            }
+        }
+        if self.exact {
+            self.s = self.exact_sum();
+        } else {
+            self.resum();
         }
     }
 
     /// The particle at `global` in the order of the classes.
+    #[inline]
     fn locate(&self, mut global: usize) -> (usize, usize) {
-        for (ci, c) in self.classes.iter().enumerate() {
-            if global < c.v.len() {
-                return (ci, global);
+        for d in self.lo..=self.hi {
+            let len = self.classes[d].v.len();
+            if global < len {
+                return (d, global);
             }
-            global -= c.v.len();
+            global -= len;
         }
-        (self.classes.len() - 1, 0)
+        (self.hi, self.classes[self.hi].v.len() - 1)
     }
 
-    /// The global index of particle `(ci, idx)`.
-    fn global(&self, ci: usize, idx: usize) -> usize {
-        self.classes[..ci].iter().map(|c| c.v.len()).sum::<usize>() + idx
+    /// The global index of particle `(d, idx)`.
+    fn global(&self, d: usize, idx: usize) -> usize {
+        self.classes[self.lo..d]
+            .iter()
+            .map(|c| c.v.len())
+            .sum::<usize>()
+            + idx
     }
 
     /// A particle drawn ∝ its class bound, from `t ∈ [0, S)`.
-    fn weighted(&self, t: f64) -> (usize, usize) {
-        let mut acc = 0.0;
-        let mut last = 0;
-        for (ci, c) in self.classes.iter().enumerate() {
-            if c.v.is_empty() {
-                continue;
-            }
+    #[inline]
+    fn weighted(&self, mut t: f64) -> (usize, usize) {
+        for d in self.lo..=self.hi {
+            let c = &self.classes[d];
             let weight = c.v.len() as f64 * c.w;
-            if t < acc + weight {
-                let idx = ((t - acc) / c.w) as usize;
-                return (ci, idx.min(c.v.len() - 1));
+            if t < weight {
+                let idx = (t / c.w) as usize;
+                return (d, idx.min(c.v.len() - 1));
             }
-            acc += weight;
-            last = ci;
+            t -= weight;
         }
         // (rounding past the last class)
-        (last, self.classes[last].v.len() - 1)
+        (self.hi, self.classes[self.hi].v.len() - 1)
     }
 }
 
@@ -372,9 +565,6 @@ impl<S: Sticking> Gas<S> {
             sp.reserve(class_of(vel))?;
             sp.insert(*vel);
         }
-        for sp in &mut species {
-            sp.refresh();
-        }
         Ok(Gas {
             restitution,
             sticking,
@@ -478,8 +668,8 @@ impl<S: Sticking> CoagulationKernel for Gas<S> {
     }
 }
 
-/// A particle: size, class index, index in the class.
-type At = (u64, usize, usize);
+/// A particle: size, class, index in the class.
+type At = (u64, i32, usize);
 
 /// What an accepted collision changes, from `plan` to `commit`.
 #[derive(Clone, Copy, Debug, Default)]
@@ -505,7 +695,8 @@ enum Pending {
 /// The DSMC collision rule (see the module docs).
 #[derive(Clone, Debug, Default)]
 pub struct Collisions {
-    /// The accepted pair, its direction and `(V_k − V_l)·e`.
+    /// The accepted pair (class index, index in the class), its direction and
+    /// `(V_k − V_l)·e`.
     k: (usize, usize),
     l: (usize, usize),
     e: [f64; 3],
@@ -559,15 +750,22 @@ fn bad_velocity(v: f64) -> Error {
     }
 }
 
-/// Removes particles `ats` (the later index first where two share a class).
-fn remove_both<S>(gas: &mut Gas<S>, mut ats: [At; 2]) {
-    if ats[0] < ats[1] {
-        ats.swap(0, 1);
+impl<S> Gas<S> {
+    /// Removes the particle at `at`.
+    fn remove(&mut self, (size, q, idx): At) {
+        let sp = &mut self.species[size as usize - 1];
+        let d = sp.index(q).expect("a particle's class");
+        sp.remove(d, idx);
     }
-    for (size, ci, idx) in ats {
-        gas.species[size as usize - 1].classes[ci]
-            .v
-            .swap_remove(idx);
+
+    /// Removes particles `ats` (the later index first where two share a class).
+    fn remove_both(&mut self, mut ats: [At; 2]) {
+        if ats[0] < ats[1] {
+            ats.swap(0, 1);
+        }
+        for at in ats {
+            self.remove(at);
+        }
     }
 }
 
@@ -660,10 +858,12 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         _count: &dyn Fn(u64) -> u64,
     ) -> Result<()> {
         let (e, gn) = (self.e, self.gn);
-        let k = (x, self.k.0, self.k.1);
-        let l = (y, self.l.0, self.l.1);
-        let vk = gas.species[x as usize - 1].classes[k.1].v[k.2];
-        let vl = gas.species[y as usize - 1].classes[l.1].v[l.2];
+        let (sx, sy) = (&gas.species[x as usize - 1], &gas.species[y as usize - 1]);
+        let vk = sx.classes[self.k.0].v[self.k.1];
+        let vl = sy.classes[self.l.0].v[self.l.1];
+        // (by class: reserving may move the classes' indices)
+        let k = (x, sx.q(self.k.0), self.k.1);
+        let l = (y, sy.q(self.l.0), self.l.1);
         let (mx, my) = (x as f64, y as f64);
         self.pending = match *outcome {
             Outcome::Bounce => {
@@ -721,50 +921,45 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         match core::mem::take(&mut self.pending) {
             Pending::None => {}
             Pending::Bounce { k, vk, l, vl } => {
-                // a particle that stays in its class is written in place; the others
-                // leave their classes (the later index first) and join their new ones
-                let same = |at: At, v: &[f64; 3], gas: &Gas<S>| {
-                    gas.species[at.0 as usize - 1].classes[at.1].q == class_of(v)
-                };
-                let (stay_k, stay_l) = (same(k, &vk, gas), same(l, &vl, gas));
+                // a particle that stays in its class is written in place (its size's
+                // sums are unchanged); the others leave their classes (the later index
+                // first) and join their new ones
+                let (stay_k, stay_l) = (k.1 == class_of(&vk), l.1 == class_of(&vl));
                 for (at, v, stay) in [(k, vk, stay_k), (l, vl, stay_l)] {
                     if stay {
-                        gas.species[at.0 as usize - 1].classes[at.1].v[at.2] = v;
+                        let sp = &mut gas.species[at.0 as usize - 1];
+                        let d = sp.index(at.1).expect("a particle's class");
+                        sp.classes[d].v[at.2] = v;
                     }
                 }
                 match (stay_k, stay_l) {
                     (true, true) => {}
                     (false, true) => {
-                        gas.species[k.0 as usize - 1].classes[k.1]
-                            .v
-                            .swap_remove(k.2);
+                        gas.remove(k);
                         gas.species[k.0 as usize - 1].insert(vk);
+                        touch(k.0);
                     }
                     (true, false) => {
-                        gas.species[l.0 as usize - 1].classes[l.1]
-                            .v
-                            .swap_remove(l.2);
+                        gas.remove(l);
                         gas.species[l.0 as usize - 1].insert(vl);
+                        touch(l.0);
                     }
                     (false, false) => {
-                        remove_both(gas, [k, l]);
+                        gas.remove_both([k, l]);
                         gas.species[k.0 as usize - 1].insert(vk);
                         gas.species[l.0 as usize - 1].insert(vl);
+                        touch(k.0);
+                        touch(l.0);
                     }
                 }
-                touch(k.0);
-                touch(l.0);
             }
             Pending::Merge { k, l, size, v } => {
-                remove_both(gas, [k, l]);
+                gas.remove_both([k, l]);
                 gas.species[size as usize - 1].insert(v);
                 touch(k.0);
                 touch(l.0);
                 touch(size);
             }
-        }
-        for &s in &touched {
-            gas.species[s as usize - 1].refresh();
         }
         touched
     }
@@ -790,9 +985,15 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
     fn save(&self, gas: &Gas<S>, w: &mut Writer) {
         w.u64(gas.species.len() as u64);
         for sp in &gas.species {
-            w.u64(sp.classes.len() as u64);
-            for c in &sp.classes {
-                w.u64(c.q as i64 as u64);
+            let occupied = || {
+                sp.classes
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| !c.v.is_empty())
+            };
+            w.u64(occupied().count() as u64);
+            for (d, c) in occupied() {
+                w.u64(sp.q(d) as i64 as u64);
                 w.f64s(&c.v.iter().flatten().copied().collect::<Vec<_>>());
             }
         }
@@ -808,22 +1009,28 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
             for _ in 0..nc {
                 let q = i32::try_from(r.u64()? as i64).map_err(|_| bad("invalid speed class"))?;
                 let flat = r.f64s()?;
-                // (the classes a finite speed can have; an empty one stays listed until
-                // the species compacts)
-                if flat.len() % 3 != 0 || !(q == i32::MIN || (-2200..=2047).contains(&q)) {
+                // (older checkpoints: `v = 0` in class i32::MIN and subnormal `|v|²` in
+                // classes below Q_MIN, all now in Q_MIN)
+                let old_low = q == i32::MIN || (-2200..Q_MIN).contains(&q);
+                if flat.len() % 3 != 0 || !(old_low || (Q_MIN..=2047).contains(&q)) {
                     return Err(bad("invalid speed class"));
                 }
+                let fits = |x: &[f64; 3]| {
+                    finite_speed(x) && (class_of(x) == q || (old_low && class_of(x) == Q_MIN))
+                };
                 let v: Vec<[f64; 3]> = flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect();
-                if v.iter().any(|x| !finite_speed(x) || class_of(x) != q)
-                    || sp.classes.iter().any(|c: &Class| c.q == q)
-                {
+                // (a class listed twice: its particles would be in the order of neither)
+                let twice = !old_low
+                    && !v.is_empty()
+                    && sp.index(q).is_some_and(|d| !sp.classes[d].v.is_empty());
+                if !v.iter().all(fits) || twice {
                     return Err(bad("particle velocities do not match their speed classes"));
                 }
-                let w = class_bound(q);
-                try_reserve(&mut sp.classes, 1)?;
-                sp.classes.push(Class { q, w, v });
+                for x in v {
+                    sp.reserve(class_of(&x))?;
+                    sp.insert(x);
+                }
             }
-            sp.refresh();
             try_reserve(&mut species, 1)?;
             species.push(sp);
         }
@@ -880,5 +1087,138 @@ where
             return 0.0;
         }
         size as f64 * s / (3.0 * n as f64)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::checkpoint::{Reader, Writer};
+    use rand_core::SeedableRng;
+
+    /// A velocity of speed about `10^e` in a random direction.
+    fn velocity(rng: &mut rand_pcg::Pcg64Mcg, e: f64) -> [f64; 3] {
+        let s = libm::pow(10.0, e);
+        [s * normal(rng), s * normal(rng), s * normal(rng)]
+    }
+
+    /// Checks a species' counts, range, top and sum against its classes.
+    fn check(sp: &Species) {
+        let n: usize = sp.classes.iter().map(|c| c.v.len()).sum();
+        assert_eq!(sp.n, n);
+        // the sum kept up to date is the one recomputed from the contents, bit for bit
+        let mut again = sp.clone();
+        again.resum();
+        assert_eq!(sp.s.to_bits(), again.s.to_bits());
+        assert_eq!(
+            (sp.lo, sp.hi, sp.exact, sp.x),
+            (again.lo, again.hi, again.exact, again.x)
+        );
+        if n == 0 {
+            assert_eq!((sp.s, sp.top), (0.0, 0.0));
+            return;
+        }
+        assert!(!sp.classes[sp.lo].v.is_empty() && !sp.classes[sp.hi].v.is_empty());
+        assert!(sp.classes[..sp.lo].iter().all(|c| c.v.is_empty()));
+        assert!(sp.classes[sp.hi + 1..].iter().all(|c| c.v.is_empty()));
+        assert_eq!(sp.top, sp.classes[sp.hi].w);
+        let naive: f64 = sp.classes.iter().map(|c| c.v.len() as f64 * c.w).sum();
+        assert!((sp.s - naive).abs() <= 1e-12 * naive, "{} vs {naive}", sp.s);
+        for (d, c) in sp.classes.iter().enumerate() {
+            let q = sp.q(d);
+            assert_eq!(c.w, class_bound(q));
+            for v in &c.v {
+                assert_eq!(class_of(v), q);
+                assert!(norm(v) < c.w);
+            }
+        }
+    }
+
+    #[test]
+    fn class_sums_follow_every_move() {
+        let mut rng = rand_pcg::Pcg64Mcg::seed_from_u64(3);
+        // speeds over a few octaves (exact sums), then over 300 (the fallback), and the
+        // lowest class (zero and subnormal |v|²)
+        for spread in [2.0, 90.0] {
+            let mut sp = Species::default();
+            for step in 0..4000 {
+                let remove = sp.n > 0 && (step % 3 == 2 || unit_f64(rng.next_u64()) < 0.3);
+                if remove {
+                    let (d, idx) = sp.locate(below(&mut rng, sp.n as u64) as usize);
+                    sp.remove(d, idx);
+                } else {
+                    let v = match step % 50 {
+                        7 => [0.0; 3],
+                        8 => [1e-170, 0.0, -1e-170],
+                        _ => {
+                            let e = spread * (unit_f64(rng.next_u64()) - 0.5);
+                            velocity(&mut rng, e)
+                        }
+                    };
+                    sp.reserve(class_of(&v)).unwrap();
+                    sp.insert(v);
+                }
+                check(&sp);
+            }
+        }
+    }
+
+    #[test]
+    fn sums_fall_back_and_come_back() {
+        let mut sp = Species::default();
+        for v in [[1.0, 0.0, 0.0], [1e-30, 0.0, 0.0]] {
+            sp.reserve(class_of(&v)).unwrap();
+            sp.insert(v);
+        }
+        assert!(sp.exact);
+        // 2^{-130} next to 1: X_r would need 130 bits
+        let slow = [libm::scalbn(1.0, -130), 0.0, 0.0];
+        sp.reserve(class_of(&slow)).unwrap();
+        sp.insert(slow);
+        check(&sp);
+        assert!(!sp.exact);
+        let d = sp.index(class_of(&slow)).unwrap();
+        sp.remove(d, 0);
+        check(&sp);
+        assert!(sp.exact);
+    }
+
+    #[test]
+    fn an_older_checkpoint_with_zero_speeds_loads() {
+        // the format before the dense classes: v = 0 in class i32::MIN, classes in
+        // the order they were made
+        let mut buf = alloc::vec![0u8; 1024];
+        let mut w = Writer::new(&mut buf);
+        w.u64(1);
+        w.u64(3);
+        w.u64(class_of(&[2.0, 0.0, 0.0]) as i64 as u64);
+        w.f64s(&[2.0, 0.0, 0.0]);
+        w.u64(i32::MIN as i64 as u64);
+        w.f64s(&[0.0; 6]);
+        w.u64(class_of(&[0.5, 0.0, 0.0]) as i64 as u64);
+        w.f64s(&[]);
+        let len = w.needed();
+        let gas = Gas::from_particles(0.9, NeverStick, &[1], &[[1.0, 0.0, 0.0]]).unwrap();
+        let mut r = Reader::new(&buf[..len]);
+        let back = Collisions::default().load(&gas, &mut r).unwrap().unwrap();
+        assert_eq!(back.counts(), alloc::vec![3]);
+        let sp = &back.species[0];
+        check(sp);
+        assert_eq!(sp.classes[sp.index(Q_MIN).unwrap()].v.len(), 2);
+        // a class listed twice is refused
+        let mut buf = alloc::vec![0u8; 1024];
+        let mut w = Writer::new(&mut buf);
+        w.u64(1);
+        w.u64(2);
+        for _ in 0..2 {
+            w.u64(class_of(&[2.0, 0.0, 0.0]) as i64 as u64);
+            w.f64s(&[2.0, 0.0, 0.0]);
+        }
+        let len = w.needed();
+        let mut r = Reader::new(&buf[..len]);
+        assert!(matches!(
+            Collisions::default().load(&gas, &mut r),
+            Err(Error::Checkpoint { .. })
+        ));
     }
 }
