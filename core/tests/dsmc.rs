@@ -10,7 +10,7 @@ use coagula_core::Error;
 use coagula_core::checkpoint::Checkpoint;
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::lowrank::dsmc::{
-    Collisions, Gas, LowRankDsmc, NeverStick, RejectionDsmc, StickBelow, Sticking,
+    Collisions, Directions, Gas, LowRankDsmc, NeverStick, RejectionDsmc, StickBelow, Sticking,
 };
 use coagula_core::scheme::lowrank::{BinaryTree, WideTree};
 use coagula_core::scheme::lowrank::{LowRankMc, ProposalEngine, TreeEngine, UniformEngine};
@@ -58,11 +58,13 @@ fn particles<S: Sticking + Clone, E: ProposalEngine<3>>(s: &On<S, E>) -> Vec<(u6
 /// a merge conserves mass and momentum. On both engines, with sticking on.
 #[test]
 fn every_collision_conserves_momentum_and_loses_its_share() {
-    check_events::<TreeEngine<3, BinaryTree<3>>>();
-    check_events::<UniformEngine<3>>();
+    for d in [Directions::Conditional, Directions::Uniform] {
+        check_events::<TreeEngine<3, BinaryTree<3>>>(d);
+        check_events::<UniformEngine<3>>(d);
+    }
 }
 
-fn check_events<E: ProposalEngine<3>>() {
+fn check_events<E: ProposalEngine<3>>(directions: Directions) {
     let eps = 0.8;
     let sizes: Vec<u64> = (0..400).map(|p| 1 + p % 5).collect();
     let mut r0 = rng(1);
@@ -75,7 +77,9 @@ fn check_events<E: ProposalEngine<3>>() {
             v
         })
         .collect();
-    let gas = Gas::from_particles(eps, StickBelow { speed: 0.05 }, &sizes, &vel).unwrap();
+    let gas = Gas::from_particles(eps, StickBelow { speed: 0.05 }, &sizes, &vel)
+        .unwrap()
+        .with_directions(directions);
     let mut s = On::<_, E>::new_gas(gas, 4000.0).unwrap();
     let mut rng = rng(2);
     let (mut bounces, mut merges) = (0, 0);
@@ -160,13 +164,17 @@ fn check_events<E: ProposalEngine<3>>() {
 /// factor 2 in the direction's law or the cross-section 100 %.
 #[test]
 fn the_first_collision_comes_at_the_exact_rate() {
-    first_collision::<TreeEngine<3, WideTree<3>>>();
-    first_collision::<UniformEngine<3>>();
+    for d in [Directions::Conditional, Directions::Uniform] {
+        first_collision::<TreeEngine<3, WideTree<3>>>(d);
+        first_collision::<UniformEngine<3>>(d);
+    }
 }
 
-fn first_collision<E: ProposalEngine<3>>() {
+fn first_collision<E: ProposalEngine<3>>(directions: Directions) {
     let mut r0 = rng(3);
-    let gas = Gas::maxwellian(0.9, &[12, 8, 4], &[1.0, 2.0, 0.5], &mut r0).unwrap();
+    let gas = Gas::maxwellian(0.9, &[12, 8, 4], &[1.0, 2.0, 0.5], &mut r0)
+        .unwrap()
+        .with_directions(directions);
     let volume = 500.0;
     let parts: Vec<(u64, [f64; 3])> = {
         let s = On::<NeverStick, E>::new_gas(gas.clone(), volume).unwrap();
@@ -200,7 +208,7 @@ fn first_collision<E: ProposalEngine<3>>() {
     }
     let zz = (st.mean() - 1.0 / rate) / st.std_error();
     println!(
-        "first collision: {} ± {} vs 1/R = {} ({zz:+.2} SE)",
+        "first collision ({directions:?}): {} ± {} vs 1/R = {} ({zz:+.2} SE)",
         st.mean(),
         st.std_error(),
         1.0 / rate

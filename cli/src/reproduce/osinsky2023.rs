@@ -13,7 +13,7 @@ use coagula_core::kernel::temperature::{Ballistic, Model, TemperatureKernel, int
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
 use coagula_core::random::generator;
 use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::dsmc::{Collisions, Gas};
+use coagula_core::scheme::lowrank::dsmc::{Collisions, Directions, Gas};
 use coagula_core::scheme::lowrank::{
     Collide, LowRankMc, ProposalEngine, Thermal, TreeEngine, UniformEngine, WideTree,
 };
@@ -370,10 +370,13 @@ fn timed_dsmc<E: ProposalEngine<3>>(
     times: &[f64],
     budget: f64,
     seed: u64,
+    directions: Directions,
 ) -> Result<Vec<Cell>, String> {
     let mut rng = generator(seed, 0);
     let temps = vec![1.0; counts.len()];
-    let gas = Gas::maxwellian(0.99, counts, &temps, &mut rng).map_err(err)?;
+    let gas = Gas::maxwellian(0.99, counts, &temps, &mut rng)
+        .map_err(err)?
+        .with_directions(directions);
     let n: u64 = counts.iter().sum();
     let mut s = DsmcOn::<E>::new_gas(gas, n as f64 / 0.1).map_err(err)?;
     through(&mut s, times, budget, &mut rng, |s| {
@@ -394,22 +397,23 @@ pub fn bench_dsmc(
         "Osinsky (2023) tables 5-6: DSMC without aggregation, eps = 0.99, N_k ~ exp(-a (k-1)), all T_k = 1, number density 0.1, {total:.1e} particles."
     );
     println!(
-        "LR = low-rank DSMC on per-size trees, AR = acceptance-rejection (uniform pairs); fastest of {repeat} alternating round(s). Collisions per second (c/s) are compared; the paper's c/s are its collisions over its seconds."
+        "LR = low-rank DSMC on per-size trees (direction integrated out); AR = acceptance-rejection, uniform pairs, the same; AR43 = acceptance-rejection with a uniform direction accepted on |g.e|, the seed's eq. 43 (the paper's baseline); fastest of {repeat} alternating round(s). Collisions per second (c/s) are compared; the paper's c/s are its collisions over its seconds."
     );
     println!(
-        "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>6} {:>6} | {:>8} {:>8} {:>6} | {:>9} {:>9} {:>9} {:>7}",
+        "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} | {:>8} {:>8} {:>6} | {:>9} {:>9} {:>7}",
         "a",
         "t",
         "LR coll",
         "LR s",
         "AR s",
+        "AR43 s",
         "AR/LR",
+        "AR43/LR",
         "LR p/c",
         "paper LR",
         "paper AR",
         "AR/LR",
         "LR c/s",
-        "AR c/s",
         "paper c/s",
         "x paper"
     );
@@ -417,39 +421,50 @@ pub fn bench_dsmc(
     for (a, table) in [(0.1, &TABLE5), (0.01, &TABLE6)] {
         let counts = dsmc_workload(a, total as f64);
         bounds.push((a, bound_ratio(&counts, seed)?));
-        let mut best_lr: Vec<Cell> = vec![None; times.len()];
-        let mut best_ar: Vec<Cell> = vec![None; times.len()];
+        let mut best = [
+            vec![None; times.len()],
+            vec![None; times.len()],
+            vec![None; times.len()],
+        ];
         for round in 0..repeat {
             let s = seed + u64::from(round);
-            keep_fastest(&mut best_lr, timed_dsmc::<Tree>(&counts, times, budget, s)?);
-            let ar = timed_dsmc::<UniformEngine<3>>(&counts, times, budget, s)?;
-            keep_fastest(&mut best_ar, ar);
+            let (c, u) = (Directions::Conditional, Directions::Uniform);
+            keep_fastest(
+                &mut best[0],
+                timed_dsmc::<Tree>(&counts, times, budget, s, c)?,
+            );
+            let ar = timed_dsmc::<UniformEngine<3>>(&counts, times, budget, s, c)?;
+            keep_fastest(&mut best[1], ar);
+            let ar43 = timed_dsmc::<UniformEngine<3>>(&counts, times, budget, s, u)?;
+            keep_fastest(&mut best[2], ar43);
         }
         for (i, &t) in times.iter().enumerate() {
+            let [lr, ar, ar43] = [best[0][i], best[1][i], best[2][i]];
             let paper = table.iter().find(|r| r.0 == t);
             let f = |c: Cell| c.map_or("-".to_string(), |c| format!("{:.2}", c.0));
             let cps = |c: Cell| c.map_or(f64::NAN, |c| c.1 as f64 / c.0);
-            let ratio = match (best_lr[i], best_ar[i]) {
+            let ratio = |base: Cell| match (lr, base) {
                 (Some(l), Some(r)) => format!("{:.1}", r.0 / l.0),
                 _ => "-".into(),
             };
             let paper_cps = paper.map_or(f64::NAN, |p| p.3 / p.2);
             println!(
-                "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>6} {:>6} | {:>8} {:>8} {:>6} | {:>9.3e} {:>9.3e} {:>9.3e} {:>7.2}",
+                "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} | {:>8} {:>8} {:>6} | {:>9.3e} {:>9.3e} {:>7.2}",
                 a,
                 t,
-                best_lr[i].map_or("-".into(), |c| format!("{:.3e}", c.1 as f64)),
-                f(best_lr[i]),
-                f(best_ar[i]),
-                ratio,
-                best_lr[i].map_or("-".into(), |c| format!("{:.2}", c.2 as f64 / c.1 as f64)),
+                lr.map_or("-".into(), |c| format!("{:.3e}", c.1 as f64)),
+                f(lr),
+                f(ar),
+                f(ar43),
+                ratio(ar),
+                ratio(ar43),
+                lr.map_or("-".into(), |c| format!("{:.2}", c.2 as f64 / c.1 as f64)),
                 paper.map_or("-".into(), |p| format!("{}", p.2)),
                 paper.map_or("-".into(), |p| format!("{}", p.1)),
                 paper.map_or("-".into(), |p| format!("{:.1}", p.1 / p.2)),
-                cps(best_lr[i]),
-                cps(best_ar[i]),
+                cps(lr),
                 paper_cps,
-                cps(best_lr[i]) / paper_cps,
+                cps(lr) / paper_cps,
             );
         }
     }

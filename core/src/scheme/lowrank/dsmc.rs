@@ -32,7 +32,9 @@
 //!   maxima give about 0.23 at 10^5 particles per size). The direction then comes from
 //!   its conditional law, density ∝ `|g·e|` (`cos θ = sqrt(U)` from `ĝ`); the seed's
 //!   eq. 42 draws `e` uniformly and accepts `|g·e|` against twice the bound: the same
-//!   process at half the acceptance.
+//!   process at half the acceptance, kept as [`Directions::Uniform`] (on the
+//!   acceptance–rejection engine below that is the seed's eq. 43, the paper's
+//!   baseline).
 //! * **Acceptance–rejection engine** ([`RejectionDsmc`]): the factors use each size's
 //!   largest class bound instead of the mean (`a(i) = (π/4) max_k W_k (…)`), pairs are
 //!   uniform, and the rule accepts with the pair's rate over the engine's bound `2 max A`
@@ -127,6 +129,21 @@ pub struct Gas<S = NeverStick> {
     /// Factors from the mean class bound (the per-size trees draw the first particle ∝
     /// its bound) rather than the largest (any engine).
     weighted: bool,
+    directions: Directions,
+}
+
+/// How a collision's direction `e` is drawn (the same process either way).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Directions {
+    /// Integrated out: a pair is proposed against the bound of its rate averaged over
+    /// `e`, accepted with `|V_k − V_l|` over it, and `e` then drawn from its conditional
+    /// law. Half the proposals of [`Uniform`](Self::Uniform).
+    #[default]
+    Conditional,
+    /// Uniform on the sphere, and the pair accepted on `|(V_k − V_l)·e|` against twice
+    /// that bound: the seed's eqs. 42 (per-size trees) and 43 (acceptance–rejection),
+    /// kept as the paper's baseline.
+    Uniform,
 }
 
 /// The particles of one speed class.
@@ -570,6 +587,7 @@ impl<S: Sticking> Gas<S> {
             sticking,
             species,
             weighted: false,
+            directions: Directions::Conditional,
         })
     }
 
@@ -580,6 +598,30 @@ impl<S: Sticking> Gas<S> {
             sticking,
             species: self.species,
             weighted: self.weighted,
+            directions: self.directions,
+        }
+    }
+
+    /// The same particles with collision directions drawn as `directions` says (a
+    /// setting, like the restitution: a checkpoint restores into a scheme built with
+    /// the same).
+    pub fn with_directions(mut self, directions: Directions) -> Self {
+        self.directions = directions;
+        self
+    }
+
+    /// How collision directions are drawn.
+    pub fn directions(&self) -> Directions {
+        self.directions
+    }
+
+    /// `π/4`, or twice that when directions are uniform (the bound of a rate before
+    /// `e` is averaged out).
+    #[inline]
+    fn scale(&self) -> f64 {
+        match self.directions {
+            Directions::Conditional => QUARTER_PI,
+            Directions::Uniform => 2.0 * QUARTER_PI,
         }
     }
 
@@ -658,7 +700,7 @@ impl<S: Sticking> CoagulationKernel for Gas<S> {
             }
             _ => 0.0,
         };
-        let w = QUARTER_PI * w;
+        let w = self.scale() * w;
         a[..3].copy_from_slice(&[w * c * c, 2.0 * w * c, w]);
         b[..3].copy_from_slice(&[1.0, c, c * c]);
     }
@@ -812,12 +854,21 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         let (vk, vl) = (ck.v[k.1], cl.v[l.1]);
         let g = [vk[0] - vl[0], vk[1] - vl[1], vk[2] - vl[2]];
         let gabs = norm(&g);
-        let (rate, bound) = if gas.weighted {
-            (gabs, ck.w + cl.w)
+        let uniform = gas.directions == Directions::Uniform;
+        // |g| (the rate integrated over e), or |g·e| for a uniform e
+        let speed = if uniform {
+            let e = direction(rng);
+            (self.e, self.gn) = (e, g[0] * e[0] + g[1] * e[1] + g[2] * e[2]);
+            self.gn.abs()
         } else {
-            // the pair's rate integrated over e against the engine's bound
+            gabs
+        };
+        let (rate, bound) = if gas.weighted {
+            (speed, ck.w + cl.w)
+        } else {
+            // the pair's rate against the engine's bound
             let d = size_cbrt(x) + size_cbrt(y);
-            (QUARTER_PI * d * d * gabs, bounds().0)
+            (gas.scale() * d * d * speed, bounds().0)
         };
         if rate.is_nan() || rate > bound * (1.0 + 1e-12) {
             // a speed past its class's bound: an invariant broke
@@ -830,10 +881,13 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         if rate < bound * open_unit(rng) {
             return Ok(None);
         }
-        // the direction given the pair: density ∝ |g·e| on the sphere, i.e.
-        // cos θ = sqrt(U) from ĝ (the sign of e does not matter), azimuth uniform
-        let (e, gn) = oriented(&g, gabs, rng);
-        (self.k, self.l, self.e, self.gn) = (k, l, e, gn);
+        if !uniform {
+            // the direction given the pair: density ∝ |g·e| on the sphere, i.e.
+            // cos θ = sqrt(U) from ĝ (the sign of e does not matter), azimuth uniform
+            (self.e, self.gn) = oriented(&g, gabs, rng);
+        }
+        (self.k, self.l) = (k, l);
+        let gn = self.gn;
         let p = gas.sticking.probability(x, y, gn.abs());
         if !(0.0..=1.0).contains(&p) {
             return Err(Error::InvalidRate {
@@ -1039,6 +1093,7 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
             sticking: gas.sticking.clone(),
             species,
             weighted: gas.weighted,
+            directions: gas.directions,
         }))
     }
 }
