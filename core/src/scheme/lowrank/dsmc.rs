@@ -176,7 +176,7 @@ impl Class {
 /// A size whose speeds span so many octaves that an `X_r` does not fit in 128 bits
 /// (about 2^87 with 2^40 particles) falls back to summing its classes in order at every
 /// move; one whose moving classes would span more than [`MAX_CLASSES`] is refused.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 struct Species {
     /// The class of `classes[1]`.
     base: i32,
@@ -197,6 +197,24 @@ struct Species {
     /// The `h` of the lowest occupied moving class, and `X_r`.
     anchor: i32,
     x: [u128; 4],
+}
+
+impl Default for Species {
+    /// No particles (the fields as `resum` leaves them).
+    fn default() -> Self {
+        Species {
+            base: 0,
+            classes: Vec::new(),
+            n: 0,
+            s: 0.0,
+            top: 0.0,
+            lo: 1,
+            end: 1,
+            exact: true,
+            anchor: 0,
+            x: [0; 4],
+        }
+    }
 }
 
 /// A little above 1: class bounds are rounded up by it.
@@ -357,6 +375,15 @@ impl Species {
             self.classes.push(Class::new(Q_MIN));
             (self.lo, self.end) = (1, 1);
         }
+        // (checked whatever the range: the refusal depends on the particles alone, so
+        // a state that was reached also loads, in any order)
+        let (first, last) = self.moving_span(qs);
+        if first <= last && (last - first) as usize >= MAX_CLASSES {
+            return Err(Error::Capacity {
+                name: "speed classes of one size (speeds within a factor 2^128)",
+                capacity: MAX_CLASSES,
+            });
+        }
         if qs.iter().any(|&q| self.index(q).is_none()) {
             self.make_room(qs)?;
         }
@@ -373,22 +400,9 @@ impl Species {
     /// are dropped. Nothing a sum depends on changes.
     #[cold]
     fn make_room(&mut self, qs: &[i32]) -> Result<()> {
-        let (mut first, mut last) = if self.lo < self.end {
-            (self.q(self.lo), self.q(self.end - 1))
-        } else {
-            (i32::MAX, i32::MIN)
-        };
-        for &q in qs.iter().filter(|&&q| q != Q_MIN) {
-            (first, last) = (first.min(q), last.max(q));
-        }
+        let (first, last) = self.moving_span(qs);
         if first > last {
             return Ok(());
-        }
-        if (last - first) as usize >= MAX_CLASSES {
-            return Err(Error::Capacity {
-                name: "speed classes of one size (speeds within a factor 2^128)",
-                capacity: MAX_CLASSES,
-            });
         }
         let from = first.saturating_sub(4).max(Q_MIN + 1);
         let mut classes = Vec::new();
@@ -411,6 +425,20 @@ impl Species {
             _ => (1, 1),
         };
         Ok(())
+    }
+
+    /// The lowest and highest of the occupied moving classes and the moving classes of
+    /// `qs` (`first > last` when there are none).
+    fn moving_span(&self, qs: &[i32]) -> (i32, i32) {
+        let (mut first, mut last) = if self.lo < self.end {
+            (self.q(self.lo), self.q(self.end - 1))
+        } else {
+            (i32::MAX, i32::MIN)
+        };
+        for &q in qs.iter().filter(|&&q| q != Q_MIN) {
+            (first, last) = (first.min(q), last.max(q));
+        }
+        (first, last)
     }
 
     /// Adds a particle (room reserved by `reserve`).
@@ -1408,6 +1436,39 @@ mod tests {
         assert_eq!((sp.n, sp.s.to_bits()), (before.n, before.s.to_bits()));
     }
 
+    /// The refusal of speeds 2^128 apart does not depend on the order the particles come
+    /// in (classes 0 and −511 are 511 apart; −514, inside the padding a rebuild leaves
+    /// below −511, is 514 from 0), and a bounce's two classes are reserved together.
+    #[test]
+    fn refusals_do_not_depend_on_order() {
+        let at = |q: i32| [libm::sqrt(libm::exp2(f64::from(q) / 2.0 + 0.1)), 0.0, 0.0];
+        for order in [[0, -511, -514], [-514, -511, 0], [-511, -514, 0]] {
+            let mut sp = Species::default();
+            let mut got = Vec::new();
+            for q in order {
+                assert_eq!(class_of(&at(q)), q);
+                let r = sp.reserve(&[q]);
+                if r.is_ok() {
+                    sp.insert(at(q));
+                }
+                got.push(r.is_ok());
+                check(&sp);
+            }
+            // whichever came first of 0 and −514, the other is refused; −511 fits
+            let refused = got.iter().filter(|ok| !**ok).count();
+            assert_eq!(refused, 1, "{order:?}: {got:?}");
+        }
+        // two classes at once, both outside the range: one rebuild holds both
+        let mut sp = Species::default();
+        sp.reserve(&[0]).unwrap();
+        sp.insert(at(0));
+        sp.reserve(&[-40, 60]).unwrap();
+        sp.insert(at(-40));
+        sp.insert(at(60));
+        check(&sp);
+        assert_eq!(sp.n, 3);
+    }
+
     /// A size whose speeds drift down (a cooling gas) keeps a bounded range of classes:
     /// the empty ones above are dropped when the range is rebuilt.
     #[test]
@@ -1440,8 +1501,8 @@ mod tests {
         w.f64s(&[0.0; 6]);
         w.u64(class_of(&[0.5, 0.0, 0.0]) as i64 as u64);
         w.f64s(&[]);
-        // |v|² = 2^{−1022.2}: the old class −2045 (the old layout's only class at or
-        // below Q_MIN's number that a normal |v|² could have)
+        // |v|² = 2^{−1022.2} (subnormal): the old layout's class −2045, which is Q_MIN's
+        // number
         let tiny = libm::sqrt(libm::exp2(-1022.2));
         w.u64(-2045i64 as u64);
         w.f64s(&[tiny, 0.0, 0.0]);
