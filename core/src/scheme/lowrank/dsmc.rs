@@ -17,7 +17,10 @@
 //!
 //! * **Speed classes.** The particles of a size are kept in classes of speed: class q
 //!   holds `|V|² ∈ [2^{q/2}, 2^{(q+1)/2})`, and `W_q = 2^{(q+1)/4}` bounds its speeds
-//!   within a factor `2^{1/4}`. A particle's bound `W_k` is its class's.
+//!   within a factor `2^{1/4}`. A particle's bound `W_k` is its class's. Particles at
+//!   rest (`|V|² < 2^{−1022}`) share one class of bound `2^{−511}`; the moving speeds
+//!   of one size must lie within a factor `2^{128}` of each other (else
+//!   [`Error::Capacity`], where a gas or a collision would pass it).
 //! * **Bound.** A pair's rate integrated over `e` is
 //!   `(π/4)(i^{1/3} + j^{1/3})² |V_k − V_l| / V ≤ (π/4)(i^{1/3} + j^{1/3})² (W_k + W_l) / V`.
 //!   Summed over the particles of sizes i and j that is `A_ij + A_ji` with
