@@ -308,6 +308,22 @@ impl Species {
         libm::scalbn(t, self.anchor) + self.rest()
     }
 
+    /// `S` after a move that kept `x`, `lo`, `end` and `top` right.
+    #[inline]
+    fn settle(&mut self) {
+        if self.exact {
+            self.s = self.exact_sum();
+        } else {
+            self.resum();
+        }
+    }
+
+    /// The last occupied class (the class at rest when no moving one is).
+    #[inline]
+    fn last_class(&self) -> usize {
+        if self.lo < self.end { self.end - 1 } else { 0 }
+    }
+
     /// `n_0 W_{Q_MIN}`.
     #[inline]
     fn rest(&self) -> f64 {
@@ -348,10 +364,8 @@ impl Species {
         }
         (self.n, self.lo, self.end) = (n, lo, end);
         (self.exact, self.anchor, self.x) = (exact, anchor, x);
-        self.top = if lo < end {
-            self.classes[end - 1].w
-        } else if still > 0 {
-            self.classes[0].w
+        self.top = if n > 0 {
+            self.classes[self.last_class()].w
         } else {
             0.0
         };
@@ -419,14 +433,8 @@ impl Species {
             });
         }
         (self.classes, self.base) = (classes, from);
-        // (the occupied ones keep their contents: lo and end shift, the sums stand)
-        let occupied = |c: &Class| !c.v.is_empty();
-        let lo = self.classes.iter().skip(1).position(occupied);
-        let hi = self.classes.iter().skip(1).rposition(occupied);
-        (self.lo, self.end) = match (lo, hi) {
-            (Some(lo), Some(hi)) => (lo + 1, hi + 2),
-            _ => (1, 1),
-        };
+        // (the same contents: lo and end shift, the sums come out the same)
+        self.resum();
         Ok(())
     }
 
@@ -455,11 +463,7 @@ impl Species {
             if self.lo == self.end {
                 self.top = self.classes[0].w;
             }
-            if self.exact {
-                self.s = self.exact_sum();
-            } else {
-                self.resum();
-            }
+            self.settle();
             return;
         }
         let (h, r) = class_parts(q);
@@ -475,11 +479,11 @@ impl Species {
         if d >= self.end {
             (self.end, self.top) = (d + 1, self.classes[d].w);
         }
-        if !self.exact || !self.add_exact(h, r) {
-            self.resum();
-            return;
+        if self.exact && !self.add_exact(h, r) {
+            // (past 128 bits: the fallback)
+            self.exact = false;
         }
-        self.s = self.exact_sum();
+        self.settle();
     }
 
     /// Adds `2^h` to `X_r` (moving the anchor down if needed); false on overflow.
@@ -517,10 +521,8 @@ impl Species {
         if d == 0 {
             if self.n == 0 {
                 self.resum();
-            } else if self.exact {
-                self.s = self.exact_sum();
             } else {
-                self.resum();
+                self.settle();
             }
             return;
         }
@@ -556,11 +558,7 @@ impl Species {
                 self.anchor = h;
             }
         }
-        if self.exact {
-            self.s = self.exact_sum();
-        } else {
-            self.resum();
-        }
+        self.settle();
     }
 
     /// The particle at `global` in the order of the classes (those at rest first).
@@ -579,7 +577,7 @@ impl Species {
             global -= len;
         }
         // (past the end: the last particle)
-        let last = if self.lo < self.end { self.end - 1 } else { 0 };
+        let last = self.last_class();
         (last, self.classes[last].v.len().saturating_sub(1))
     }
 
@@ -616,7 +614,7 @@ impl Species {
             t -= weight;
         }
         // (rounding past the last class)
-        let last = if self.lo < self.end { self.end - 1 } else { 0 };
+        let last = self.last_class();
         (last, self.classes[last].v.len().saturating_sub(1))
     }
 }
