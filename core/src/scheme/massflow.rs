@@ -418,9 +418,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         // k = ⌊N u_0⌋ (written nearly in order), so that the loop below walks the sizes
         // like MC's instead of scattered (same points, same pairs, same bits)
         let by_particle = |k: usize, w1: u64, w2: u64| {
-            if let Some(row) = pts.get_mut(3 * k..3 * k + 3) {
-                row[1] = w1.to_unit();
-                row[2] = w2.to_unit();
+            if let Some(row) = pts.get_mut(2 * k..2 * k + 2) {
+                row[0] = w1.to_unit();
+                row[1] = w2.to_unit();
             }
             Ok(())
         };
@@ -442,8 +442,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             _ => false,
         };
         if sorted {
-            for (k, u) in pts.chunks_exact(3).take(n).enumerate() {
-                one(k, partner(u[1]), u[2])?;
+            for (k, u) in pts.chunks_exact(2).take(n).enumerate() {
+                one(k, partner(u[0]), u[1])?;
             }
         } else {
             self.points.block(self.steps, self.m, pts)?;
