@@ -12,13 +12,30 @@ use coagula_core::kernel::{BinaryUniform, Coagulation};
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::massflow::{MassFlow, PointSource, Sorting};
 use rand_pcg::Pcg64Mcg;
+use std::process::ExitCode;
 use std::time::Instant;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let rounds: usize = match std::env::args().nth(1) {
-        Some(a) => a.parse()?,
+fn main() -> ExitCode {
+    let rounds = match std::env::args().nth(1) {
         None => 100,
+        Some(a) => match a.parse::<usize>() {
+            Ok(r) if r > 0 => r,
+            _ => {
+                eprintln!("usage: massflow_step_ratio [ROUNDS] (a positive integer, got {a:?})");
+                return ExitCode::FAILURE;
+            }
+        },
     };
+    match run(rounds) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("massflow_step_ratio: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(rounds: usize) -> Result<(), coagula_core::Error> {
     let dt = 1.0 / 400.0;
     let start = |points| -> Result<_, coagula_core::Error> {
         let k = Coagulation::constant(1.0)?;

@@ -6,7 +6,8 @@
 //! cargo run --release -p coagula-core --example osinsky_row -- brownian 10
 //! ```
 //! Kernels: `brownian`, `ballistic` (free-molecular, sizes ≥ 1), `linear` (K = i + j).
-//! Prints the collisions, the largest size, N(t)/V and the wall time.
+//! Prints the collisions, M (the largest size the state can hold), N(t)/V and the wall
+//! time.
 
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::random::{Generator, generator};
@@ -17,10 +18,11 @@ use std::time::Instant;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let usage = "usage: osinsky_row brownian|ballistic|linear T (T > 0)";
-    let (Some(name), Some(t)) = (
-        args.first(),
-        args.get(1).and_then(|s| s.parse::<f64>().ok()),
-    ) else {
+    let t = args
+        .get(1)
+        .and_then(|s| s.parse::<f64>().ok())
+        .filter(|t| t.is_finite() && *t > 0.0);
+    let (Some(name), Some(t)) = (args.first(), t) else {
         eprintln!("{usage}");
         return ExitCode::FAILURE;
     };
