@@ -414,9 +414,10 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         // the partner of a point: ⌊N u⌋ (a u64 word's top m digits, as `to_unit` keeps
         // 53 bits and N = 2^m)
         let partner = |u: f64| ((nf * u) as usize).min(n - 1);
-        // the block's points in the order of the particle they move: rows by
-        // k = ⌊N u_0⌋ (written nearly in order), so that the loop below walks the sizes
-        // like MC's instead of scattered (same points, same pairs, same bits)
+        // the block's points in the order of the particle they move: row k = ⌊N u_0⌋
+        // holds (u_1, u_2), two values, not the block path's three (written nearly in
+        // order), so that the loop below walks the sizes like MC's instead of scattered
+        // (same points, same pairs, same bits)
         let by_particle = |k: usize, w1: u64, w2: u64| {
             if let Some(row) = pts.get_mut(2 * k..2 * k + 2) {
                 row[0] = w1.to_unit();
