@@ -250,55 +250,6 @@ pub(crate) fn check_header(r: &mut Reader, tag: u64) -> Result<()> {
     Ok(())
 }
 
-/// Scheme tags.
-pub(crate) mod tag {
-    pub const MASSFLOW: u64 = 1;
-    pub const LOWRANK: u64 = 2;
-    pub const INVERSE: u64 = 3;
-    pub const REJECTION: u64 = 4;
-    pub const BUCKETED: u64 = 5;
-    pub const MFA: u64 = 6;
-    pub const DSA: u64 = 7;
-    pub const DSA_COUNTS: u64 = 8;
-    pub const LANGEVIN: u64 = 9;
-    pub const THERMAL: u64 = 10;
-    pub const UNIFORM: u64 = 11;
-    pub const DSMC: u64 = 12;
-    pub const LOWRANK_SIZES: u64 = 13;
-    pub const BUCKETED_COUNTED: u64 = 14;
-}
-
-/// Writes a [`crate::scheme::StepReport`].
-pub(crate) fn save_report(w: &mut Writer, r: &crate::scheme::StepReport) {
-    w.f64(r.time);
-    for v in [
-        r.events,
-        r.proposals,
-        r.rejections,
-        r.bound_violations,
-        r.clipped,
-        r.doublings,
-    ] {
-        w.u64(v);
-    }
-}
-
-/// Reads a [`crate::scheme::StepReport`].
-pub(crate) fn read_report(r: &mut Reader) -> Result<crate::scheme::StepReport> {
-    Ok(crate::scheme::StepReport {
-        time: r.f64()?,
-        events: r.u64()?,
-        proposals: r.u64()?,
-        rejections: r.u64()?,
-        bound_violations: r.u64()?,
-        clipped: r.u64()?,
-        doublings: r.u64()?,
-        // (removals and bounces are written after the report by the schemes that
-        // have them)
-        ..Default::default()
-    })
-}
-
 /// A scheme whose state can be saved and restored.
 pub trait Checkpoint {
     /// Writes the full state.

@@ -61,9 +61,6 @@ pub trait Observe {
     /// The gel-mass estimate, where the scheme defines one (size-count schemes: the
     /// largest cluster's mass per volume, Eibeck & Wagner eq. 6.15); `None` otherwise.
     fn gel_mass(&self) -> Option<f64>;
-
-    /// Totals of every `advance_to` so far.
-    fn totals(&self) -> crate::scheme::StepReport;
 }
 
 /// `C(a, b)` from occupied `(size, N)` pairs: `Σ N / V` over the sizes in `[a, b]`

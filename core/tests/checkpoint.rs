@@ -232,11 +232,11 @@ fn auto_bucketed_restores_across_engines() {
     // replacing the counts chooses the engine again; time and totals carry over
     let mut s = AutoBucketed::<_, 1, 2>::new(k, &[1000], 1000.0).unwrap();
     s.advance_to(0.5, &mut Pcg64Mcg::new(1)).unwrap();
-    let (t, events) = (s.time(), coagula_core::observe::Observe::totals(&s).events);
+    let (t, events) = (s.time(), coagula_core::scheme::Scheme::totals(&s).events);
     s.set_counts(&[50_000], 50_000.0).unwrap();
     assert_eq!(s.mode(), BucketMode::Slots);
     assert_eq!(
-        (s.time(), coagula_core::observe::Observe::totals(&s).events),
+        (s.time(), coagula_core::scheme::Scheme::totals(&s).events),
         (t, events)
     );
     s.set_counts(&[300], 300.0).unwrap();
@@ -275,7 +275,7 @@ fn auto_bucketed_pinned_engine() {
     let (counts, t, events) = (
         s.counts().into_owned(),
         s.time(),
-        coagula_core::observe::Observe::totals(&s).events,
+        coagula_core::scheme::Scheme::totals(&s).events,
     );
     assert!(events > 0);
     s.set_mode(Some(BucketMode::Slots)).unwrap();
@@ -285,7 +285,7 @@ fn auto_bucketed_pinned_engine() {
     );
     assert_eq!(s.counts().into_owned(), counts);
     assert_eq!(
-        (s.time(), coagula_core::observe::Observe::totals(&s).events),
+        (s.time(), coagula_core::scheme::Scheme::totals(&s).events),
         (t, events)
     );
     // unpinned: the engine stays until the counts are replaced, then follows the size

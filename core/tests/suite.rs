@@ -10,6 +10,8 @@ mod common;
 mod checkpoint;
 #[path = "conformance.rs"]
 mod conformance;
+#[path = "count_schemes.rs"]
+mod count_schemes;
 #[path = "dsmc.rs"]
 mod dsmc;
 #[path = "finite_n.rs"]

@@ -851,6 +851,9 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> Scheme for Ba
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        Batch::totals(self)
+    }
 
     /// Steps every trajectory to `t`. With no budget each trajectory goes through all
     /// its steps in turn (its record stays in cache); with a budget the batch goes
@@ -982,7 +985,8 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> crate::checkp
     /// The configuration, key, time, counts and every record (the drift is code: the
     /// restoring batch brings its own).
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::LANGEVIN);
         w.u64(D as u64);
         w.u64(self.n as u64);
@@ -1002,7 +1006,7 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> crate::checkp
         w.u64(self.key);
         w.u64(self.first_id);
         w.f64(self.time);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64(self.totals.removed);
         w.u64(self.totals.bounces);
         w.u64s(self.records());
@@ -1012,7 +1016,8 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> crate::checkp
     /// an invalid record (non-finite state, a zero generator, a first hit after the
     /// time); on error the batch is unchanged.
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::LANGEVIN)?;
         if r.u64()? != D as u64 || r.u64()? != self.n as u64 {
@@ -1058,7 +1063,7 @@ impl<const D: usize, Dr: Drift<D>, B: AsRef<[u64]> + AsMut<[u64]>> crate::checkp
         if Self::snap(cfg.dt, time) / cfg.dt > MAX_STEP_INDEX {
             return Err(bad("a time beyond 2^52 steps"));
         }
-        let mut totals = read_report(r)?;
+        let mut totals = StepReport::read(r)?;
         totals.removed = r.u64()?;
         totals.bounces = r.u64()?;
         if totals.time.is_nan() || totals.time > time {

@@ -500,6 +500,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
 
     /// Takes steps of Δt until `t`; a last, shorter step lands exactly on `t` when `t`
     /// is not a multiple of Δt.
@@ -581,16 +584,14 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn gel_mass(&self) -> Option<f64> {
         None
     }
-    fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
 impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
     crate::checkpoint::Checkpoint for MassFlow<K, F, B>
 {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::MASSFLOW);
         w.u64(self.points.fingerprint());
         w.u64(match self.sorting {
@@ -601,12 +602,13 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         w.f64(self.dt);
         w.f64(self.time);
         w.u64(self.steps);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.f64s(self.sizes());
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         check_header(r, tag::MASSFLOW)?;
         if r.u64()? != self.points.fingerprint() {
             return Err(Error::Checkpoint {
@@ -623,7 +625,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             }
         };
         let (mass, dt, time, steps) = (r.f64()?, r.f64()?, r.f64()?, r.u64()?);
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         // read into the next-sizes half (scratch until a step), so that a refused
         // checkpoint leaves the sizes as they were and nothing is allocated
         let (_, next, ..) = split(self.ws.as_mut(), self.n, self.cur);

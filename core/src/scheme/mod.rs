@@ -72,7 +72,56 @@ pub struct StepReport {
     pub interrupted: bool,
 }
 
+/// Checkpoint tags of the schemes (a checkpoint of one scheme is refused by another).
+pub(crate) mod tag {
+    pub const MASSFLOW: u64 = 1;
+    pub const LOWRANK: u64 = 2;
+    pub const INVERSE: u64 = 3;
+    pub const REJECTION: u64 = 4;
+    pub const BUCKETED: u64 = 5;
+    pub const MFA: u64 = 6;
+    pub const DSA: u64 = 7;
+    pub const DSA_COUNTS: u64 = 8;
+    pub const LANGEVIN: u64 = 9;
+    pub const THERMAL: u64 = 10;
+    pub const UNIFORM: u64 = 11;
+    pub const DSMC: u64 = 12;
+    pub const LOWRANK_SIZES: u64 = 13;
+    pub const BUCKETED_COUNTED: u64 = 14;
+}
+
 impl StepReport {
+    /// Writes the report into a checkpoint.
+    pub(crate) fn save(&self, w: &mut crate::checkpoint::Writer) {
+        w.f64(self.time);
+        for v in [
+            self.events,
+            self.proposals,
+            self.rejections,
+            self.bound_violations,
+            self.clipped,
+            self.doublings,
+        ] {
+            w.u64(v);
+        }
+    }
+
+    /// Reads a report written by [`save`](Self::save).
+    pub(crate) fn read(r: &mut crate::checkpoint::Reader) -> Result<StepReport> {
+        Ok(StepReport {
+            time: r.f64()?,
+            events: r.u64()?,
+            proposals: r.u64()?,
+            rejections: r.u64()?,
+            bound_violations: r.u64()?,
+            clipped: r.u64()?,
+            doublings: r.u64()?,
+            // (removals and bounces are written after the report by the schemes that
+            // have them)
+            ..Default::default()
+        })
+    }
+
     /// Adds the counts of `other` (time is taken from `other`).
     pub fn accumulate(&mut self, other: &StepReport) {
         self.time = other.time;
@@ -195,6 +244,10 @@ impl<'a> Budget<'a> {
 pub trait Scheme {
     /// Current simulation time.
     fn time(&self) -> f64;
+
+    /// Totals of every call so far (the books: events, proposals, removals, …; what a
+    /// checkpoint carries over).
+    fn totals(&self) -> StepReport;
 
     /// Runs until time `t ≥ self.time()`, or until `budget` is spent (then the report
     /// says `interrupted`, its time is the time reached and the state is consistent

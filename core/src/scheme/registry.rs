@@ -342,6 +342,8 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
     fn id(&self) -> SchemeId;
     /// Current time.
     fn time(&self) -> f64;
+    /// [`Scheme::totals`]: the books of every call so far.
+    fn totals(&self) -> StepReport;
     /// [`Scheme::advance_to`].
     fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport>;
     /// [`Scheme::advance_within`]: at most `budget`'s work, then `interrupted`.
@@ -472,9 +474,6 @@ impl<S: Observe, K, F> Observe for Entry<S, K, F> {
     fn gel_mass(&self) -> Option<f64> {
         self.s.gel_mass()
     }
-    fn totals(&self) -> StepReport {
-        self.s.totals()
-    }
 }
 
 impl<S, K, F, G> Simulation<K, F, G> for Entry<S, K, F>
@@ -487,6 +486,9 @@ where
     }
     fn time(&self) -> f64 {
         self.s.time()
+    }
+    fn totals(&self) -> StepReport {
+        self.s.totals()
     }
     fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport> {
         self.s.advance_to(t, rng)

@@ -249,6 +249,9 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        Inverse::totals(self)
+    }
 
     fn advance_within<R: Rng + ?Sized>(
         &mut self,
@@ -470,7 +473,8 @@ impl<K: CoagulationKernel> Inverse<K> {
 
 impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::INVERSE);
         w.u64(self.pop.size_limit);
         w.u64(self.pop.n);
@@ -478,7 +482,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
         w.f64(self.pop.volume);
         w.f64(self.time);
         Pending::save(&self.pending, w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64s(&self.size);
         w.u64s(&self.count);
         w.f64s(&self.row);
@@ -486,12 +490,13 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for Inverse<K> {
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         check_header(r, tag::INVERSE)?;
         let (size_limit, n, n0) = (r.u64()?, r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
         let pending = Pending::read(r, time)?;
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         let (size, count, row, diag) = (r.u64s()?, r.u64s()?, r.f64s()?, r.f64s()?);
         let k = size.len();
         if count.len() != k

@@ -185,6 +185,9 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        AcceptanceRejection::totals(self)
+    }
 
     fn advance_within<R: Rng + ?Sized>(
         &mut self,
@@ -284,7 +287,8 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
 
 impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection<K> {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::REJECTION);
         w.u64(self.pop.size_limit);
         w.u64(self.pop.n0);
@@ -293,18 +297,19 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
         Pending::save(&self.pending, w);
         w.u64(self.max_present);
         w.f64(self.cmax);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64s(&self.sizes);
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         check_header(r, tag::REJECTION)?;
         let (size_limit, n0) = (r.u64()?, r.u64()?);
         let (volume, time) = (r.f64()?, r.f64()?);
         let pending = Pending::read(r, time)?;
         let (max_present, cmax) = (r.u64()?, r.f64()?);
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         let mut sizes = r.u64s()?;
         if sizes.iter().any(|&s| s == 0 || s > max_present)
             || max_present > size_limit

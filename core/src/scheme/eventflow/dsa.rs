@@ -295,6 +295,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
 
     fn advance_within<R: Rng + ?Sized>(
         &mut self,
@@ -364,23 +367,21 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn gel_mass(&self) -> Option<f64> {
         Some(self.store.sizes().iter().copied().fold(0.0, f64::max) / self.volume)
     }
-    fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
 impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
     crate::checkpoint::Checkpoint for Dsa<K, F, B>
 {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::DSA);
         w.u64(self.store.capacity() as u64);
         w.f64(self.volume);
         w.u64(u64::from(self.strict));
         w.f64(self.time);
         Pending::save(&self.pending, w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64(self.totals.removed);
         w.u64(self.store.len() as u64);
         for &y in self.store.sizes() {
@@ -390,7 +391,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::DSA)?;
         // (the capacity it was written with: any state that fits restores, so a run
@@ -402,7 +404,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             return Err(bad("invalid volume, flag or time"));
         }
         let pending = Pending::read(r, time)?;
-        let mut totals = read_report(r)?;
+        let mut totals = StepReport::read(r)?;
         totals.removed = r.u64()?;
         let ys = read_sizes(r, self.store.capacity())?;
         let (k, f) = (&self.kernel, &self.frag);

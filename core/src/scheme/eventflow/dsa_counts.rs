@@ -423,6 +423,9 @@ impl<K: CoagulationKernel> Scheme for DsaCounts<K> {
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
 
     fn advance_within<R: Rng + ?Sized>(
         &mut self,
@@ -511,26 +514,25 @@ impl<K: CoagulationKernel> crate::observe::Observe for DsaCounts<K> {
     fn gel_mass(&self) -> Option<f64> {
         Some(self.largest() as f64 / self.pop.volume)
     }
-    fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
 impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for DsaCounts<K> {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::DSA_COUNTS);
         w.u64(self.pop.size_limit);
         w.f64(self.pop.volume);
         w.u64(u64::from(self.strict));
         w.f64(self.time);
         Pending::save(&self.pending, w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64s(&self.counts);
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::DSA_COUNTS)?;
         let (limit, volume, strict, time) = (r.u64()?, r.f64()?, r.u64()?, r.f64()?);
@@ -542,7 +544,7 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for DsaCounts<K> {
             return Err(bad("invalid size limit, volume, flag or time"));
         }
         let pending = Pending::read(r, time)?;
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         let counts = r.u64s()?;
         r.finish()?;
         let m = counts.len();

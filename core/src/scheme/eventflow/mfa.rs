@@ -330,6 +330,9 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
 
     fn advance_within<R: Rng + ?Sized>(
         &mut self,
@@ -395,16 +398,14 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn gel_mass(&self) -> Option<f64> {
         Some(self.mass * (1.0 - self.store.len() as f64 / self.n0 as f64))
     }
-    fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
 impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
     crate::checkpoint::Checkpoint for Mfa<K, F, B>
 {
     fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::MFA);
         w.u64(self.n0 as u64);
         w.f64(self.mass);
@@ -412,7 +413,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         w.u64(u64::from(self.strict));
         w.f64(self.time);
         Pending::save(&self.pending, w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64(self.totals.removed);
         w.u64(self.store.len() as u64);
         for &x in self.store.sizes() {
@@ -422,7 +423,8 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
 
     fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::MFA)?;
         if r.u64()? != self.n0 as u64 {
@@ -439,7 +441,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             return Err(bad("invalid mass, truncation, flag or time"));
         }
         let pending = Pending::read(r, time)?;
-        let mut totals = read_report(r)?;
+        let mut totals = StepReport::read(r)?;
         totals.removed = r.u64()?;
         let xs = read_sizes(r, self.n0)?;
         let (k, f) = (&self.kernel, &self.frag);

@@ -263,6 +263,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for AutoBucket
     fn time(&self) -> f64 {
         either!(&self.engine, s => s.time())
     }
+    fn totals(&self) -> StepReport {
+        either!(&self.engine, s => Scheme::totals(s))
+    }
 
     fn advance_within<G: Rng + ?Sized>(
         &mut self,
@@ -292,9 +295,6 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Observe for AutoBucke
     }
     fn gel_mass(&self) -> Option<f64> {
         either!(&self.engine, s => s.gel_mass())
-    }
-    fn totals(&self) -> StepReport {
-        either!(&self.engine, s => Observe::totals(s))
     }
 }
 

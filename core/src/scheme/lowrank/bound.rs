@@ -10,6 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
+use alloc::vec::Vec;
 
 /// The low-rank factors `(a(x), b(x))` of size x; a negative or non-finite one is an
 /// error.
@@ -249,5 +250,31 @@ mod tests {
             quantise_up(3.0, quantum(3.0, 1 << 20)) as f64 * quantum(3.0, 1 << 20),
             3.0
         );
+    }
+}
+
+/// Largest number of initial particles of the bucket engines (counts are stored as
+/// `u32`).
+pub const MAX_PARTICLES: u64 = u32::MAX as u64;
+
+/// Calls `f(size, count)` for the sizes in a list of offsets from `lo`, in increasing
+/// order (`scratch` holds a sorted copy).
+pub(super) fn each_in_list(
+    lo: u64,
+    list: &[u32],
+    scratch: &mut Vec<u32>,
+    f: &mut dyn FnMut(u64, u64),
+) {
+    scratch.clear();
+    scratch.extend_from_slice(list);
+    scratch.sort_unstable();
+    let mut i = 0;
+    while i < scratch.len() {
+        let j = i + scratch[i..]
+            .iter()
+            .take_while(|&&o| o == scratch[i])
+            .count();
+        f(lo + u64::from(scratch[i]), (j - i) as u64);
+        i = j;
     }
 }

@@ -89,11 +89,10 @@
 //! ```
 
 use super::bound::{
-    SINGLE, bucket_extremes, bucket_of, bucket_range, count_len, quantise_up, quantum, width_bits,
+    MAX_PARTICLES, SINGLE, bucket_extremes, bucket_of, bucket_range, count_len, each_in_list,
+    quantise_up, quantum, width_bits,
 };
-use super::counted::each_in_list;
-use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
-use super::rule::Outcome;
+use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
@@ -283,9 +282,6 @@ const SMALL_N: u64 = 4096;
 /// Most buckets in the overflow before the tables are rebuilt (each overflow proposal
 /// scans them).
 const OVER_MAX: usize = 32;
-
-/// Largest number of initial particles (counts are stored as `u32`).
-pub const MAX_PARTICLES: u64 = u32::MAX as u64;
 
 impl<const R: usize, const W: usize> BucketedEngine<R, W> {
     /// Whether proposals are drawn ahead (for tests).
@@ -1076,7 +1072,7 @@ type Loc = ((usize, u64), (usize, u64));
 
 impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> {
     type Loc = Loc;
-    const TAG: u64 = crate::checkpoint::tag::BUCKETED;
+    const TAG: u64 = crate::scheme::tag::BUCKETED;
     const LOW_IS_BOUND: bool = false;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {

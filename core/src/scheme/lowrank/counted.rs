@@ -37,10 +37,10 @@
 //! assert!((sum / 100.0 - 0.5).abs() < 0.01, "{}", sum / 100.0);
 //! ```
 
-use super::bound::{SINGLE, bucket_extremes, bucket_of, bucket_range, width_bits};
-use super::bucketed::MAX_PARTICLES;
-use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
-use super::rule::Outcome;
+use super::bound::{
+    MAX_PARTICLES, SINGLE, bucket_extremes, bucket_of, bucket_range, each_in_list, width_bits,
+};
+use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
 use super::tree::{check_restored, checked_rate, descend_leaves, tree_rate};
 use super::trees::{ProposalTree, Weights, WideTree};
 use crate::checkpoint::{Reader, Writer};
@@ -104,28 +104,6 @@ fn bytes_for<const R: usize, const W: usize>(m: u64, n: u64) -> Option<usize> {
 /// size): a power of two, at least 8.
 fn leaves_for(nb: usize) -> usize {
     nb.saturating_sub(1).next_power_of_two().max(8)
-}
-
-/// Calls `f(size, count)` for the sizes in a list of offsets from `lo`, in increasing
-/// order (`scratch` holds a sorted copy).
-pub(super) fn each_in_list(
-    lo: u64,
-    list: &[u32],
-    scratch: &mut Vec<u32>,
-    f: &mut dyn FnMut(u64, u64),
-) {
-    scratch.clear();
-    scratch.extend_from_slice(list);
-    scratch.sort_unstable();
-    let mut i = 0;
-    while i < scratch.len() {
-        let j = i + scratch[i..]
-            .iter()
-            .take_while(|&&o| o == scratch[i])
-            .count();
-        f(lo + u64::from(scratch[i]), (j - i) as u64);
-        i = j;
-    }
 }
 
 /// The weights of bucket b from its bounds and count (zero past the buckets).
@@ -284,7 +262,7 @@ impl<const R: usize, const W: usize> CountedEngine<R, W> {
 
 impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
     type Loc = Loc;
-    const TAG: u64 = crate::checkpoint::tag::BUCKETED_COUNTED;
+    const TAG: u64 = crate::scheme::tag::BUCKETED_COUNTED;
     const LOW_IS_BOUND: bool = false;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {

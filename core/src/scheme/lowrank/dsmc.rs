@@ -67,8 +67,8 @@
 //! assert!((0..3).all(|k| (p[k] - p0[k]).abs() < 1e-9 * 20_000.0));
 //! ```
 
-use super::proposal::{Candidate, ProposalEngine};
-use super::rule::{EventRule, Outcome, Reweighed};
+use super::proposal::{Candidate, Outcome, ProposalEngine};
+use super::rule::{EventRule, Reweighed};
 use super::trees::WideTree;
 use super::{LowRankMc, TreeEngine, UniformEngine};
 use crate::checkpoint::{Reader, Writer};
@@ -958,7 +958,7 @@ impl<S> Gas<S> {
 impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
     const REWEIGHS: bool = true;
     const DOUBLES: bool = false;
-    const TAG: Option<u64> = Some(crate::checkpoint::tag::DSMC);
+    const TAG: Option<u64> = Some(crate::scheme::tag::DSMC);
 
     fn for_kernel(_kernel: &Gas<S>) -> Self {
         Collisions::default()

@@ -68,10 +68,11 @@ pub mod uniform;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
 pub use auto::{AutoBucketed, BucketMode};
-pub use bucketed::{BucketedEngine, MAX_PARTICLES};
+pub use bound::MAX_PARTICLES;
+pub use bucketed::BucketedEngine;
 pub use counted::CountedEngine;
-pub use proposal::{Candidate, ProposalEngine};
-pub use rule::{Coagulate, EventRule, Outcome, Reweighed, SPOT_CHECK};
+pub use proposal::{Candidate, Outcome, ProposalEngine};
+pub use rule::{Coagulate, EventRule, Reweighed, SPOT_CHECK};
 pub use sizes::LowRankSizes;
 pub use thermal::{Collide, TemperatureMc, TemperatureRejection, Thermal};
 pub use tree::TreeEngine;
@@ -452,6 +453,9 @@ where
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        LowRankMc::totals(self)
+    }
 
     fn advance_within<G: Rng + ?Sized>(
         &mut self,
@@ -597,7 +601,7 @@ where
     /// engine's state. The kernel is not stored: restore into a scheme built with the
     /// same kernel.
     fn save(&self, w: &mut Writer) {
-        use crate::checkpoint::{header, save_report};
+        use crate::checkpoint::header;
         header(w, Self::tag());
         w.u64(R as u64);
         w.u64(self.engine.max_size());
@@ -607,13 +611,13 @@ where
         w.f64(self.pop.volume);
         w.f64(self.time);
         self.clock.save(w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         self.rule.save(&self.kernel, w);
         self.engine.save(w);
     }
 
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report};
+        use crate::checkpoint::check_header;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, Self::tag())?;
         if r.u64()? != R as u64 {
@@ -633,7 +637,7 @@ where
             ));
         }
         let clock = Clock::read(r, time)?;
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         let pop = Population {
             n,
             n0,
@@ -682,7 +686,7 @@ where
 }
 
 /// [`Observe`](crate::observe::Observe) for a size-count scheme from its inherent
-/// `counts`, `volume`, `particles`, `moment` and `totals` (one definition for all).
+/// `counts`, `volume`, `particles` and `moment` (one definition for all).
 macro_rules! observe_counts {
     ([$($g:tt)*] $ty:ty) => {
         impl<$($g)*> crate::observe::Observe for $ty {
@@ -700,9 +704,6 @@ macro_rules! observe_counts {
             }
             fn gel_mass(&self) -> Option<f64> {
                 Some(crate::observe::largest_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self)))
-            }
-            fn totals(&self) -> StepReport {
-                <$ty>::totals(self)
             }
         }
     };

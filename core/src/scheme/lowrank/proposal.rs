@@ -8,7 +8,6 @@
 //! [`EventRule`](super::rule::EventRule) decides each proposal. A new rule (a
 //! temperature-dependent rate, a DSMC collision with velocities) reuses either engine.
 
-use super::rule::Outcome;
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
@@ -28,6 +27,20 @@ pub struct Candidate<L> {
     pub y: u64,
     /// The engine's handle on the two particles.
     pub at: L,
+}
+
+/// What an accepted proposal does.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[non_exhaustive]
+pub enum Outcome {
+    /// The two particles merge into one of size `size`.
+    Merge {
+        /// The merged size.
+        size: u64,
+    },
+    /// The two particles collide and separate (no count changes; a rule with per-size
+    /// state may change it).
+    Bounce,
 }
 
 /// A particle layout that proposes pairs from a rank-R bound (see the module docs).

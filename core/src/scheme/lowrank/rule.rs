@@ -13,7 +13,7 @@
 //! temperature changed. Such a rule runs on an engine that can reweigh a size (the
 //! per-size trees).
 
-use super::proposal::Candidate;
+use super::proposal::{Candidate, Outcome};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::Result;
 use crate::kernel::{CoagulationKernel, bounded_rate};
@@ -25,20 +25,6 @@ use rand_core::Rng;
 /// that turns NaN or exceeds its bound is caught (deterministic: the random stream is
 /// the same with or without the check).
 pub const SPOT_CHECK: u64 = 1024;
-
-/// What an accepted proposal does.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-#[non_exhaustive]
-pub enum Outcome {
-    /// The two particles merge into one of size `size`.
-    Merge {
-        /// The merged size.
-        size: u64,
-    },
-    /// The two particles collide and separate (no count changes; a rule with per-size
-    /// state may change it).
-    Bounce,
-}
 
 /// The sizes whose bound factors a rule changed after an event (at most three: the
 /// pair and the merged size).

@@ -536,6 +536,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for LowRankSiz
     fn time(&self) -> f64 {
         self.time
     }
+    fn totals(&self) -> StepReport {
+        self.totals
+    }
 
     fn advance_within<G: Rng + ?Sized>(
         &mut self,
@@ -615,23 +618,21 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::observe::Obser
     fn gel_mass(&self) -> Option<f64> {
         Some(self.p.sizes.iter().copied().fold(0.0, f64::max) / self.volume)
     }
-    fn totals(&self) -> StepReport {
-        self.totals
-    }
 }
 
 impl<K: CoagulationKernel, const R: usize, const W: usize> crate::checkpoint::Checkpoint
     for LowRankSizes<K, R, W>
 {
     fn save(&self, w: &mut Writer) {
-        use crate::checkpoint::{header, save_report, tag};
+        use crate::checkpoint::header;
+        use crate::scheme::tag;
         header(w, tag::LOWRANK_SIZES);
         w.u64(R as u64);
         w.f64(self.volume);
         w.u64(self.n0 as u64);
         w.f64(self.time);
         Pending::save(&self.pending, w);
-        save_report(w, &self.totals);
+        self.totals.save(w);
         w.u64(self.proposals);
         w.u64(u64::from(self.p.base));
         w.f64s(&self.p.sizes);
@@ -649,7 +650,8 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::checkpoint::Ch
     }
 
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
-        use crate::checkpoint::{check_header, read_report, tag};
+        use crate::checkpoint::check_header;
+        use crate::scheme::tag;
         let bad = |what| Error::Checkpoint { what };
         check_header(r, tag::LOWRANK_SIZES)?;
         if r.u64()? != R as u64 {
@@ -660,7 +662,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::checkpoint::Ch
             return Err(bad("invalid volume or time"));
         }
         let pending = Pending::read(r, time)?;
-        let totals = read_report(r)?;
+        let totals = StepReport::read(r)?;
         let proposals = r.u64()?;
         let base = u32::try_from(r.u64()?).map_err(|_| bad("invalid bucket base"))?;
         let sizes = r.f64s()?;

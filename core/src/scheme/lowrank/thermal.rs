@@ -43,8 +43,8 @@
 //! assert!((sim.mean_temperature() / exact.mean_temperature() - 1.0).abs() < 0.05);
 //! ```
 
-use super::proposal::{Candidate, ProposalEngine};
-use super::rule::{EventRule, Outcome, Reweighed};
+use super::proposal::{Candidate, Outcome, ProposalEngine};
+use super::rule::{EventRule, Reweighed};
 use super::trees::WideTree;
 use super::{LowRankMc, TreeEngine, UniformEngine};
 use crate::checkpoint::{Reader, Writer};
@@ -228,7 +228,7 @@ fn per(a: f64, b: f64) -> f64 {
 
 impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
     const REWEIGHS: bool = true;
-    const TAG: Option<u64> = Some(crate::checkpoint::tag::THERMAL);
+    const TAG: Option<u64> = Some(crate::scheme::tag::THERMAL);
 
     fn for_kernel(_kernel: &Thermal<TK>) -> Self {
         Collide::default()

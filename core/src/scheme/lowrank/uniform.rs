@@ -11,8 +11,7 @@
 //! `max(M, 1024)` events (a stale maximum is still a bound: it only costs
 //! rejections).
 
-use super::proposal::{Candidate, ProposalEngine, rank_mismatch};
-use super::rule::Outcome;
+use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
 use super::trees::Weights;
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
@@ -126,7 +125,7 @@ impl<const R: usize> UniformEngine<R> {
 impl<const R: usize> ProposalEngine<R> for UniformEngine<R> {
     /// The two particles' places in the list.
     type Loc = (usize, usize);
-    const TAG: u64 = crate::checkpoint::tag::UNIFORM;
+    const TAG: u64 = crate::scheme::tag::UNIFORM;
     const LOW_IS_BOUND: bool = false;
     const REWEIGHS: bool = true;
 
