@@ -173,6 +173,32 @@ pub(crate) fn quantise_up(f: f64, scale: f64) -> u64 {
     q
 }
 
+/// Largest number of initial particles of the bucket engines (counts are stored as
+/// `u32`).
+pub const MAX_PARTICLES: u64 = u32::MAX as u64;
+
+/// Calls `f(size, count)` for the sizes in a list of offsets from `lo`, in increasing
+/// order (`scratch` holds a sorted copy).
+pub(super) fn each_in_list(
+    lo: u64,
+    list: &[u32],
+    scratch: &mut Vec<u32>,
+    f: &mut dyn FnMut(u64, u64),
+) {
+    scratch.clear();
+    scratch.extend_from_slice(list);
+    scratch.sort_unstable();
+    let mut i = 0;
+    while i < scratch.len() {
+        let j = i + scratch[i..]
+            .iter()
+            .take_while(|&&o| o == scratch[i])
+            .count();
+        f(lo + u64::from(scratch[i]), (j - i) as u64);
+        i = j;
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -250,31 +276,5 @@ mod tests {
             quantise_up(3.0, quantum(3.0, 1 << 20)) as f64 * quantum(3.0, 1 << 20),
             3.0
         );
-    }
-}
-
-/// Largest number of initial particles of the bucket engines (counts are stored as
-/// `u32`).
-pub const MAX_PARTICLES: u64 = u32::MAX as u64;
-
-/// Calls `f(size, count)` for the sizes in a list of offsets from `lo`, in increasing
-/// order (`scratch` holds a sorted copy).
-pub(super) fn each_in_list(
-    lo: u64,
-    list: &[u32],
-    scratch: &mut Vec<u32>,
-    f: &mut dyn FnMut(u64, u64),
-) {
-    scratch.clear();
-    scratch.extend_from_slice(list);
-    scratch.sort_unstable();
-    let mut i = 0;
-    while i < scratch.len() {
-        let j = i + scratch[i..]
-            .iter()
-            .take_while(|&&o| o == scratch[i])
-            .count();
-        f(lo + u64::from(scratch[i]), (j - i) as u64);
-        i = j;
     }
 }
