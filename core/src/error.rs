@@ -99,6 +99,24 @@ pub enum Error {
         /// What overflowed.
         name: &'static str,
     },
+    /// A setting's value is of the wrong kind or outside its range.
+    OptionValue {
+        /// The setting's key.
+        key: &'static str,
+        /// What it takes.
+        expected: &'static str,
+    },
+    /// A setting was given to a scheme it does not apply to.
+    OptionNotApplicable {
+        /// The setting's key.
+        key: &'static str,
+        /// The scheme's registry name.
+        scheme: &'static str,
+    },
+    /// No setting has this key (the keys are `scheme::facade::KEYS`).
+    UnknownOption,
+    /// No scheme of the registry has this name (`scheme::registry::SCHEMES`).
+    UnknownScheme,
     /// A kernel returned a rate above the bound it declared (the low-rank bound, or
     /// the supremum acceptance–rejection proposes with): a scheme built on that bound
     /// would be biased, so it stops instead.
@@ -177,6 +195,19 @@ impl fmt::Display for Error {
             Error::Unsupported { what } => write!(f, "not supported: {what}"),
             Error::Checkpoint { what } => write!(f, "cannot restore checkpoint: {what}"),
             Error::Overflow { name } => write!(f, "integer overflow in {name}"),
+            Error::OptionValue { key, expected } => {
+                write!(f, "option {key}: expected {expected}")
+            }
+            Error::OptionNotApplicable { key, scheme } => write!(
+                f,
+                "option {key} does not apply to scheme {scheme} (its registry entry lists the options that do)"
+            ),
+            Error::UnknownOption => f.write_str(
+                "unknown option: the keys are dt, points, randomization, sorting, size-limit, memory-budget, batched-clock, capacity, truncation, strict-bound, sampler, engine, directions, seed, stream",
+            ),
+            Error::UnknownScheme => f.write_str(
+                "unknown scheme: the registry lists its schemes (coagula schemes, coag_scheme_count/coag_scheme_name, coagula.schemes())",
+            ),
             Error::BoundExceeded { name, rate, bound } => write!(
                 f,
                 "the kernel returned {}, above its declared {name} {}: the bound must hold for every pair",

@@ -568,8 +568,8 @@ proptest! {
         flip in any::<usize>(),
         value in any::<u8>(),
     ) {
-        use coagula_core::kernel::temperature::{Ballistic, Model};
-        use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Thermal};
+        use coagula_core::kernel::temperature::{Ballistic, ClosedForm};
+        use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Temperatures};
         let mut rng = Pcg64Mcg::new(10);
         let counts: Vec<u64> = pairs.iter().map(|p| p.0).collect();
         let temps: Vec<f64> = pairs.iter().map(|p| p.1).collect();
@@ -578,7 +578,7 @@ proptest! {
         let t = if t.is_finite() { t.clamp(-1.0, 5.0) } else { t };
         let mut ran = 0;
         if let Ok(b) = Ballistic::new(params[0], params[1], params[2])
-            && let Ok(k) = Thermal::new(b, &temps[..len])
+            && let Ok(k) = Temperatures::new(b, &temps[..len])
         {
             if let Ok(mut s) = TemperatureMc::<_>::new(k.clone(), &counts[..len], volume) && small {
                 ran += 1;
@@ -590,8 +590,8 @@ proptest! {
                 prop_assert!(bent_restore(&mut s, flip, value, &mut rng, |s| s.counts().to_vec()));
             }
         }
-        if let Ok(m) = Model::new(params[0], params[1])
-            && let Ok(k) = Thermal::new(m, &temps[..len])
+        if let Ok(m) = ClosedForm::new(params[0], params[1])
+            && let Ok(k) = Temperatures::new(m, &temps[..len])
             && let Ok(mut s) = TemperatureMc::<_>::new(k, &counts[..len], volume)
             && small
         {

@@ -30,7 +30,7 @@ mod particle_sizes;
 mod regime_sweep;
 #[path = "regressions.rs"]
 mod regressions;
-#[path = "thermal.rs"]
-mod thermal;
+#[path = "temperature.rs"]
+mod temperature;
 #[path = "value_stability.rs"]
 mod value_stability;

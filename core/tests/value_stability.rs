@@ -346,8 +346,8 @@ fn langevin_batches_are_value_stable() {
 
 #[test]
 fn temperature_schemes_are_value_stable() {
-    use coagula_core::kernel::temperature::{Ballistic, Model};
-    use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Thermal};
+    use coagula_core::kernel::temperature::{Ballistic, ClosedForm};
+    use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Temperatures};
     let mut failures = String::new();
     // counts and temperature bits
     macro_rules! run {
@@ -360,8 +360,8 @@ fn temperature_schemes_are_value_stable() {
             (pin(rep, fnv(words)), rep.bounces)
         }};
     }
-    let ballistic = Thermal::new(Ballistic::new(0.9, 0.5, 0.4).unwrap(), &[1.0, 0.5]).unwrap();
-    let model = Thermal::new(Model::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
+    let ballistic = Temperatures::new(Ballistic::new(0.9, 0.5, 0.4).unwrap(), &[1.0, 0.5]).unwrap();
+    let model = Temperatures::new(ClosedForm::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
     for (name, got, want) in [
         (
             "temperature low-rank, ballistic",

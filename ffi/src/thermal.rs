@@ -10,9 +10,9 @@ use crate::{
     slice_mut, write,
 };
 use coagula_core::checkpoint::{Checkpoint, fingerprint};
-use coagula_core::kernel::temperature::{Ballistic, Model, PairRates, TemperatureKernel};
+use coagula_core::kernel::temperature::{Ballistic, ClosedForm, PairRates, TemperatureKernel};
 use coagula_core::random::{Generator, generator};
-use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Thermal};
+use coagula_core::scheme::lowrank::{TemperatureMc, TemperatureRejection, Temperatures};
 use coagula_core::scheme::{Budget, Scheme};
 
 /// The paper's ballistic kernels (restitution ε, barrier a, exponent λ).
@@ -42,9 +42,9 @@ pub struct coag_thermal_config {
     pub barrier: f64,
     /// Ballistic: barrier exponent λ (finite).
     pub barrier_exponent: f64,
-    /// Model: the constant c > 0.
+    /// ClosedForm: the constant c > 0.
     pub model_c: f64,
-    /// Model: the exponent γ ≥ 0.
+    /// ClosedForm: the exponent γ ≥ 0.
     pub model_gamma: f64,
     /// Largest particle size allowed (0: the library's default).
     pub size_limit: u64,
@@ -92,26 +92,26 @@ pub unsafe extern "C" fn coag_thermal_default_config(
 #[derive(Clone, Copy, Debug)]
 enum Kernels {
     Ballistic(Ballistic),
-    Model(Model),
+    ClosedForm(ClosedForm),
 }
 
 impl TemperatureKernel for Kernels {
     fn rates(&self, i: u64, ti: f64, j: u64, tj: f64) -> PairRates {
         match self {
             Kernels::Ballistic(k) => k.rates(i, ti, j, tj),
-            Kernels::Model(k) => k.rates(i, ti, j, tj),
+            Kernels::ClosedForm(k) => k.rates(i, ti, j, tj),
         }
     }
     fn collision(&self, i: u64, ti: f64, j: u64, tj: f64) -> f64 {
         match self {
             Kernels::Ballistic(k) => k.collision(i, ti, j, tj),
-            Kernels::Model(k) => k.collision(i, ti, j, tj),
+            Kernels::ClosedForm(k) => k.collision(i, ti, j, tj),
         }
     }
     fn factors(&self, i: u64, t: f64, a: &mut [f64; 3], b: &mut [f64; 3]) {
         match self {
             Kernels::Ballistic(k) => k.factors(i, t, a, b),
-            Kernels::Model(k) => k.factors(i, t, a, b),
+            Kernels::ClosedForm(k) => k.factors(i, t, a, b),
         }
     }
 }
@@ -151,7 +151,7 @@ fn kernels(c: &coag_thermal_config) -> Result<Kernels, Fail> {
             c.barrier,
             c.barrier_exponent,
         )?),
-        COAG_THERMAL_MODEL => Kernels::Model(Model::new(c.model_c, c.model_gamma)?),
+        COAG_THERMAL_MODEL => Kernels::ClosedForm(ClosedForm::new(c.model_c, c.model_gamma)?),
         k => {
             return Err(bad(format!(
                 "kernel {k} (COAG_THERMAL_BALLISTIC or COAG_THERMAL_MODEL)"
@@ -187,7 +187,7 @@ pub unsafe extern "C" fn coag_thermal_new(
             return Err(bad("len is 0: no particles"));
         }
         let k = kernels(&c)?;
-        let thermal = Thermal::new(k, t)?;
+        let thermal = Temperatures::new(k, t)?;
         let limit = |s: u64| if c.size_limit == 0 { s } else { c.size_limit };
         if c.size_limit != 0 && (len as u64) > c.size_limit {
             return Err(bad(format!(
@@ -599,7 +599,7 @@ pub unsafe extern "C" fn coag_thermal_model_exact(
     mean_temperature: *mut f64,
 ) -> i32 {
     guard(|| {
-        let m = Model::new(c, gamma)?;
+        let m = ClosedForm::new(c, gamma)?;
         for (name, v) in [("n0", n0), ("t0", t0), ("t", t)] {
             if !(v >= 0.0 && v.is_finite()) {
                 return Err(bad(format!("{name} = {v} (finite, >= 0)")));

@@ -9,13 +9,13 @@
 //! the replicas' standard errors times the suite's family-wise Student t threshold.
 
 use crate::validate::Case;
-use coagula_core::kernel::temperature::{Ballistic, Model, TemperatureKernel, integrate};
+use coagula_core::kernel::temperature::{Ballistic, ClosedForm, TemperatureKernel, integrate};
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
 use coagula_core::random::generator;
 use coagula_core::scheme::Scheme;
 use coagula_core::scheme::lowrank::dsmc::{Collisions, Directions, Gas};
 use coagula_core::scheme::lowrank::{
-    Collide, LowRankMc, ProposalEngine, Thermal, TreeEngine, UniformEngine, WideTree,
+    Collide, LowRankMc, ProposalEngine, Temperatures, TreeEngine, UniformEngine, WideTree,
 };
 use rayon::prelude::*;
 use std::time::Instant;
@@ -25,7 +25,7 @@ fn err(e: coagula_core::Error) -> String {
 }
 
 /// The scheme on engine E.
-type On<TK, E> = LowRankMc<Thermal<TK>, 3, E, Collide>;
+type On<TK, E> = LowRankMc<Temperatures<TK>, 3, E, Collide>;
 /// The low-rank (per-size 8-ary tree) engine.
 type Tree = TreeEngine<3, WideTree<3>>;
 
@@ -116,9 +116,9 @@ pub fn cases(quick: bool) -> Result<Vec<Case>, String> {
     let mut out = Vec::new();
     let (reps, n0) = if quick { (8, 20_000) } else { (32, 100_000) };
     for (g, gamma) in [0.0, 0.5, 1.0].into_iter().enumerate() {
-        let model = Model::new(1.0, gamma).map_err(err)?;
+        let model = ClosedForm::new(1.0, gamma).map_err(err)?;
         let exact = model.exact(1.0, 1.0, 4.0);
-        let thermal = Thermal::new(model, &[1.0]).map_err(err)?;
+        let thermal = Temperatures::new(model, &[1.0]).map_err(err)?;
         let tree = replicas::<_, Tree>(reps, 10 + g as u64, &[4.0], &|| {
             On::new(thermal.clone(), &[n0], n0 as f64)
         })?;
@@ -147,7 +147,7 @@ pub fn cases(quick: bool) -> Result<Vec<Case>, String> {
         (32, 100_000, &[100.0, 1000.0])
     };
     let want = ballistic_equations(times)?;
-    let thermal = Thermal::new(Ballistic::paper(), &[1.0]).map_err(err)?;
+    let thermal = Temperatures::new(Ballistic::paper(), &[1.0]).map_err(err)?;
     let v = n0 as f64 / BALLISTIC_N1;
     let tree = replicas::<_, Tree>(reps, 30, times, &|| On::new(thermal.clone(), &[n0], v))?;
     let ar =
@@ -225,7 +225,7 @@ fn timed<E: ProposalEngine<3>>(
     budget: f64,
     seed: u64,
 ) -> Result<Vec<Cell>, String> {
-    let thermal = Thermal::new(Ballistic::paper(), &[1.0]).map_err(err)?;
+    let thermal = Temperatures::new(Ballistic::paper(), &[1.0]).map_err(err)?;
     let mut s = On::<_, E>::new(thermal, &[n0], n0 as f64 / BALLISTIC_N1).map_err(err)?;
     let mut rng = generator(seed, 0);
     through(&mut s, times, budget, &mut rng, |s| {

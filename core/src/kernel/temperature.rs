@@ -20,8 +20,8 @@
 //!   aggregation barrier `W_ij` and restitution coefficient ε: the paper's model. The
 //!   seed's appendix is damaged; the formulas are those recovered in the project's
 //!   `TEMPERATURE.md` (from the author's implementation and a kinetic derivation).
-//! * [`Model`] — a family with constants c and γ whose solution is known in closed form
-//!   ([`Model::exact`]), to test a scheme against.
+//! * [`ClosedForm`] — a family with constants c and γ whose solution is known in closed form
+//!   ([`ClosedForm::exact`]), to test a scheme against.
 //!
 //! [`rhs`] evaluates the right-hand side of the equations above for sizes truncated at a
 //! maximum, so that they can be integrated deterministically.
@@ -211,19 +211,19 @@ impl TemperatureKernel for Ballistic {
     }
 }
 
-/// A model family with a closed-form solution ([`Model::exact`]): with constants
+/// A model family with a closed-form solution ([`ClosedForm::exact`]): with constants
 /// `c > 0`, `γ ≥ 0`,
 /// `C^agg_ij = c sqrt((T_i/i + T_j/j)/2)`, `C^res_ij = C^agg_ij`, `B_ij = C^agg_ij (T_i + T_j)`,
 /// `D^agg_ij = C^agg_ij T_i`, `D^res_ij = γ C^agg_ij T_i`: a new cluster gets `T_i + T_j`,
 /// survivors keep their temperatures, and each bounce lowers the species' total by
 /// `γ T_i`. γ = 0 is a constant kernel.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Model {
+pub struct ClosedForm {
     c: f64,
     gamma: f64,
 }
 
-impl Model {
+impl ClosedForm {
     /// The family's kernels for `c > 0` and `γ ≥ 0` (both finite).
     pub fn new(c: f64, gamma: f64) -> Result<Self> {
         crate::error::positive("model constant c", c)?;
@@ -234,14 +234,14 @@ impl Model {
                 range: "[0, inf)",
             });
         }
-        Ok(Model { c, gamma })
+        Ok(ClosedForm { c, gamma })
     }
 
     /// The solution from `n_1(0) = n0`, `T_1(0) = t0` at time t.
-    pub fn exact(&self, n0: f64, t0: f64, t: f64) -> ModelSolution {
+    pub fn exact(&self, n0: f64, t0: f64, t: f64) -> ClosedFormSolution {
         let g1 = 1.0 + self.gamma;
         let u = pow(1.0 + g1 * self.c * n0 * sqrt(t0) * t / 2.0, 1.0 / g1);
-        ModelSolution {
+        ClosedFormSolution {
             n0,
             t0,
             u,
@@ -250,7 +250,7 @@ impl Model {
     }
 }
 
-impl TemperatureKernel for Model {
+impl TemperatureKernel for ClosedForm {
     fn rates(&self, i: u64, ti: f64, j: u64, tj: f64) -> PairRates {
         let cagg = self.c * sqrt(0.5 * (ti / i as f64 + tj / j as f64));
         PairRates {
@@ -275,18 +275,18 @@ impl TemperatureKernel for Model {
     }
 }
 
-/// The closed-form solution of a [`Model`] (TEMPERATURE.md):
+/// The closed-form solution of a [`ClosedForm`] (TEMPERATURE.md):
 /// `u(t) = [1 + (1+γ) c n0 sqrt(T0) t / 2]^{1/(1+γ)}`, `n_k = n0 (u − 1)^{k−1} / u^{k+1}`,
 /// `N = n0 / u`, `T_k = k T0 u^{−2γ}`, mean temperature `T0 u^{1−2γ}`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ModelSolution {
+pub struct ClosedFormSolution {
     n0: f64,
     t0: f64,
     u: f64,
     gamma: f64,
 }
 
-impl ModelSolution {
+impl ClosedFormSolution {
     /// `u(t)`.
     pub fn u(&self) -> f64 {
         self.u
@@ -375,8 +375,8 @@ pub fn rhs<K: TemperatureKernel + ?Sized>(
 /// or the interval not finite and positive (an empty interval does nothing).
 ///
 /// ```
-/// use coagula_core::kernel::temperature::{Model, integrate};
-/// let m = Model::new(1.0, 0.5).unwrap();
+/// use coagula_core::kernel::temperature::{ClosedForm, integrate};
+/// let m = ClosedForm::new(1.0, 0.5).unwrap();
 /// let (mut n, mut e) = (vec![0.0; 200], vec![0.0; 200]);
 /// (n[0], e[0]) = (1.0, 1.0);
 /// integrate(&m, &mut n, &mut e, 0.0, 1.0, 0.01).unwrap();
@@ -490,7 +490,7 @@ mod tests {
     #[test]
     fn the_proposal_bounds_cover_the_collision_rate() {
         let kernels: [&dyn TemperatureKernel; 2] =
-            [&Ballistic::paper(), &Model::new(1.3, 0.5).unwrap()];
+            [&Ballistic::paper(), &ClosedForm::new(1.3, 0.5).unwrap()];
         for k in kernels {
             for i in [1u64, 2, 3, 10, 1000] {
                 for j in [1u64, 4, 9, 500] {
@@ -518,7 +518,7 @@ mod tests {
         // solution, the model's kernels and `rhs` together (a factor 2 in any of them,
         // or a lost 1/2 on equal sizes, moves the residual to O(1))
         for gamma in [0.0, 0.5, 1.0] {
-            let m = Model::new(0.8, gamma).unwrap();
+            let m = ClosedForm::new(0.8, gamma).unwrap();
             let (n0, t0) = (0.3, 1.7);
             for t in [0.2, 1.0, 4.0] {
                 let l = 400;
@@ -595,12 +595,12 @@ mod tests {
         assert!(Ballistic::new(1.5, 0.1, 0.4).is_err());
         assert!(Ballistic::new(0.9, -1.0, 0.4).is_err());
         assert!(Ballistic::new(0.9, 0.1, f64::NAN).is_err());
-        assert!(Model::new(0.0, 1.0).is_err());
-        assert!(Model::new(1.0, -0.5).is_err());
+        assert!(ClosedForm::new(0.0, 1.0).is_err());
+        assert!(ClosedForm::new(1.0, -0.5).is_err());
         let mut out = [0.0; 2];
         assert!(
             rhs(
-                &Model::new(1.0, 0.0).unwrap(),
+                &ClosedForm::new(1.0, 0.0).unwrap(),
                 &[1.0; 3],
                 &[1.0; 2],
                 &mut out,

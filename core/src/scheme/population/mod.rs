@@ -24,6 +24,20 @@ pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
 /// that knows its memory sets the budget.)
 pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
 
+/// The default memory budget of [`Options`](crate::scheme::facade::Options): the
+/// machine's ([`machine_memory_budget`]) with the `std` feature, else
+/// [`DEFAULT_MEMORY_BUDGET`].
+pub fn default_memory_budget() -> usize {
+    #[cfg(feature = "std")]
+    {
+        machine_memory_budget()
+    }
+    #[cfg(not(feature = "std"))]
+    {
+        DEFAULT_MEMORY_BUDGET
+    }
+}
+
 /// A memory budget from what this machine has: half of its physical memory (Linux:
 /// `MemTotal` in `/proc/meminfo`), at least 256 MiB; [`DEFAULT_MEMORY_BUDGET`] where the
 /// machine cannot say. The C ABI and the CLI use it when no budget is given. Read

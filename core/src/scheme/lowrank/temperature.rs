@@ -5,7 +5,7 @@
 //!
 //! It is the low-rank event loop with the per-size tree engine and the rule [`Collide`]:
 //!
-//! * **Kernel and state.** [`Thermal`] is the kernel at the current temperatures (a
+//! * **Kernel and state.** [`Temperatures`] is the kernel at the current temperatures (a
 //!   [`CoagulationKernel`] of rank 3 whose factors are `a_k(i, T_i)`, `b_k(i)`): the
 //!   engine builds and grows from it, and the rule moves its temperatures.
 //! * **Proposals** at rate `(A + Aᵀ)/V` from the rank-3 bound (the engine's), accepted
@@ -29,13 +29,13 @@
 //!
 //! # Example
 //! ```
-//! use coagula_core::kernel::temperature::Model;
+//! use coagula_core::kernel::temperature::ClosedForm;
 //! use coagula_core::scheme::Scheme;
-//! use coagula_core::scheme::lowrank::{TemperatureMc, Thermal};
+//! use coagula_core::scheme::lowrank::{TemperatureMc, Temperatures};
 //! let mut rng = rand_pcg::Pcg64Mcg::new(11);
 //! // the model family with a closed form: c = 1, γ = 1/2, n_1(0) = 1, T_1(0) = 1
-//! let model = Model::new(1.0, 0.5).unwrap();
-//! let kernel = Thermal::new(model, &[1.0]).unwrap();
+//! let model = ClosedForm::new(1.0, 0.5).unwrap();
+//! let kernel = Temperatures::new(model, &[1.0]).unwrap();
 //! let mut sim = TemperatureMc::<_>::monodisperse(kernel, 20_000).unwrap();
 //! sim.advance_to(2.0, &mut rng).unwrap();
 //! let exact = model.exact(1.0, 1.0, 2.0);
@@ -58,16 +58,17 @@ use rand_core::Rng;
 
 /// Temperature-dependent low-rank MC over the per-size trees (see the module docs);
 /// `T` is the tree layout ([`WideTree`] or [`BinaryTree`](super::BinaryTree)).
-pub type TemperatureMc<TK, T = WideTree<3>> = LowRankMc<Thermal<TK>, 3, TreeEngine<3, T>, Collide>;
+pub type TemperatureMc<TK, T = WideTree<3>> =
+    LowRankMc<Temperatures<TK>, 3, TreeEngine<3, T>, Collide>;
 
 /// The temperature-dependent scheme on the acceptance–rejection engine (uniform pairs,
 /// one bound `2 max A` for all): the baseline that [`TemperatureMc`] is timed against.
-pub type TemperatureRejection<TK> = LowRankMc<Thermal<TK>, 3, UniformEngine<3>, Collide>;
+pub type TemperatureRejection<TK> = LowRankMc<Temperatures<TK>, 3, UniformEngine<3>, Collide>;
 
 /// A temperature kernel with the partial temperatures of every size: the collision
 /// kernel at the current temperatures (see the module docs).
 #[derive(Clone, Debug)]
-pub struct Thermal<TK> {
+pub struct Temperatures<TK> {
     model: TK,
     /// `temps[i − 1] = T_i`; sizes past the end are at temperature 0.
     temps: Vec<f64>,
@@ -80,7 +81,7 @@ pub struct Thermal<TK> {
 /// A cached factor row: size, temperature bits, `a`, `b`.
 type Recent = (u64, u64, [f64; 3], [f64; 3]);
 
-impl<TK: TemperatureKernel> Thermal<TK> {
+impl<TK: TemperatureKernel> Temperatures<TK> {
     /// The kernels `model` with `temperatures[i − 1] = T_i` (finite, ≥ 0; sizes past
     /// the slice start at 0).
     pub fn new(model: TK, temperatures: &[f64]) -> Result<Self> {
@@ -88,7 +89,7 @@ impl<TK: TemperatureKernel> Thermal<TK> {
         let mut temps = Vec::new();
         try_reserve(&mut temps, temperatures.len())?;
         temps.extend_from_slice(temperatures);
-        Ok(Thermal {
+        Ok(Temperatures {
             model,
             temps,
             recent: heapless::Vec::new(),
@@ -136,7 +137,7 @@ fn check_temperatures(t: &[f64]) -> Result<()> {
     Ok(())
 }
 
-impl<TK: TemperatureKernel> CoagulationKernel for Thermal<TK> {
+impl<TK: TemperatureKernel> CoagulationKernel for Temperatures<TK> {
     /// The collision rate `C(x, T_x, y, T_y)` (sizes rounded to integers).
     fn rate(&self, x: f64, y: f64) -> f64 {
         self.rates(x as u64, y as u64).collision
@@ -226,18 +227,18 @@ fn per(a: f64, b: f64) -> f64 {
     if b > 0.0 { a / b } else { 0.0 }
 }
 
-impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
+impl<TK: TemperatureKernel + Clone> EventRule<Temperatures<TK>> for Collide {
     const REWEIGHS: bool = true;
     const TAG: Option<u64> = Some(crate::scheme::tag::THERMAL);
 
-    fn for_kernel(_kernel: &Thermal<TK>) -> Self {
+    fn for_kernel(_kernel: &Temperatures<TK>) -> Self {
         Collide::default()
     }
 
     #[inline]
     fn decide<L, G: Rng + ?Sized>(
         &mut self,
-        kernel: &Thermal<TK>,
+        kernel: &Temperatures<TK>,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
         _low_is_bound: bool,
@@ -268,7 +269,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
 
     fn plan(
         &mut self,
-        kernel: &mut Thermal<TK>,
+        kernel: &mut Temperatures<TK>,
         (x, y): (u64, u64),
         outcome: &Outcome,
         count: &dyn Fn(u64) -> u64,
@@ -343,7 +344,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
         Ok(())
     }
 
-    fn commit(&mut self, kernel: &mut Thermal<TK>) -> Reweighed {
+    fn commit(&mut self, kernel: &mut Temperatures<TK>) -> Reweighed {
         let mut sizes = Reweighed::new();
         for &(s, t) in &self.pending {
             let i = (s - 1) as usize;
@@ -358,16 +359,16 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
         sizes
     }
 
-    fn save(&self, kernel: &Thermal<TK>, w: &mut Writer) {
+    fn save(&self, kernel: &Temperatures<TK>, w: &mut Writer) {
         w.f64s(&kernel.temps);
     }
 
-    fn load(&self, kernel: &Thermal<TK>, r: &mut Reader) -> Result<Option<Thermal<TK>>> {
+    fn load(&self, kernel: &Temperatures<TK>, r: &mut Reader) -> Result<Option<Temperatures<TK>>> {
         let temps = r.f64s()?;
         check_temperatures(&temps).map_err(|_| Error::Checkpoint {
             what: "invalid partial temperature",
         })?;
-        Ok(Some(Thermal {
+        Ok(Some(Temperatures {
             model: kernel.model.clone(),
             temps,
             recent: heapless::Vec::new(),
@@ -375,7 +376,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Thermal<TK>> for Collide {
     }
 }
 
-impl<TK, E> LowRankMc<Thermal<TK>, 3, E, Collide>
+impl<TK, E> LowRankMc<Temperatures<TK>, 3, E, Collide>
 where
     TK: TemperatureKernel + Clone,
     E: ProposalEngine<3>,

@@ -7,11 +7,11 @@
 use crate::common::z_max;
 use coagula_core::Error;
 use coagula_core::checkpoint::Checkpoint;
-use coagula_core::kernel::temperature::{Ballistic, Model, TemperatureKernel, integrate};
+use coagula_core::kernel::temperature::{Ballistic, ClosedForm, TemperatureKernel, integrate};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::lowrank::{
     BinaryTree, BucketedEngine, Collide, LowRankMc, ProposalEngine, TemperatureMc,
-    TemperatureRejection, Thermal, TreeEngine, UniformEngine, WideTree,
+    TemperatureRejection, Temperatures, TreeEngine, UniformEngine, WideTree,
 };
 use coagula_core::scheme::{Budget, Scheme};
 use rand_pcg::Pcg64Mcg;
@@ -22,12 +22,12 @@ fn rng(seed: u64) -> Pcg64Mcg {
 }
 
 /// The scheme on engine E.
-type On<TK, E> = LowRankMc<Thermal<TK>, 3, E, Collide>;
+type On<TK, E> = LowRankMc<Temperatures<TK>, 3, E, Collide>;
 
 /// The model family on engine E from `n0` monomers at density 1 and temperature `t0`.
-fn model_sim<E: ProposalEngine<3>>(gamma: f64, t0: f64, n0: u64) -> On<Model, E> {
-    let k = Thermal::new(Model::new(1.0, gamma).unwrap(), &[t0]).unwrap();
-    On::<Model, E>::new(k, &[n0], n0 as f64).unwrap()
+fn model_sim<E: ProposalEngine<3>>(gamma: f64, t0: f64, n0: u64) -> On<ClosedForm, E> {
+    let k = Temperatures::new(ClosedForm::new(1.0, gamma).unwrap(), &[t0]).unwrap();
+    On::<ClosedForm, E>::new(k, &[n0], n0 as f64).unwrap()
 }
 
 /// The engines every statistical test runs on: the per-size trees and the
@@ -57,7 +57,7 @@ fn model_family<E: ProposalEngine<3>>(engine: &str) -> String {
     let times = [1.0, 4.0];
     let mut failures = String::new();
     for (g, gamma) in [0.0, 0.5, 1.0].into_iter().enumerate() {
-        let exact = Model::new(1.0, gamma).unwrap();
+        let exact = ClosedForm::new(1.0, gamma).unwrap();
         let mut stats = vec![[Replicas::new(), Replicas::new()]; times.len()];
         for r in 0..reps {
             let mut sim = model_sim::<E>(gamma, 1.0, 20_000);
@@ -222,7 +222,7 @@ fn energy_shares<E: ProposalEngine<3>>() {
     let model = Ballistic::new(0.8, 0.3, 0.4).unwrap();
     let temps = [1.0, 0.5, 2.0, 0.2, 1.5, 0.7];
     let counts = [160, 80, 48, 24, 16, 12];
-    let k = Thermal::new(model, &temps).unwrap();
+    let k = Temperatures::new(model, &temps).unwrap();
     let mut sim = On::<_, E>::new(k, &counts, 80.0).unwrap();
     // (stop before the first particle doubling, which doubles every count)
     let n0: u64 = counts.iter().sum();
@@ -343,7 +343,7 @@ fn ballistic<E: ProposalEngine<3>>(engine: &str) -> String {
     let reps = 8u64;
     let mut stats = vec![[Replicas::new(), Replicas::new(), Replicas::new()]; times.len()];
     for r in 0..reps {
-        let k = Thermal::new(model, &[1.0]).unwrap();
+        let k = Temperatures::new(model, &[1.0]).unwrap();
         let n0 = 20_000u64;
         let mut sim = On::<_, E>::new(k, &[n0], n0 as f64 / n1).unwrap();
         let mut rng = rng(50 + r);
@@ -389,7 +389,7 @@ fn checkpoint_split_and_same_seed() {
     split_and_seed::<TreeEngine<3, WideTree<3>>>();
     split_and_seed::<UniformEngine<3>>();
     // one engine's checkpoint does not restore into the other
-    let k = Thermal::new(Model::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
+    let k = Temperatures::new(ClosedForm::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
     let a = TemperatureMc::<_>::new(k.clone(), &[100], 100.0).unwrap();
     let mut b = TemperatureRejection::new(k, &[100], 100.0).unwrap();
     let mut buf = vec![0u8; a.checkpoint_len()];
@@ -399,7 +399,7 @@ fn checkpoint_split_and_same_seed() {
 
 fn split_and_seed<E: ProposalEngine<3>>() {
     let make = || {
-        let k = Thermal::new(Ballistic::new(0.9, 1.0, 0.4).unwrap(), &[1.0, 2.0]).unwrap();
+        let k = Temperatures::new(Ballistic::new(0.9, 1.0, 0.4).unwrap(), &[1.0, 2.0]).unwrap();
         On::<_, E>::new(k, &[3000, 500], 3000.0).unwrap()
     };
     let mut a = make();
@@ -443,22 +443,22 @@ fn split_and_seed<E: ProposalEngine<3>>() {
 /// (which cannot move factors), a kernel whose rate leaves the bound.
 #[test]
 fn bad_input_is_refused() {
-    let m = Model::new(1.0, 0.5).unwrap();
+    let m = ClosedForm::new(1.0, 0.5).unwrap();
     for t in [f64::NAN, -1.0, f64::INFINITY] {
         assert!(matches!(
-            Thermal::new(m, &[1.0, t]),
+            Temperatures::new(m, &[1.0, t]),
             Err(Error::OutOfRange { .. })
         ));
     }
-    assert!(Model::new(0.0, 0.5).is_err() && Model::new(1.0, -0.1).is_err());
+    assert!(ClosedForm::new(0.0, 0.5).is_err() && ClosedForm::new(1.0, -0.1).is_err());
     assert!(Ballistic::new(0.0, 0.1, 0.4).is_err() && Ballistic::new(0.9, -1.0, 0.4).is_err());
-    let k = Thermal::new(m, &[1.0]).unwrap();
+    let k = Temperatures::new(m, &[1.0]).unwrap();
     let r = LowRankMc::<_, 3, BucketedEngine<3, 6>, Collide>::new(k.clone(), &[100], 100.0);
     assert!(matches!(r, Err(Error::Unsupported { .. })));
 
     /// A kernel whose collision rate is twice what its bound allows.
     #[derive(Clone, Copy)]
-    struct Liar(Model);
+    struct Liar(ClosedForm);
     impl TemperatureKernel for Liar {
         fn rates(
             &self,
@@ -475,7 +475,7 @@ fn bad_input_is_refused() {
             self.0.factors(i, t, a, b)
         }
     }
-    let k = Thermal::new(Liar(m), &[1.0]).unwrap();
+    let k = Temperatures::new(Liar(m), &[1.0]).unwrap();
     let mut sim = TemperatureMc::<_>::new(k, &[100], 100.0).unwrap();
     let before = state_bits(&sim);
     let err = sim.advance_to(10.0, &mut rng(1)).unwrap_err();
