@@ -28,70 +28,7 @@
 #include <stdint.h>
 
 /*
- Success.
- */
-#define COAG_OK 0
-
-/*
- A required pointer argument was NULL.
- */
-#define COAG_NULL_PARAMETER 1
-
-/*
- An argument is outside its admissible range (NaN, negative rate, bad enum value).
- */
-#define COAG_INVALID_ARGUMENT 2
-
-/*
- A caller buffer is too small (or has the wrong length).
- */
-#define COAG_BUFFER_TOO_SMALL 3
-
-/*
- A capacity (maximum particle size) would be exceeded.
- */
-#define COAG_CAPACITY 4
-
-/*
- A kernel returned a negative or non-finite rate at run time.
- */
-#define COAG_INVALID_RATE 5
-
-/*
- The operation does not apply to this scheme or kernel (e.g. no low-rank bound).
- */
-#define COAG_UNSUPPORTED 6
-
-/*
- A target time lies before the current time.
- */
-#define COAG_TIME_BACKWARDS 7
-
-/*
- A checkpoint buffer is malformed or belongs to another scheme or configuration.
- */
-#define COAG_BAD_CHECKPOINT 8
-
-/*
- A panic was caught inside the library (a bug: please report it).
- */
-#define COAG_PANIC 9
-
-/*
- `coag_sim_advance_to` stopped before its target time: its work limit was spent or
- its cancellation callback asked (the sim is consistent at the time reached; call
- again to continue). Not an error of the sim.
- */
-#define COAG_INTERRUPTED 10
-
-/*
- The host's random callback is degenerate (returned the same word 8 times in a row);
- the call was undone.
- */
-#define COAG_RNG_FAILURE 11
-
-/*
- Exact solutions (Eibeck & Wagner 2000 eqs. 6.8-6.11; Lécot et al. 2019 §4), validation targets for hosts.
+ The constant kernel `K = 1` (a `COAG_EXACT_*` solution).
  */
 #define COAG_EXACT_CONSTANT 0
 
@@ -114,16 +51,6 @@
  Lécot's coagulation–fragmentation test (moments only).
  */
 #define COAG_EXACT_COAG_FRAG 4
-
-/*
- Low-rank DSMC on per-size trees (the default).
- */
-#define COAG_DSMC_LOWRANK 0
-
-/*
- Acceptance–rejection on uniform pairs (the baseline).
- */
-#define COAG_DSMC_REJECTION 1
 
 /*
  Specular reflection at the wall.
@@ -171,145 +98,193 @@
 #define COAG_DRIFT_CALLBACK 3
 
 /*
- Niederreiter's (1,3)-sequence (Lécot et al.'s choice).
+ `coag_scheme_info.model`: a coagulation kernel (with fragmentation).
  */
-#define COAG_POINTS_NIEDERREITER 0
+#define COAG_MODEL_COAGULATION 0
 
 /*
- Sobol' (Joe–Kuo), dimensions 1–3.
+ A temperature model (Osinsky 2023 §4): counts with partial temperatures.
  */
-#define COAG_POINTS_SOBOL 1
+#define COAG_MODEL_TEMPERATURE 1
 
 /*
- Pseudo-random points (Monte Carlo).
+ A gas (Osinsky 2023 §5): particles with velocities.
  */
-#define COAG_POINTS_MONTE_CARLO 2
+#define COAG_MODEL_GAS 2
 
 /*
- No randomisation of the sequence.
+ `coag_scheme_info.inits` bit: counts of integer sizes (`coag_sim_new_counts`).
  */
-#define COAG_RANDOMIZATION_NONE 0
+#define COAG_INIT_COUNTS 1
 
 /*
- Random digital shift.
+ Particle sizes (`coag_sim_new_sizes`).
  */
-#define COAG_RANDOMIZATION_SHIFT 1
+#define COAG_INIT_SIZES 2
 
 /*
- Matoušek's linear scrambling plus a shift.
+ Counts with temperatures (`coag_sim_new_temperatures`).
  */
-#define COAG_RANDOMIZATION_MATOUSEK 2
+#define COAG_INIT_TEMPERATURES 4
 
 /*
- Owen's nested scrambling (hash-based).
+ Particles with velocities (`coag_sim_new_velocities`, `coag_sim_new_maxwellian`).
  */
-#define COAG_RANDOMIZATION_OWEN 3
+#define COAG_INIT_VELOCITIES 8
 
 /*
- Osinsky's low-rank Monte Carlo, bucketed layout (the default and fastest layout).
+ `coag_scheme_info.sizes`: the scheme takes no sizes.
  */
-#define COAG_METHOD_LOWRANK 0
+#define COAG_SAMPLES_NONE 0
 
 /*
- Inverse method (Gillespie on sizes).
+ Its sizes are samples of the mass distribution (mass-flow schemes).
  */
-#define COAG_METHOD_INVERSE 1
+#define COAG_SAMPLES_MASS 1
 
 /*
- Acceptance–rejection.
+ Its sizes are samples of the number distribution (direct simulation).
  */
-#define COAG_METHOD_REJECTION 2
+#define COAG_SAMPLES_NUMBER 2
 
 /*
- Osinsky's low-rank Monte Carlo with the paper's per-size segment trees.
+ `coag_scheme_info.memory`: fixed at construction (may run in a caller workspace).
  */
-#define COAG_METHOD_LOWRANK_TREE 3
+#define COAG_MEMORY_FIXED 0
 
 /*
- Direct simulation (Marcus–Lushnikov, Eibeck & Wagner 2000) over size counts: the
- finite-N process itself, no particle doubling (the kernel needs a product majorant).
+ Grows within the `memory-budget` option.
  */
-#define COAG_METHOD_DSA_COUNTS 4
+#define COAG_MEMORY_GROWING 1
 
 /*
- `coag_counts_config.bucket_mode`: the bucketed low-rank method chooses its engine by
- the initial particle number (exact bucket counts up to 16384 particles, slots and
- alias tables above), and again when the counts are replaced.
+ `coag_scheme_info.law`: the finite-N coagulation process itself (Marcus–Lushnikov).
  */
-#define COAG_BUCKET_AUTO 0
+#define COAG_LAW_FINITE_N 0
 
 /*
- The slot engine (slots and alias tables: O(1) per proposal, fastest for large
- systems), kept through `coag_sim_set_counts`.
+ A stochastic weighted (mass-flow) process (Eibeck & Wagner 2000).
  */
-#define COAG_BUCKET_SLOTS 1
+#define COAG_LAW_MASS_FLOW 1
 
 /*
- The counted engine (exact bucket counts in a sum tree: fastest for small systems),
- kept through `coag_sim_set_counts`.
+ A time-stepping scheme (an O(Δt) bias; Lécot et al. 2019).
  */
-#define COAG_BUCKET_COUNTED 2
+#define COAG_LAW_TIME_STEPPED 2
 
 /*
- Eibeck & Wagner's event-driven mass flow algorithm (particles carry mass `M1 / N`).
+ Temperature-dependent coagulation (Osinsky 2023 §4).
  */
-#define COAG_EVENTFLOW_MFA 0
+#define COAG_LAW_TEMPERATURE 3
 
 /*
- Eibeck & Wagner's direct simulation over a list of particles (Marcus–Lushnikov).
+ DSMC of a gas (Osinsky 2023 §5).
  */
-#define COAG_EVENTFLOW_DSA 1
+#define COAG_LAW_GAS 4
 
 /*
- Osinsky's low-rank Monte Carlo over a list of particles (continuous or sparse sizes;
- memory O(particles), particle doubling; the kernel needs a low-rank bound, every
- built-in kernel has one). Like direct simulation, its sizes are samples of the
- number distribution in the volume `Σ sizes / mass`. No caller-owned workspace (it
- grows its size buckets), no fragmentation; capacity, truncation, sampler and
- strict bound must stay 0.
+ `coag_option_info.kind`: a finite real (`coag_options_set_real`).
  */
-#define COAG_EVENTFLOW_LOWRANK 2
+#define COAG_OPTION_REAL 0
 
 /*
- The scheme's default weighted sampler (the faster in our measurements: groups for
- the mass flow algorithm, the sum tree for direct simulation).
+ A non-negative integer (`coag_options_set_count`).
  */
-#define COAG_SAMPLER_DEFAULT 0
+#define COAG_OPTION_COUNT 1
 
 /*
- A sum tree over the particles.
+ On or off (`coag_options_set_flag`).
  */
-#define COAG_SAMPLER_TREE 1
+#define COAG_OPTION_FLAG 2
 
 /*
- Eibeck & Wagner's group acceptance–rejection (one group per binade of the weight).
+ A name (`coag_options_set_name`).
  */
-#define COAG_SAMPLER_GROUPS 2
+#define COAG_OPTION_NAME 3
 
 /*
- The paper's ballistic kernels (restitution ε, barrier a, exponent λ).
+ `coag_builtin_info.family`: a coagulation kernel.
  */
-#define COAG_THERMAL_BALLISTIC 0
+#define COAG_FAMILY_COAGULATION 0
 
 /*
- The model family with a closed form (constants c, γ; `coag_thermal_model_exact`).
+ A temperature model.
  */
-#define COAG_THERMAL_MODEL 1
+#define COAG_FAMILY_TEMPERATURE 1
 
 /*
- Low-rank Monte Carlo on per-size trees (the default).
+ A gas.
  */
-#define COAG_THERMAL_LOWRANK 0
+#define COAG_FAMILY_GAS 2
 
 /*
- Acceptance–rejection on uniform pairs (the baseline).
+ Success.
  */
-#define COAG_THERMAL_REJECTION 1
+#define COAG_OK 0
 
 /*
- Opaque handle of a DSMC simulation (`coag_dsmc` in C).
+ A required pointer argument was NULL.
  */
-typedef struct coag_dsmc coag_dsmc;
+#define COAG_NULL_PARAMETER 1
+
+/*
+ An argument is outside its admissible range (NaN, negative rate, unknown name).
+ */
+#define COAG_INVALID_ARGUMENT 2
+
+/*
+ A caller buffer is too small (or has the wrong length).
+ */
+#define COAG_BUFFER_TOO_SMALL 3
+
+/*
+ A capacity (maximum particle size, memory budget) would be exceeded.
+ */
+#define COAG_CAPACITY 4
+
+/*
+ A kernel returned a negative or non-finite rate at run time.
+ */
+#define COAG_INVALID_RATE 5
+
+/*
+ The operation, option or input does not apply to this scheme or kernel.
+ */
+#define COAG_UNSUPPORTED 6
+
+/*
+ A target time lies before the current time.
+ */
+#define COAG_TIME_BACKWARDS 7
+
+/*
+ A checkpoint buffer is malformed or belongs to another scheme or configuration.
+ */
+#define COAG_BAD_CHECKPOINT 8
+
+/*
+ A panic was caught inside the library (a bug: please report it).
+ */
+#define COAG_PANIC 9
+
+/*
+ An advance stopped before its target time: its work limit was spent or its
+ cancellation callback asked (the handle is consistent at the time reached; call
+ again to continue). Not an error of the handle.
+ */
+#define COAG_INTERRUPTED 10
+
+/*
+ The host's random callback is degenerate (returned the same word 8 times in a row);
+ the call was undone.
+ */
+#define COAG_RNG_FAILURE 11
+
+/*
+ A call on a handle that is in the middle of another call (a callback calling back
+ into the handle whose call invoked it): refused, nothing changed.
+ */
+#define COAG_REENTRANT 12
 
 /*
  Opaque fragmentation handle (`coag_fragmentation` in C).
@@ -327,95 +302,14 @@ typedef struct coag_kernel coag_kernel;
 typedef struct coag_langevin coag_langevin;
 
 /*
+ Opaque options handle (`coag_options` in C): the settings a sim is built with.
+ */
+typedef struct coag_options coag_options;
+
+/*
  Opaque simulation handle (`coag_sim` in C).
  */
 typedef struct coag_sim coag_sim;
-
-/*
- Opaque handle of a temperature-dependent simulation (`coag_thermal` in C).
- */
-typedef struct coag_thermal coag_thermal;
-
-/*
- A DSMC simulation's configuration. Fill it with `coag_dsmc_default_config`, which
- sets `struct_size`.
- */
-typedef struct {
-  /*
-   `sizeof(coag_dsmc_config)` as the caller compiled it.
-   */
-  size_t struct_size;
-  /*
-   `COAG_DSMC_LOWRANK` or `COAG_DSMC_REJECTION`.
-   */
-  int32_t engine;
-  /*
-   Restitution coefficient ε ∈ (0, 1].
-   */
-  double restitution;
-  /*
-   Collisions whose normal relative speed is below this aggregate (≥ 0; 0: never,
-   the paper's test).
-   */
-  double stick_speed;
-  /*
-   The random stream: the seed policy's `(seed, stream)`.
-   */
-  uint64_t seed;
-  /*
-   See `seed`.
-   */
-  uint64_t stream;
-} coag_dsmc_config;
-
-/*
- What one `coag_sim_advance_to` call did. The caller sets `struct_size` (or calls
- `coag_step_report_init`) before passing it; the library writes the fields that fit.
- */
-typedef struct {
-  /*
-   `sizeof(coag_step_report)` as the caller compiled it.
-   */
-  size_t struct_size;
-  /*
-   Time reached.
-   */
-  double time;
-  /*
-   Accepted events (coagulations and break-ups).
-   */
-  uint64_t events;
-  /*
-   Proposals, accepted or not.
-   */
-  uint64_t proposals;
-  /*
-   Proposals rejected by thinning.
-   */
-  uint64_t rejections;
-  /*
-   Proposals where the kernel exceeded its declared bound: always 0 except for the
-   event-driven schemes without `strict_bound` (elsewhere, and with it, a kernel
-   above its bound is an error, `COAG_INVALID_RATE`).
-   */
-  uint64_t bound_violations;
-  /*
-   Probabilities above 1 that were clipped (time-driven scheme).
-   */
-  uint64_t clipped;
-  /*
-   Particle-number doublings.
-   */
-  uint64_t doublings;
-  /*
-   Particles that left the system (0 for the schemes that keep every particle).
-   */
-  uint64_t removed;
-  /*
-   Collisions that bounced instead of merging (0 for pure coagulation).
-   */
-  uint64_t bounces;
-} coag_step_report;
 
 /*
  `K(x, y)` from C.
@@ -569,9 +463,59 @@ typedef struct {
 } coag_langevin_config;
 
 /*
- An observable `f(x, u)` for `coag_langevin_mean`.
+ What one advance did, or the books of every advance so far. The caller sets
+ `struct_size` (or calls `coag_step_report_init`) before passing it; the library
+ writes the fields that fit.
  */
-typedef double (*coag_observable_fn)(const double *x, const double *u, size_t dim, void *user_data);
+typedef struct {
+  /*
+   `sizeof(coag_step_report)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Time reached.
+   */
+  double time;
+  /*
+   Accepted events (coagulations, break-ups, collisions).
+   */
+  uint64_t events;
+  /*
+   Proposals, accepted or not.
+   */
+  uint64_t proposals;
+  /*
+   Proposals rejected by thinning.
+   */
+  uint64_t rejections;
+  /*
+   Proposals where the kernel exceeded its declared bound: always 0 except for the
+   event-driven schemes without the `strict-bound` option (elsewhere, and with it,
+   a kernel above its bound is an error, `COAG_INVALID_RATE`).
+   */
+  uint64_t bound_violations;
+  /*
+   Probabilities above 1 that were clipped (time-driven scheme).
+   */
+  uint64_t clipped;
+  /*
+   Particle-number doublings.
+   */
+  uint64_t doublings;
+  /*
+   Particles that left the system (0 for the schemes that keep every particle).
+   */
+  uint64_t removed;
+  /*
+   Collisions that bounced instead of merging (0 for pure coagulation).
+   */
+  uint64_t bounces;
+} coag_step_report;
+
+/*
+ A host callback polled during `coag_sim_advance_to`: non-zero cancels the call.
+ */
+typedef int32_t (*coag_cancel_callback)(void *user_data);
 
 /*
  A first-hit kernel estimation (see `coag_first_hit_kernel`).
@@ -636,242 +580,170 @@ typedef struct {
 } coag_first_hits;
 
 /*
- Configuration of the event-driven schemes over particle sizes: the mass flow
- algorithm and direct simulation (Eibeck & Wagner 2000), low-rank Monte Carlo over
- sizes (`COAG_EVENTFLOW_LOWRANK`, Osinsky 2023: sizes as for direct simulation). Fill it with
- `coag_eventflow_default_config`, which sets `struct_size`.
+ An observable `f(x, u)` for `coag_langevin_mean`.
+ */
+typedef double (*coag_observable_fn)(const double *x, const double *u, size_t dim, void *user_data);
+
+/*
+ A registry scheme's capabilities (`coag_scheme_info`); the strings are static.
  */
 typedef struct {
   /*
-   `sizeof(coag_eventflow_config)` as the caller compiled it.
+   `sizeof(coag_scheme_info)` as the caller compiled it.
    */
   size_t struct_size;
   /*
-   `COAG_EVENTFLOW_*`.
+   Its registry name (what `coag_sim_new_*` takes).
    */
-  int32_t method;
+  const char *name;
   /*
-   The mass M1 > 0 of the initial particles: the mass flow algorithm's particles
-   each carry `M1 / N` (the sizes are samples of the mass distribution); direct
-   simulation's are real particles in the volume `Σ sizes / M1` (the sizes are
-   samples of the number distribution).
+   The paper and section it implements.
    */
-  double mass;
+  const char *paper;
   /*
-   Truncation `b_N` of the mass flow algorithm: particles larger than it leave
-   (the gel); 0 means none (infinite). Not used by direct simulation.
+   What it is, in one line.
    */
-  double truncation;
+  const char *summary;
   /*
-   Particle capacity of direct simulation (fragmentation adds particles); 0: the
-   initial number without fragmentation, four times it with.
+   `COAG_MODEL_*`: the physics it takes.
    */
-  uint64_t capacity;
+  int32_t model;
   /*
-   `COAG_SAMPLER_*`.
+   `COAG_INIT_*` bits: the initial states it builds from.
    */
-  int32_t sampler;
+  uint32_t inits;
   /*
-   Non-zero: a kernel value above the product majorant `h(x) h(y)` is an error
-   (`COAG_INVALID_RATE`) instead of a counted violation (the step report's
-   `bound_violations`).
+   `COAG_SAMPLES_*`: what its sizes are samples of.
    */
-  int32_t strict_bound;
+  int32_t sizes;
   /*
-   Seed of the sim's random stream.
+   Non-zero when it breaks particles (takes a fragmentation kernel).
    */
-  uint64_t seed;
+  int32_t fragmentation;
   /*
-   Stream id.
+   `COAG_MEMORY_*`.
    */
-  uint64_t stream;
-} coag_eventflow_config;
+  int32_t memory;
+  /*
+   `COAG_LAW_*`: the process it simulates.
+   */
+  int32_t law;
+  /*
+   Its checkpoint tag.
+   */
+  uint64_t tag;
+  /*
+   The options that apply besides `seed` and `stream` (`coag_scheme_option`).
+   */
+  size_t option_count;
+  /*
+   Its named observables (`coag_scheme_observable`, `coag_sim_observable`).
+   */
+  size_t observable_count;
+} coag_scheme_info;
 
 /*
- Configuration of the time-driven mass-flow scheme (Lécot et al. 2019). Fill it with
- `coag_massflow_default_config`, which sets `struct_size`.
+ An option's description (`coag_option_info`); the strings are static.
  */
 typedef struct {
   /*
-   `sizeof(coag_massflow_config)` as the caller compiled it (the ABI's growth rule:
-   fields are only ever appended).
+   `sizeof(coag_option_info)` as the caller compiled it.
    */
   size_t struct_size;
   /*
-   Time step Δt > 0.
+   Its key.
    */
-  double dt;
+  const char *name;
   /*
-   Total mass M1 carried by the particles (> 0).
+   `COAG_OPTION_*`.
    */
-  double mass;
+  int32_t kind;
   /*
-   `COAG_POINTS_*`.
+   Non-zero when a checkpoint written under another value is refused.
    */
-  int32_t points;
+  int32_t must_match;
   /*
-   `COAG_RANDOMIZATION_*` (for `NIEDERREITER` and `SOBOL`; RQMC when not NONE).
+   Its default, as text.
    */
-  int32_t randomization;
+  const char *default_value;
   /*
-   Non-zero: a full sort every step instead of the adaptive merge.
+   What it does.
    */
-  int32_t full_sort;
-  /*
-   Seed of the sim's random stream (MC points, scrambling).
-   */
-  uint64_t seed;
-  /*
-   Stream id (independent streams for equal seeds).
-   */
-  uint64_t stream;
-} coag_massflow_config;
+  const char *doc;
+} coag_option_info;
 
 /*
- Configuration of the size-count schemes (low-rank, inverse, acceptance–rejection).
- Fill it with `coag_counts_default_config`, which sets `struct_size`.
+ A built-in kernel of core's table (`coag_builtin_info`); the strings are static.
  */
 typedef struct {
   /*
-   `sizeof(coag_counts_config)` as the caller compiled it.
+   `sizeof(coag_builtin_info)` as the caller compiled it.
    */
   size_t struct_size;
   /*
-   `COAG_METHOD_*`.
+   Its name (what `coag_kernel_new` takes).
    */
-  int32_t method;
+  const char *name;
   /*
-   Simulation volume V (> 0); 0 means "the number of particles" (so that the
-   initial counts per volume are concentrations; 1 for an empty system).
+   `COAG_FAMILY_*`.
    */
-  double volume;
+  int32_t family;
   /*
-   Largest particle size allowed (0: the default, 2^32).
+   The formula.
    */
-  uint64_t size_limit;
+  const char *formula;
   /*
-   Memory budget in bytes for the growing size tables (0: half of the machine's
-   physical memory, at least 256 MiB; 2 GiB where the machine cannot say).
+   Where it comes from.
    */
-  uint64_t memory_budget;
+  const char *source;
   /*
-   Seed of the sim's random stream.
+   Units of the rate and the time ("" for dimensionless kernels).
    */
-  uint64_t seed;
+  const char *units;
   /*
-   Stream id.
+   Its parameters (`coag_builtin_param`), in the order `coag_kernel_new` takes them.
    */
-  uint64_t stream;
-  /*
-   Non-zero: low-rank proposal times in batches (1.2–1.5× faster for large systems,
-   but a run then depends on where the host stops it). 0, the default: every
-   proposal has its own waiting time and the next one is kept between calls, so a
-   run stopped at 0.7 and 1.3 on its way to 2 is bit for bit the run that went to 2
-   in one call. (Appended in 0.1: a caller compiled against a header without it
-   gets 0.)
-   */
-  int32_t batched_clock;
-  /*
-   Ignored: the tail padding of the struct before `bucket_mode` was appended, which
-   an older caller passes uninitialised (so `bucket_mode` starts past its size).
-   */
-  int32_t reserved;
-  /*
-   `COAG_BUCKET_*`: the bucketed low-rank method's engine (`COAG_METHOD_LOWRANK`
-   only; other methods need `COAG_BUCKET_AUTO`). A pinned sim keeps its engine and
-   restores only checkpoints that engine wrote. (Appended in 0.1: a caller compiled
-   against a header without it passes a smaller `struct_size` and gets
-   `COAG_BUCKET_AUTO`.)
-   */
-  int32_t bucket_mode;
-} coag_counts_config;
+  size_t param_count;
+} coag_builtin_info;
 
 /*
- A host callback polled during `coag_sim_advance_to`: non-zero cancels the call.
+ A parameter of a built-in kernel (`coag_builtin_param`).
  */
-typedef int32_t (*coag_cancel_callback)(void *user_data);
+typedef struct {
+  /*
+   `sizeof(coag_param_info)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Its name.
+   */
+  const char *name;
+  /*
+   Non-zero when it has a default (else it is required).
+   */
+  int32_t has_default;
+  /*
+   The default (NaN when required).
+   */
+  double default_value;
+  /*
+   Its unit ("" for dimensionless).
+   */
+  const char *unit;
+  /*
+   What it is, with its range.
+   */
+  const char *doc;
+} coag_param_info;
 
 /*
  A host callback returning 64 uniformly random bits per call.
  */
 typedef uint64_t (*coag_rng_callback)(void *user_data);
 
-/*
- A temperature-dependent simulation's configuration. Fill it with
- `coag_thermal_default_config`, which sets `struct_size`.
- */
-typedef struct {
-  /*
-   `sizeof(coag_thermal_config)` as the caller compiled it.
-   */
-  size_t struct_size;
-  /*
-   `COAG_THERMAL_BALLISTIC` or `COAG_THERMAL_MODEL`.
-   */
-  int32_t kernel;
-  /*
-   `COAG_THERMAL_LOWRANK` or `COAG_THERMAL_REJECTION`.
-   */
-  int32_t engine;
-  /*
-   Ballistic: restitution coefficient ε ∈ (0, 1].
-   */
-  double restitution;
-  /*
-   Ballistic: aggregation barrier a ≥ 0.
-   */
-  double barrier;
-  /*
-   Ballistic: barrier exponent λ (finite).
-   */
-  double barrier_exponent;
-  /*
-   Model: the constant c > 0.
-   */
-  double model_c;
-  /*
-   Model: the exponent γ ≥ 0.
-   */
-  double model_gamma;
-  /*
-   Largest particle size allowed (0: the library's default).
-   */
-  uint64_t size_limit;
-  /*
-   The random stream: the seed policy's `(seed, stream)`.
-   */
-  uint64_t seed;
-  /*
-   See `seed`.
-   */
-  uint64_t stream;
-} coag_thermal_config;
-
 #ifdef __cplusplus
 extern "C" {
 #endif // __cplusplus
-
-/*
- The library version as a NUL-terminated static string.
- */
-const char *coag_version(void);
-
-/*
- The name of a status code (e.g. `"COAG_OK"`), a static NUL-terminated string;
- `"COAG_UNKNOWN"` for a value that is not a status.
- */
-const char *coag_status_name(int32_t status);
-
-/*
- Copies the message of the last failed call on this thread into `buf` (NUL-terminated)
- and its length without the NUL into `*out_len` (if not NULL). When `buf_len` is too
- small the message is truncated to fit and `COAG_BUFFER_TOO_SMALL` is returned (with
- `*out_len` the full length); `buf` may be NULL with `buf_len` 0 to query the length.
-
- # Safety
- `buf` must be NULL or point to `buf_len` writable bytes; `out_len` NULL or writable.
- */
-int32_t coag_last_error_message(char *buf, size_t buf_len, size_t *out_len);
 
 /*
  Exact moment `M_m(t)` (m = 0..3) of a `COAG_EXACT_*` solution from `n_1(0) = 1`.
@@ -890,160 +762,19 @@ int32_t coag_exact_moment(int32_t solution, uint32_t m, double t, double *out);
 int32_t coag_exact_density(int32_t solution, uint64_t k, double t, double *out);
 
 /*
- Writes the default configuration (low-rank, ε = 0.99, no sticking, seed 0) into
- `out`, a struct of `size` bytes.
+ A built-in kernel of core's table by name (`coag_builtin_count`/`coag_builtin_info`
+ list them: coagulation kernels, the temperature models and the hard-sphere gas) with
+ `n` parameters in the table's order (`coag_builtin_param`); parameters past `n` take
+ their defaults (`params` may be NULL with `n` 0). The kernel convention is that of
+ the Smoluchowski equation with the ½ of the gain term: each unordered pair of
+ particles in a volume V coagulates at rate `K/V`. Errors: an unknown name, a
+ required parameter missing, a value outside its range (`COAG_INVALID_ARGUMENT`).
 
  # Safety
- `out` must be NULL or valid for writing `size` bytes.
+ `name` NULL or NUL-terminated; `params` NULL or valid for `n` doubles; `out` NULL or
+ writable.
  */
-int32_t coag_dsmc_default_config(coag_dsmc_config *out, size_t size);
-
-/*
- A simulation of `n` particles of sizes `sizes[p] ≥ 1` with velocities
- `velocities[3p .. 3p + 3]` (finite) in volume `volume`. Free with `coag_dsmc_free`.
-
- # Safety
- Pointers must be NULL or valid; `sizes` holds `n` values, `velocities` `3n`.
- */
-int32_t coag_dsmc_new(const coag_dsmc_config *config, const uint64_t *sizes, const double *velocities, size_t n, double volume, coag_dsmc **out);
-
-/*
- A simulation of `counts[i − 1]` particles of size i with Maxwellian velocities at
- temperature `temperatures[i − 1]` (each component normal with variance `T_i / i`,
- drawn from the configuration's stream), `len` entries each, in volume `volume`.
-
- # Safety
- Pointers must be NULL or valid; `counts` and `temperatures` hold `len` values.
- */
-int32_t coag_dsmc_new_maxwellian(const coag_dsmc_config *config, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_dsmc **out);
-
-/*
- Frees a simulation (NULL is a no-op).
-
- # Safety
- `h` must be NULL or a live handle, not used afterwards.
- */
-void coag_dsmc_free(coag_dsmc *h);
-
-/*
- Advances to time `t`; `report` (may be NULL) gets the call's totals (`events`:
- collisions, `bounces`: those that did not aggregate).
-
- # Safety
- `h` a live handle used by this thread alone; `report` NULL or valid.
- */
-int32_t coag_dsmc_advance_to(coag_dsmc *h, double t, coag_step_report *report);
-
-/*
- The time, the number of particles and the volume; any out pointer may be NULL.
-
- # Safety
- `h` a live handle; out pointers NULL or writable.
- */
-int32_t coag_dsmc_info(const coag_dsmc *h, double *time, uint64_t *particles, double *volume);
-
-/*
- The total momentum `Σ m V` (3 doubles), the kinetic energy density `Σ m |V|²/2 / V`
- and the granular temperature `Σ m |V|² / (3N)`; any out pointer may be NULL.
-
- # Safety
- `h` a live handle; `momentum` NULL or valid for 3 doubles; others NULL or writable.
- */
-int32_t coag_dsmc_observe(const coag_dsmc *h, double *momentum, double *energy, double *mean_temperature);
-
-/*
- Copies the particles, by size then in the library's order: `sizes` (`n`) and
- `velocities` (`3n`), where `n` must be the particle count of `coag_dsmc_info`.
- Either array may be NULL.
-
- # Safety
- `h` a live handle; each non-null array valid for its length.
- */
-int32_t coag_dsmc_particles(const coag_dsmc *h, uint64_t *sizes, double *velocities, size_t n);
-
-/*
- Bytes a checkpoint of the simulation needs now.
-
- # Safety
- `h` a live handle; `out` writable.
- */
-int32_t coag_dsmc_checkpoint_size(const coag_dsmc *h, size_t *out);
-
-/*
- Saves the simulation (particles, clock, random stream) into `buf`; `written` (may
- be NULL) gets the bytes used.
-
- # Safety
- `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
- */
-int32_t coag_dsmc_save(const coag_dsmc *h, uint8_t *buf, size_t len, size_t *written);
-
-/*
- Restores a checkpoint of a simulation with the same configuration (engine,
- restitution, sticking); on error the simulation is unchanged.
-
- # Safety
- `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
- */
-int32_t coag_dsmc_restore(coag_dsmc *h, const uint8_t *buf, size_t len);
-
-/*
- Constant kernel `K = k0` (k0 > 0).
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_constant(double k0, coag_kernel **out);
-
-/*
- Additive kernel `K = x + y`; bounds valid for sizes `≥ min_size` (0: all sizes,
- 1: integer sizes, with a tighter majorant).
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_additive(double min_size, coag_kernel **out);
-
-/*
- Multiplicative kernel `K = x y`.
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_multiplicative(coag_kernel **out);
-
-/*
- Product kernel `K = (x y)^a`, `0 < a ≤ 1`.
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_product(double a, coag_kernel **out);
-
-/*
- Homogeneous kernel of Eibeck & Wagner eq. 6.6, `1 < gamma ≤ 2`.
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_homogeneous(double gamma, coag_kernel **out);
-
-/*
- Free-molecular (ballistic) kernel; bounds valid for sizes `≥ min_size` (0: all
- sizes, 1: integer sizes).
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_free_molecular(double min_size, coag_kernel **out);
-
-/*
- Brownian (continuum) kernel.
-
- # Safety
- `out` must be NULL or valid for writing one pointer.
- */
-int32_t coag_kernel_new_brownian(coag_kernel **out);
+int32_t coag_kernel_new(const char *name, const double *params, size_t n, coag_kernel **out);
 
 /*
  A user kernel from C callbacks (see `coag_user_kernel`). Errors: `rate` NULL,
@@ -1056,7 +787,8 @@ int32_t coag_kernel_new_brownian(coag_kernel **out);
 int32_t coag_kernel_new_user(const coag_user_kernel *desc, coag_kernel **out);
 
 /*
- Evaluates `K(x, y)` of a kernel handle.
+ Evaluates `K(x, y)` of a coagulation kernel handle (`COAG_UNSUPPORTED` for a
+ temperature model or a gas, whose rates depend on more than two sizes).
 
  # Safety
  `kernel` must be NULL or a live handle; `out` NULL or writable.
@@ -1149,11 +881,56 @@ void coag_langevin_free(coag_langevin *h);
  Steps every trajectory to time `t` (steps end at the multiples of dt; a target
  between two ends a shortened step). `report` may be NULL. A drift returning NaN,
  infinity or a non-zero status is `COAG_INVALID_RATE`, with the batch as it was.
+ With `coag_langevin_set_work_limit` or `coag_langevin_set_cancel_callback`, a call
+ that spends its trajectory steps or is cancelled returns `COAG_INTERRUPTED` with the
+ batch at the grid point reached; calling again continues the same run. The batch
+ takes no generator: each trajectory's noise is its own stream of the seed.
 
  # Safety
  `h` a live handle used by this thread alone; `report` NULL or valid.
  */
 int32_t coag_langevin_advance_to(coag_langevin *h, double t, coag_step_report *report);
+
+/*
+ Sets the trajectory steps one `coag_langevin_advance_to` may take (0: no limit,
+ the default); past it the call returns `COAG_INTERRUPTED`, the batch at the grid
+ point reached.
+
+ # Safety
+ `h` NULL or live.
+ */
+int32_t coag_langevin_set_work_limit(coag_langevin *h, uint64_t units);
+
+/*
+ Installs a callback polled during `coag_langevin_advance_to` (every 16384 trajectory
+ steps): a non-zero return stops the call with `COAG_INTERRUPTED`. `cancel` NULL
+ removes it.
+
+ # Safety
+ `h` NULL or live; `cancel` and `user_data` valid while installed.
+ */
+int32_t coag_langevin_set_cancel_callback(coag_langevin *h, coag_cancel_callback cancel, void *user_data);
+
+/*
+ A new batch that is an exact copy of `h` (trajectories, time, books, drift, limits
+ and callbacks) in memory the library owns: the two continue identically and
+ independently.
+
+ # Safety
+ `h` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_langevin_clone(const coag_langevin *h, coag_langevin **out);
+
+/*
+ The collision kernel of the relative motion, averaged over `[from, to)`, from the
+ first hits of the sphere |x| = R by pairs starting uniformly in R < |x| < L with
+ Maxwellian velocities (see `coagula_core::langevin::kernel`): its estimate, standard
+ error and the hits counted. Trajectories `first_id..` of `seed`.
+
+ # Safety
+ `p` valid for `p->struct_size` bytes; out pointers writable (`hits` may be NULL).
+ */
+int32_t coag_first_hit_kernel(const coag_first_hits *p, uint64_t seed, uint64_t first_id, double *mean, double *std_error, uint64_t *hits);
 
 /*
  The batch's time, dimension and number of trajectories (any out pointer may be NULL).
@@ -1193,8 +970,9 @@ int32_t coag_langevin_mean(const coag_langevin *h, coag_observable_fn f, void *u
 int32_t coag_langevin_checkpoint_size(const coag_langevin *h, size_t *out);
 
 /*
- Saves the batch (configuration, time, every trajectory; not the drift) into `buf`;
- `written` (may be NULL) gets the bytes used.
+ Saves the batch (configuration, time, every trajectory; the drift's fingerprint,
+ not the drift) in core's checkpoint envelope into `buf`; `written` (may be NULL)
+ gets the bytes used.
 
  # Safety
  `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
@@ -1202,8 +980,8 @@ int32_t coag_langevin_checkpoint_size(const coag_langevin *h, size_t *out);
 int32_t coag_langevin_save(const coag_langevin *h, uint8_t *buf, size_t len, size_t *written);
 
 /*
- Restores a checkpoint into a batch of the same dimension and size (its drift stays);
- on error the batch is unchanged.
+ Restores a checkpoint into a batch of the same dimension, size and drift (a callback
+ drift: any callback); on error the batch is unchanged.
 
  # Safety
  `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
@@ -1211,15 +989,146 @@ int32_t coag_langevin_save(const coag_langevin *h, uint8_t *buf, size_t len, siz
 int32_t coag_langevin_restore(coag_langevin *h, const uint8_t *buf, size_t len);
 
 /*
- The collision kernel of the relative motion, averaged over `[from, to)`, from the
- first hits of the sphere |x| = R by pairs starting uniformly in R < |x| < L with
- Maxwellian velocities (see `coagula_core::langevin::kernel`): its estimate, standard
- error and the hits counted. Trajectories `first_id..` of `seed`.
+ New options, every key at its default. Free with `coag_options_free`.
 
  # Safety
- `p` valid for `p->struct_size` bytes; out pointers writable (`hits` may be NULL).
+ `out` NULL or writable.
  */
-int32_t coag_first_hit_kernel(const coag_first_hits *p, uint64_t seed, uint64_t first_id, double *mean, double *std_error, uint64_t *hits);
+int32_t coag_options_new(coag_options **out);
+
+/*
+ A copy of `options`. Free with `coag_options_free`.
+
+ # Safety
+ `options` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_options_clone(const coag_options *options, coag_options **out);
+
+/*
+ Releases an options handle (NULL is a no-op).
+
+ # Safety
+ `options` NULL or a live handle not used afterwards.
+ */
+void coag_options_free(coag_options *options);
+
+/*
+ Sets option `key` to the real `value` (the kinds of `coag_option_info_get`; a count
+ given as a real with no fractional part is accepted, 1e6 included). Errors (nothing
+ changes): an unknown key, a value of the wrong kind or out of range
+ (`COAG_INVALID_ARGUMENT`, core's message naming the key).
+
+ # Safety
+ `options` NULL or live; `key` NULL or NUL-terminated.
+ */
+int32_t coag_options_set_real(coag_options *options, const char *key, double value);
+
+/*
+ Sets option `key` to the integer `value` (see `coag_options_set_real`).
+
+ # Safety
+ `options` NULL or live; `key` NULL or NUL-terminated.
+ */
+int32_t coag_options_set_count(coag_options *options, const char *key, uint64_t value);
+
+/*
+ Sets option `key` on (non-zero) or off (see `coag_options_set_real`).
+
+ # Safety
+ `options` NULL or live; `key` NULL or NUL-terminated.
+ */
+int32_t coag_options_set_flag(coag_options *options, const char *key, int32_t value);
+
+/*
+ Sets option `key` to the name `value` (see `coag_options_set_real`).
+
+ # Safety
+ `options` NULL or live; `key` and `value` NULL or NUL-terminated.
+ */
+int32_t coag_options_set_name(coag_options *options, const char *key, const char *value);
+
+/*
+ The number of schemes in the registry.
+
+ # Safety
+ `out` NULL or writable.
+ */
+int32_t coag_scheme_count(size_t *out);
+
+/*
+ The index of the scheme named `name` (an unknown name is `COAG_INVALID_ARGUMENT`,
+ whose message lists the names).
+
+ # Safety
+ `name` NULL or NUL-terminated; `out` NULL or writable.
+ */
+int32_t coag_scheme_find(const char *name, size_t *out);
+
+/*
+ The capabilities of scheme `index` into a struct of `size` bytes
+ (`sizeof(coag_scheme_info)`).
+
+ # Safety
+ `out` NULL or valid for `size` bytes.
+ */
+int32_t coag_scheme_info_get(size_t index, coag_scheme_info *out, size_t size);
+
+/*
+ The name of option `i` (< `option_count`) that applies to scheme `index`.
+
+ # Safety
+ `out` NULL or writable.
+ */
+int32_t coag_scheme_option(size_t index, size_t i, const char **out);
+
+/*
+ The name of observable `i` (< `observable_count`) of scheme `index`.
+
+ # Safety
+ `out` NULL or writable.
+ */
+int32_t coag_scheme_observable(size_t index, size_t i, const char **out);
+
+/*
+ The number of option keys.
+
+ # Safety
+ `out` NULL or writable.
+ */
+int32_t coag_option_count(size_t *out);
+
+/*
+ Option key `index` into a struct of `size` bytes (`sizeof(coag_option_info)`).
+
+ # Safety
+ `out` NULL or valid for `size` bytes.
+ */
+int32_t coag_option_info_get(size_t index, coag_option_info *out, size_t size);
+
+/*
+ The number of built-in kernels.
+
+ # Safety
+ `out` NULL or writable.
+ */
+int32_t coag_builtin_count(size_t *out);
+
+/*
+ Built-in kernel `index` into a struct of `size` bytes (`sizeof(coag_builtin_info)`).
+
+ # Safety
+ `out` NULL or valid for `size` bytes.
+ */
+int32_t coag_builtin_info_get(size_t index, coag_builtin_info *out, size_t size);
+
+/*
+ Parameter `param` of built-in kernel `index` into a struct of `size` bytes
+ (`sizeof(coag_param_info)`).
+
+ # Safety
+ `out` NULL or valid for `size` bytes.
+ */
+int32_t coag_builtin_param(size_t index, size_t param, coag_param_info *out, size_t size);
 
 /*
  Zero-fills a step report of `size` bytes (`sizeof(coag_step_report)`) and sets its
@@ -1231,154 +1140,135 @@ int32_t coag_first_hit_kernel(const coag_first_hits *p, uint64_t seed, uint64_t 
 int32_t coag_step_report_init(coag_step_report *out, size_t size);
 
 /*
- Writes the default event-driven configuration into a struct of `size` bytes
- (`sizeof(coag_eventflow_config)`), with `struct_size` set: the mass flow
- algorithm, mass 1, no truncation, automatic capacity, the default sampler, bound
- violations counted, seed 0, stream 0.
+ A sim of registry scheme `scheme` (`coag_scheme_*` list the names and what each
+ takes) from counts: `counts[i]` particles of size `i + 1`, `len` entries, in volume
+ `volume`, under coagulation kernel `kernel` with fragmentation `frag` (NULL: none)
+ and `options` (NULL: every default; the seed and stream of the options start the
+ sim's own random stream). Errors: an unknown scheme, a kernel, initial state or
+ option the scheme does not take (`COAG_UNSUPPORTED`, naming what), bad values.
 
  # Safety
- `out` must be NULL or valid for writing `size` bytes.
+ Pointers NULL or valid; `counts` valid for `len` values.
  */
-int32_t coag_eventflow_default_config(coag_eventflow_config *out, size_t size);
+int32_t coag_sim_new_counts(const char *scheme, const coag_kernel *kernel, const coag_fragmentation *frag, const coag_options *options, const uint64_t *counts, size_t len, double volume, coag_sim **out);
 
 /*
- An event-driven sim over the `n` particle sizes `sizes` (each finite and > 0): the
- mass flow algorithm or direct simulation (Eibeck & Wagner 2000), or low-rank Monte
- Carlo over sizes (Osinsky 2023), as `config.method` says (see
- `coag_eventflow_config` for what the sizes mean). Eibeck & Wagner's schemes need a
- product majorant `h(x)`, `K(x, y) ≤ h(x) h(y)`, low-rank a low-rank bound (every
- built-in kernel has both; a user kernel declares them, else `COAG_UNSUPPORTED`). `frag` may be
- NULL (pure coagulation); with it, break-ups are events at rate `Ḟ(x)` (no time
- step).
+ A sim of scheme `scheme` from `n` particle sizes (each finite and > 0) carrying the
+ mass `mass`: samples of the mass distribution for the mass-flow schemes, of the
+ number distribution (in the volume `Σ sizes / mass`) for direct simulation and
+ low-rank over sizes (`coag_scheme_info.sizes` says which). See
+ `coag_sim_new_counts`.
 
  # Safety
- Pointers must be NULL or valid (`sizes` for `n` doubles).
+ Pointers NULL or valid; `sizes` valid for `n` doubles.
  */
-int32_t coag_eventflow_new(const coag_eventflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, coag_sim **out);
+int32_t coag_sim_new_sizes(const char *scheme, const coag_kernel *kernel, const coag_fragmentation *frag, const coag_options *options, const double *sizes, size_t n, double mass, coag_sim **out);
 
 /*
- Bytes of caller-owned workspace an event-driven sim of `n` particles needs under
- `config` and `frag` (NULL: none) — for `coag_eventflow_new_in` with the same
- arguments: the particles and the sum trees (direct simulation: for its capacity).
- The group sampler's index tables (`COAG_SAMPLER_GROUPS`, the mass flow algorithm's
- default) are allocated by the library besides.
+ Bytes of caller-owned workspace a sim of a fixed-memory scheme
+ (`COAG_MEMORY_FIXED`) from `n` sizes needs under `options` and `frag` (NULL: none),
+ for `coag_sim_new_sizes_in`; `COAG_UNSUPPORTED` for a growing scheme. The LAPACK
+ `lwork` habit: query, allocate, construct.
 
  # Safety
- Pointers must be NULL or valid; `out` writable.
+ Pointers NULL or valid; `out` writable.
  */
-int32_t coag_eventflow_workspace_size(const coag_eventflow_config *config, const coag_fragmentation *frag, size_t n, size_t *out);
+int32_t coag_sim_workspace_size(const char *scheme, const coag_fragmentation *frag, const coag_options *options, size_t n, size_t *out);
 
 /*
- `coag_eventflow_new` in memory the caller owns: `workspace` (aligned for `double`,
- `workspace_bytes` ≥ `coag_eventflow_workspace_size` for the same config, frag and
- n) holds the particles and their sum trees for the sim's whole life; no step
- allocates (the group sampler's index tables excepted: allocated here). The caller
- keeps the buffer alive and untouched until `coag_sim_free`; the sim zeroes it
- first, so after a refused construction its contents are lost. `sizes` must not
- overlap it. A clone (`coag_sim_clone`) lives in memory the library owns.
+ `coag_sim_new_sizes` in memory the caller owns: `workspace` (aligned for `double`,
+ `workspace_bytes` ≥ `coag_sim_workspace_size` for the same scheme, frag, options
+ and n) holds the state for the sim's whole life; no step allocates (the group
+ sampler's index tables excepted). The caller keeps the buffer alive and untouched
+ until `coag_sim_free`; the sim zeroes it first, so after a refused construction its
+ contents are lost. `sizes` must not overlap it. A clone lives in memory the library
+ owns.
 
  # Safety
- Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
- used by nothing else until the sim is freed.
+ Pointers NULL or valid; `workspace` valid for `workspace_bytes` bytes and used by
+ nothing else until the sim is freed.
  */
-int32_t coag_eventflow_new_in(const coag_eventflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, void *workspace, size_t workspace_bytes, coag_sim **out);
+int32_t coag_sim_new_sizes_in(const char *scheme, const coag_kernel *kernel, const coag_fragmentation *frag, const coag_options *options, const double *sizes, size_t n, double mass, void *workspace, size_t workspace_bytes_given, coag_sim **out);
 
 /*
- Writes the default mass-flow configuration into a struct of `size` bytes
- (`sizeof(coag_massflow_config)`), with `struct_size` set: Δt = 0.01, mass 1,
- Niederreiter points, no randomisation, adaptive sort, seed 0, stream 0.
+ A sim of a temperature scheme (`COAG_MODEL_TEMPERATURE`) under the temperature model
+ `kernel` (`coag_kernel_new("temperature-ballistic", …)` or
+ `"temperature-closed-form"`): `counts[i]` particles of size `i + 1` at partial
+ temperature `temperatures[i]` (finite, ≥ 0), `len` entries each, in volume
+ `volume`. See `coag_sim_new_counts`.
 
  # Safety
- `out` must be NULL or valid for writing `size` bytes.
+ Pointers NULL or valid; `counts` and `temperatures` valid for `len` values.
  */
-int32_t coag_massflow_default_config(coag_massflow_config *out, size_t size);
+int32_t coag_sim_new_temperatures(const char *scheme, const coag_kernel *kernel, const coag_options *options, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_sim **out);
 
 /*
- Writes the default size-count configuration into a struct of `size` bytes
- (`sizeof(coag_counts_config)`), with `struct_size` set: the bucketed low-rank
- method, volume = number of particles, default size limit, the machine's memory
- budget (0: half its physical memory), seed 0, stream 0.
+ A sim of a gas scheme (`COAG_MODEL_GAS`) under the gas `kernel`
+ (`coag_kernel_new("hard-spheres", …)`): `n` particles, particle p of size
+ `sizes[p] ≥ 1` with velocity `velocities[3p .. 3p + 3]` (finite), in volume
+ `volume`. See `coag_sim_new_counts`.
 
  # Safety
- `out` must be NULL or valid for writing `size` bytes.
+ Pointers NULL or valid; `sizes` valid for `n` values, `velocities` for `3 n`.
  */
-int32_t coag_counts_default_config(coag_counts_config *out, size_t size);
+int32_t coag_sim_new_velocities(const char *scheme, const coag_kernel *kernel, const coag_options *options, const uint64_t *sizes, const double *velocities, size_t n, double volume, coag_sim **out);
 
 /*
- A time-driven mass-flow sim (Lécot et al. 2019) over the `n` particle sizes `sizes`
- (n a power of two ≥ 2). `frag` may be NULL (pure coagulation).
+ A sim of a gas scheme from `counts[i]` particles of size `i + 1` with Maxwellian
+ velocities at temperature `temperatures[i]` (each component normal with variance
+ `T_i / i`), drawn from the velocity stream of the options' seed and stream (core's
+ seed policy, as the CLI and Python draw them), `len` entries each, in volume
+ `volume`. See `coag_sim_new_velocities`.
 
  # Safety
- Pointers must be NULL or valid (`sizes` for `n` doubles).
+ Pointers NULL or valid; `counts` and `temperatures` valid for `len` values.
  */
-int32_t coag_massflow_new(const coag_massflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, coag_sim **out);
+int32_t coag_sim_new_maxwellian(const char *scheme, const coag_kernel *kernel, const coag_options *options, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_sim **out);
 
 /*
- Bytes of caller-owned workspace a mass-flow sim of `n` particles needs (for
- `coag_massflow_new_in`): `6 n` doubles. The LAPACK `lwork` habit: query, allocate,
- construct.
+ Releases a sim (NULL is a no-op; a sim in the middle of a call — freed from its own
+ callback — is left alone).
 
  # Safety
- `out` must be NULL or writable.
- */
-int32_t coag_massflow_workspace_size(size_t n, size_t *out);
-
-/*
- `coag_massflow_new` in memory the caller owns: `workspace` (aligned for `double`,
- `workspace_bytes` ≥ `coag_massflow_workspace_size(n)`) holds the particles, the
- points and the scratch for the sim's whole life; no step allocates. The caller keeps
- the buffer alive and untouched until `coag_sim_free` (the sim zeroes it first);
- `sizes` must not overlap it.
-
- # Safety
- Pointers must be NULL or valid; `workspace` valid for `workspace_bytes` bytes and
- used by nothing else until the sim is freed.
- */
-int32_t coag_massflow_new_in(const coag_massflow_config *config, const coag_kernel *kernel, const coag_fragmentation *frag, const double *sizes, size_t n, void *workspace, size_t workspace_bytes, coag_sim **out);
-
-/*
- A size-count sim: `counts[i]` particles of size `i + 1`, `len` entries, with
- `config.method` choosing the scheme — low-rank Monte Carlo (bucketed layout, the
- default, or the per-size tree layout; the kernel needs a low-rank bound of rank
- 1..4), the inverse method, or acceptance–rejection (the kernel needs its supremum).
-
- # Safety
- Pointers must be NULL or valid (`counts` for `len` values).
- */
-int32_t coag_counts_new(const coag_counts_config *config, const coag_kernel *kernel, const uint64_t *counts, size_t len, coag_sim **out);
-
-/*
- The `COAG_METHOD_*` of a size-count sim (`COAG_UNSUPPORTED` for a mass-flow sim).
-
- # Safety
- `sim` must be NULL or live; `out` NULL or writable.
- */
-int32_t coag_sim_method(const coag_sim *sim, int32_t *out);
-
-/*
- The engine a bucketed low-rank sim runs now: `COAG_BUCKET_SLOTS` or
- `COAG_BUCKET_COUNTED` (chosen by size unless the config pinned it;
- `COAG_UNSUPPORTED` for any other method).
-
- # Safety
- `sim` must be NULL or live; `out` NULL or writable.
- */
-int32_t coag_sim_bucket_mode(const coag_sim *sim, int32_t *out);
-
-/*
- Releases a sim (NULL is a no-op).
-
- # Safety
- `sim` must be NULL or a handle from a `coag_*_new` not yet freed.
+ `sim` must be NULL or a handle from a `coag_sim_new_*` or `coag_sim_clone` not yet
+ freed.
  */
 void coag_sim_free(coag_sim *sim);
 
 /*
+ A new sim that is an exact copy of `sim` — state, settings, physics, own random
+ stream, host callbacks and limits — into `*out`: the two continue identically and
+ independently (a host forking a run, or trying a step it may discard). A sim in
+ caller-owned memory is copied into memory the library owns.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_clone(const coag_sim *sim, coag_sim **out);
+
+/*
+ The sim's registry name (a static string).
+
+ # Safety
+ `sim` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_scheme(const coag_sim *sim, const char **out);
+
+/*
+ The engine the bucketed low-rank scheme runs now (a static string: `"slots"` or
+ `"counted"`; chosen by the particle number unless the `engine` option pinned it);
+ `COAG_UNSUPPORTED` for every other scheme.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_engine(const coag_sim *sim, const char **out);
+
+/*
  Runs the sim until time `t` (≥ its current time): time-driven schemes take steps of
  Δt (a last shorter one lands on t), event-driven schemes process every event before
- t (and keep the time of the next one for the next call: see
- `coag_counts_config.batched_clock`). `report` may be NULL; otherwise its
- `struct_size` must be set.
+ t (and keep the time of the next one for the next call: see the `batched-clock`
+ option). `report` may be NULL; otherwise its `struct_size` must be set.
 
  Bounded calls: with `coag_sim_set_work_limit` or `coag_sim_set_cancel_callback`, a
  call that spends its work units or is cancelled returns `COAG_INTERRUPTED` with the
@@ -1386,6 +1276,8 @@ void coag_sim_free(coag_sim *sim);
  `coag_sim_time`); calling again continues the same run. With a host random
  callback (`coag_sim_set_rng_callback`) that turns out stuck (the same word 8 times
  in a row), the call returns `COAG_RNG_FAILURE` and the sim is as before the call.
+ A callback (kernel, random, cancel) that calls back into this sim gets
+ `COAG_REENTRANT`.
 
  # Safety
  `sim` must be NULL or live; `report` NULL or writable.
@@ -1407,12 +1299,63 @@ int32_t coag_sim_set_work_limit(coag_sim *sim, uint64_t units);
  Installs a callback polled during `coag_sim_advance_to` (every 16384 proposals, and
  before every mass-flow step): a non-zero return stops the call with
  `COAG_INTERRUPTED`, the sim consistent at the time reached. `cancel` NULL removes it.
- The callback must not call into this sim (it is being changed) nor free it.
 
  # Safety
  `sim` NULL or live; `cancel` and `user_data` valid while installed.
  */
 int32_t coag_sim_set_cancel_callback(coag_sim *sim, coag_cancel_callback cancel, void *user_data);
+
+/*
+ Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
+ call) instead of its own stream; `next` NULL switches back to the own stream, which
+ resumes where it stopped. Randomness drawn from a callback is not part of a
+ checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
+ to undo the call if the stream turns out stuck.
+
+ # Safety
+ `sim` NULL or live; `next` and `user_data` valid while installed.
+ */
+int32_t coag_sim_set_rng_callback(coag_sim *sim, coag_rng_callback next, void *user_data);
+
+/*
+ Restarts the sim's own random stream from `seed` and `stream` (core's seed policy,
+ `coagula_core::random::generator`, the same as the CLI's and Python's).
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_reseed(coag_sim *sim, uint64_t seed, uint64_t stream);
+
+/*
+ Bytes a checkpoint of the sim needs now.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or writable.
+ */
+int32_t coag_sim_checkpoint_size(const coag_sim *sim, size_t *out);
+
+/*
+ Writes the sim's full state (including its own random stream) into `buf`;
+ `*written` (may be NULL) receives the bytes used. A sim restored from it with
+ `coag_sim_restore` continues bit-identically.
+
+ # Safety
+ `sim` NULL or live; `buf` valid for `len` bytes; `written` NULL or writable.
+ */
+int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_t *written);
+
+/*
+ Restores a checkpoint into a sim of the same scheme, settings and physics (the seed,
+ the stream, the memory budget and the capacity may differ; the sim takes the
+ checkpoint's random stream). A checkpoint that is corrupted (checksum), truncated,
+ of another format, scheme, setting or kernel, or whose state fails the checks its
+ scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
+ unchanged.
+
+ # Safety
+ `sim` NULL or live; `buf` valid for `len` bytes.
+ */
+int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
 
 /*
  The sim's current time.
@@ -1450,8 +1393,11 @@ int32_t coag_sim_moment(const coag_sim *sim, double m, double *out);
 int32_t coag_sim_concentration(const coag_sim *sim, double a, double b, double *out);
 
 /*
- Gel mass estimate: for size-count schemes the largest cluster's mass per volume
- (Eibeck & Wagner eq. 6.15); 0 for the mass-flow scheme, whose particles never leave.
+ Gel mass estimate: for the integer-size and direct-simulation schemes the largest
+ cluster's mass per volume (Eibeck & Wagner eq. 6.15), for the mass flow algorithm
+ the mass past its truncation; 0 for the time-driven mass-flow scheme, whose
+ particles never leave. Before gelation this is not a gel mass (it tends to 0 as N
+ grows).
 
  # Safety
  `sim` must be NULL or live; `out` NULL or writable.
@@ -1502,6 +1448,61 @@ int32_t coag_sim_occupied(const coag_sim *sim, size_t *out);
 int32_t coag_sim_get_pairs(const coag_sim *sim, uint64_t *sizes, uint64_t *counts, size_t len, double *volume, size_t *written);
 
 /*
+ Copies the particle sizes of a sim over particle sizes into `buf`, which must hold
+ `coag_sim_state_len` values: sorted ascending for the time-driven mass-flow
+ scheme, in storage order for the event-driven ones.
+
+ # Safety
+ `sim` NULL or live; `buf` valid for `len` doubles.
+ */
+int32_t coag_sim_get_sizes(const coag_sim *sim, double *buf, size_t len);
+
+/*
+ Copies the counts `N_i` (`buf[i]` for size `i + 1`) of a size-count sim into `buf`
+ (at least `coag_sim_state_len` entries; extra entries are zeroed) and its volume into
+ `*volume` (may be NULL).
+
+ # Safety
+ `sim` NULL or live; `buf` valid for `len` values; `volume` NULL or writable.
+ */
+int32_t coag_sim_get_counts(const coag_sim *sim, uint64_t *buf, size_t len, double *volume);
+
+/*
+ A named observable of the sim's scheme (its `coag_scheme_observable` names: the
+ mean temperature, the kinetic energy density, the momentum of a gas, …); a name
+ the scheme does not have is `COAG_UNSUPPORTED`, a value that overflows a double
+ `COAG_CAPACITY`.
+
+ # Safety
+ `sim` NULL or live; `name` NULL or NUL-terminated; `out` NULL or writable.
+ */
+int32_t coag_sim_observable(const coag_sim *sim, const char *name, double *out);
+
+/*
+ A per-size quantity by name for every occupied size (`"temperature"`: the partial
+ temperatures of the temperature schemes, a gas's per-size kinetic temperature):
+ `sizes[i]` and `values[i]` for `i < *written` (= `coag_sim_occupied`), both buffers
+ of `len` (`COAG_BUFFER_TOO_SMALL` below it, nothing written; they must not
+ overlap). `COAG_UNSUPPORTED` for a scheme without it.
+
+ # Safety
+ `sim` NULL or live; `name` NUL-terminated; `sizes` and `values` valid for `len`
+ values; `written` NULL or writable.
+ */
+int32_t coag_sim_size_values(const coag_sim *sim, const char *name, uint64_t *sizes, double *values, size_t len, size_t *written);
+
+/*
+ The particles of a gas: `sizes[p]` and `velocities[3p .. 3p + 3]` for
+ `p < n = coag_sim_particle_count` (`sizes` holds `len` values, `velocities`
+ `3 len`; `COAG_BUFFER_TOO_SMALL` below n). `COAG_UNSUPPORTED` for a scheme whose
+ particles carry no velocity.
+
+ # Safety
+ `sim` NULL or live; `sizes` valid for `len` values, `velocities` for `3 len`.
+ */
+int32_t coag_sim_velocities(const coag_sim *sim, uint64_t *sizes, double *velocities, size_t len);
+
+/*
  Replaces the state of a size-count sim by `counts[i]` particles of size `sizes[i]`
  (`len` pairs, any order, each size ≥ 1 and within the size limit, a size at most
  once) in volume `volume`, as `coag_sim_set_counts` does — without a dense vector
@@ -1516,16 +1517,6 @@ int32_t coag_sim_get_pairs(const coag_sim *sim, uint64_t *sizes, uint64_t *count
 int32_t coag_sim_set_pairs(coag_sim *sim, const uint64_t *sizes, const uint64_t *counts, size_t len, double volume);
 
 /*
- Copies the particle sizes of a sim over particle sizes into `buf`, which must hold
- `coag_sim_state_len` values: sorted ascending for the time-driven mass-flow
- scheme, in storage order for the event-driven ones.
-
- # Safety
- `sim` NULL or live; `buf` valid for `len` doubles.
- */
-int32_t coag_sim_get_sizes(const coag_sim *sim, double *buf, size_t len);
-
-/*
  Replaces the particle sizes of a sim over particle sizes (each finite and > 0): a
  host applying growth or nucleation between steps. The time-driven mass-flow scheme
  takes the same number of sizes; the mass flow algorithm at most its initial number
@@ -1536,16 +1527,6 @@ int32_t coag_sim_get_sizes(const coag_sim *sim, double *buf, size_t len);
  `sim` NULL or live; `sizes` valid for `len` doubles.
  */
 int32_t coag_sim_set_sizes(coag_sim *sim, const double *sizes, size_t len);
-
-/*
- Copies the counts `N_i` (`buf[i]` for size `i + 1`) of a size-count sim into `buf`
- (at least `coag_sim_state_len` entries; extra entries are zeroed) and its volume into
- `*volume` (may be NULL).
-
- # Safety
- `sim` NULL or live; `buf` valid for `len` values; `volume` NULL or writable.
- */
-int32_t coag_sim_get_counts(const coag_sim *sim, uint64_t *buf, size_t len, double *volume);
 
 /*
  Replaces the counts and the volume of a size-count sim (a host applying growth or
@@ -1570,7 +1551,7 @@ int32_t coag_sim_set_kernel(coag_sim *sim, const coag_kernel *kernel);
  Replaces the fragmentation kernel of a mass-flow or event-driven sim (NULL: none).
  Direct simulation's capacity stays what it was made with: one made without
  fragmentation and an automatic capacity holds only its initial number of particles
- (`COAG_CAPACITY` when break-ups pass it; set `capacity` to make room).
+ (`COAG_CAPACITY` when break-ups pass it; set the `capacity` option to make room).
 
  # Safety
  `sim` NULL or live; `frag` NULL or live.
@@ -1608,202 +1589,26 @@ int32_t coag_sim_set_time(coag_sim *sim, double t);
 int32_t coag_sim_set_mass(coag_sim *sim, double mass);
 
 /*
- The configuration of a mass-flow sim as it stands (what it was made with, with Δt
- and the mass as `coag_sim_set_dt` and `coag_sim_set_mass` left them) into a struct
- of `size` bytes (`sizeof(coag_massflow_config)`); `COAG_UNSUPPORTED` for a
- size-count sim.
-
- # Safety
- `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ The library version as a NUL-terminated static string.
  */
-int32_t coag_sim_massflow_config(const coag_sim *sim, coag_massflow_config *out, size_t size);
+const char *coag_version(void);
 
 /*
- The configuration of a size-count sim as it stands (the volume and size limit
- resolved: never 0; the volume as given at construction or by the last
- `coag_sim_set_counts` — doublings since are in `coag_sim_get_counts`) into a struct
- of `size` bytes (`sizeof(coag_counts_config)`); `COAG_UNSUPPORTED` for a mass-flow
- sim.
-
- # Safety
- `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ The name of a status code (e.g. `"COAG_OK"`), a static NUL-terminated string;
+ `"COAG_UNKNOWN"` for a value that is not a status.
  */
-int32_t coag_sim_counts_config(const coag_sim *sim, coag_counts_config *out, size_t size);
+const char *coag_status_name(int32_t status);
 
 /*
- The configuration of an event-driven sim over particle sizes as it stands (the
- mass as `coag_sim_set_mass` left it) into a struct of `size` bytes
- (`sizeof(coag_eventflow_config)`); `COAG_UNSUPPORTED` for other sims.
+ Copies the message of the last failed call on this thread into `buf` (NUL-terminated)
+ and its length without the NUL into `*out_len` (if not NULL). When `buf_len` is too
+ small the message is truncated to fit and `COAG_BUFFER_TOO_SMALL` is returned (with
+ `*out_len` the full length); `buf` may be NULL with `buf_len` 0 to query the length.
 
  # Safety
- `sim` NULL or live; `out` NULL or valid for writing `size` bytes.
+ `buf` must be NULL or point to `buf_len` writable bytes; `out_len` NULL or writable.
  */
-int32_t coag_sim_eventflow_config(const coag_sim *sim, coag_eventflow_config *out, size_t size);
-
-/*
- Makes the sim draw its random numbers from `next(user_data)` (64 random bits per
- call) instead of its own stream; `next` NULL switches back to the own stream, which
- resumes where it stopped. Randomness drawn from a callback is not part of a
- checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
- to undo the call if the stream turns out stuck. The callback must not call into
- this sim nor free it.
-
- # Safety
- `sim` NULL or live; `next` and `user_data` valid while installed.
- */
-int32_t coag_sim_set_rng_callback(coag_sim *sim, coag_rng_callback next, void *user_data);
-
-/*
- Restarts the sim's own random stream from `seed` and `stream` (the seed policy of
- `coagula_core::random::generator`, the same as the CLI's).
-
- # Safety
- `sim` NULL or live.
- */
-int32_t coag_sim_reseed(coag_sim *sim, uint64_t seed, uint64_t stream);
-
-/*
- Bytes a checkpoint of the sim needs now.
-
- # Safety
- `sim` NULL or live; `out` NULL or writable.
- */
-int32_t coag_sim_checkpoint_size(const coag_sim *sim, size_t *out);
-
-/*
- Writes the sim's full state (including its own random stream) into `buf`;
- `*written` (may be NULL) receives the bytes used. A sim restored from it with
- `coag_sim_restore` continues bit-identically.
-
- # Safety
- `sim` NULL or live; `buf` valid for `len` bytes; `written` NULL or writable.
- */
-int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_t *written);
-
-/*
- Restores a checkpoint into a sim made with the same scheme and configuration
- (`mass`, `dt`, points, randomisation and sorting; method, volume, size limit and
- clock — seed, stream and memory budget may differ) and the same kernels as the sim
- that wrote it has now. A checkpoint that is corrupted (checksum), truncated, of
- another format, of another configuration, or whose state fails the checks its
- scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
- unchanged.
-
- # Safety
- `sim` NULL or live; `buf` valid for `len` bytes.
- */
-int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
-
-/*
- A new sim that is an exact copy of `sim` — state, configuration, kernels, own random
- stream, host callbacks and limits — into `*out`: the two continue identically and
- independently (a host forking a run, or trying a step it may discard). A mass-flow
- sim in caller-owned memory is copied into memory the library owns.
-
- # Safety
- `sim` NULL or live; `out` NULL or writable.
- */
-int32_t coag_sim_clone(const coag_sim *sim, coag_sim **out);
-
-/*
- Writes the default configuration (the paper's ballistic kernels ε = 0.99, a = 0.1,
- λ = 0.4, the low-rank engine, seed 0) into `out`, a struct of `size` bytes.
-
- # Safety
- `out` must be NULL or valid for writing `size` bytes.
- */
-int32_t coag_thermal_default_config(coag_thermal_config *out, size_t size);
-
-/*
- A simulation from `counts[i − 1] = N_i` particles of size i at partial temperatures
- `temperatures[i − 1] = T_i` (finite, ≥ 0), `len` entries each, in volume `volume`
- (number densities `N_i / V`). Free with `coag_thermal_free`.
-
- # Safety
- Pointers must be NULL or valid; `counts` and `temperatures` hold `len` values.
- */
-int32_t coag_thermal_new(const coag_thermal_config *config, const uint64_t *counts, const double *temperatures, size_t len, double volume, coag_thermal **out);
-
-/*
- Frees a simulation (NULL is a no-op).
-
- # Safety
- `h` must be NULL or a live handle, not used afterwards.
- */
-void coag_thermal_free(coag_thermal *h);
-
-/*
- Advances to time `t`; `report` (may be NULL) gets the call's totals (`events`
- counts collisions, `bounces` those that bounced). On error (a capacity, a kernel
- rate that is not finite) the simulation is as before the failing event.
-
- # Safety
- `h` a live handle used by this thread alone; `report` NULL or valid.
- */
-int32_t coag_thermal_advance_to(coag_thermal *h, double t, coag_step_report *report);
-
-/*
- The time, the number of simulation particles, the volume and the largest size the
- state arrays cover (`coag_thermal_state`'s `len`); any out pointer may be NULL.
-
- # Safety
- `h` a live handle; out pointers NULL or writable.
- */
-int32_t coag_thermal_info(const coag_thermal *h, double *time, uint64_t *particles, double *volume, size_t *max_size);
-
-/*
- The moment `Σ i^m N_i / V` (`m` finite), the mean temperature `Σ N_i T_i / N` and
- the energy density `Σ N_i T_i / V`; any out pointer may be NULL.
-
- # Safety
- `h` a live handle; out pointers NULL or writable.
- */
-int32_t coag_thermal_observe(const coag_thermal *h, double m, double *moment, double *mean_temperature, double *energy);
-
-/*
- Copies the state: `counts[i − 1] = N_i` and `temperatures[i − 1] = T_i` for
- `i = 1..=len`, where `len` must be the `max_size` of `coag_thermal_info`. Either
- array may be NULL.
-
- # Safety
- `h` a live handle; each non-null array valid for `len` values.
- */
-int32_t coag_thermal_state(const coag_thermal *h, uint64_t *counts, double *temperatures, size_t len);
-
-/*
- Bytes a checkpoint of the simulation needs now.
-
- # Safety
- `h` a live handle; `out` writable.
- */
-int32_t coag_thermal_checkpoint_size(const coag_thermal *h, size_t *out);
-
-/*
- Saves the simulation (state, temperatures, clock, random stream) into `buf`;
- `written` (may be NULL) gets the bytes used.
-
- # Safety
- `h` a live handle; `buf` valid for `len` bytes; `written` NULL or writable.
- */
-int32_t coag_thermal_save(const coag_thermal *h, uint8_t *buf, size_t len, size_t *written);
-
-/*
- Restores a checkpoint of a simulation with the same configuration (kernel, its
- parameters, engine); on error the simulation is unchanged.
-
- # Safety
- `h` a live handle used by this thread alone; `buf` valid for `len` bytes.
- */
-int32_t coag_thermal_restore(coag_thermal *h, const uint8_t *buf, size_t len);
-
-/*
- The model family's closed form from `n_1(0) = n0`, `T_1(0) = t0` (c > 0, γ ≥ 0):
- the number density `N(t)` and the mean temperature at time `t ≥ 0`.
-
- # Safety
- Out pointers writable (either may be NULL).
- */
-int32_t coag_thermal_model_exact(double c, double gamma, double n0, double t0, double t, double *number, double *mean_temperature);
+int32_t coag_last_error_message(char *buf, size_t buf_len, size_t *out_len);
 
 #ifdef __cplusplus
 }  // extern "C"

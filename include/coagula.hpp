@@ -1,15 +1,22 @@
 // coagula.hpp — header-only C++17 wrapper over the C ABI of libcoagula.
 //
-// RAII handles (move-only), exceptions from status codes (coagula::Error carries the
-// code and the library's message), std::vector in and out. Same threading rules as
-// the C API: one thread at a time per object.
+// RAII handles (move-only; clone() where the C ABI copies), exceptions from status
+// codes (coagula::Error carries the code and the library's message), std::vector in
+// and out. Same threading rules as the C API: one thread at a time per object.
+//
+// One Sim runs every population scheme of the registry, chosen by name
+// (schemes() lists them with what each takes); Kernel::builtin builds core's
+// built-in kernels by name and positional parameters (builtins() lists them);
+// Options holds the settings by key (option_infos() lists the keys).
 #ifndef COAGULA_HPP
 #define COAGULA_HPP
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -27,23 +34,38 @@ class Error : public std::runtime_error {
     int code_;
 };
 
-/// Throws coagula::Error unless `status` is COAG_OK.
-inline void check(std::int32_t status) {
-    if (status == COAG_OK) return;
+/// The message of the last failed call on this thread.
+inline std::string last_error_message() {
     size_t len = 0;
-    coag_last_error_message(nullptr, 0, &len);
+    if (coag_last_error_message(nullptr, 0, &len) != COAG_OK) return std::string();
     std::string msg(len + 1, '\0');
     coag_last_error_message(&msg[0], msg.size(), nullptr);
     msg.resize(len);
-    throw Error(status, std::string(coag_status_name(status)) + ": " + msg);
+    return msg;
 }
 
+/// The name of a status code ("COAG_OK", ...).
+inline std::string status_name(std::int32_t status) { return coag_status_name(status); }
+
+/// Throws coagula::Error unless `status` is COAG_OK.
+inline void check(std::int32_t status) {
+    if (status == COAG_OK) return;
+    throw Error(status, status_name(status) + ": " + last_error_message());
+}
+
+/// The library version.
+inline std::string version() { return coag_version(); }
+
 namespace detail {
+inline std::string str(const char *p) { return p ? std::string(p) : std::string(); }
 struct KernelFree {
     void operator()(coag_kernel *k) const noexcept { coag_kernel_free(k); }
 };
 struct FragFree {
     void operator()(coag_fragmentation *f) const noexcept { coag_fragmentation_free(f); }
+};
+struct OptionsFree {
+    void operator()(coag_options *o) const noexcept { coag_options_free(o); }
 };
 struct SimFree {
     void operator()(coag_sim *s) const noexcept { coag_sim_free(s); }
@@ -51,91 +73,140 @@ struct SimFree {
 struct LangevinFree {
     void operator()(coag_langevin *h) const noexcept { coag_langevin_free(h); }
 };
-struct ThermalFree {
-    void operator()(coag_thermal *h) const noexcept { coag_thermal_free(h); }
-};
-struct DsmcFree {
-    void operator()(coag_dsmc *h) const noexcept { coag_dsmc_free(h); }
-};
+template <class T>
+bool negative(T v, std::true_type) { return v < T(0); }
+template <class T>
+bool negative(T, std::false_type) { return false; }
 }  // namespace detail
 
-/// A coagulation kernel.
-class Kernel {
-  public:
-    static Kernel constant(double k0) { return make([&](coag_kernel **o) { return coag_kernel_new_constant(k0, o); }); }
-    static Kernel additive(double min_size = 0.0) {
-        return make([&](coag_kernel **o) { return coag_kernel_new_additive(min_size, o); });
-    }
-    static Kernel multiplicative() { return make([](coag_kernel **o) { return coag_kernel_new_multiplicative(o); }); }
-    static Kernel product(double a) { return make([&](coag_kernel **o) { return coag_kernel_new_product(a, o); }); }
-    static Kernel homogeneous(double gamma) {
-        return make([&](coag_kernel **o) { return coag_kernel_new_homogeneous(gamma, o); });
-    }
-    static Kernel free_molecular(double min_size = 0.0) {
-        return make([&](coag_kernel **o) { return coag_kernel_new_free_molecular(min_size, o); });
-    }
-    static Kernel brownian() { return make([](coag_kernel **o) { return coag_kernel_new_brownian(o); }); }
-    /// A kernel from C callbacks (see coag_user_kernel); user_data must outlive every
-    /// object made from it.
-    static Kernel user(const coag_user_kernel &desc) {
-        return make([&](coag_kernel **o) { return coag_kernel_new_user(&desc, o); });
-    }
+// ---------------------------------------------------------------- core's tables
 
-    double rate(double x, double y) const {
-        double v;
-        check(coag_kernel_rate(k_.get(), x, y, &v));
-        return v;
-    }
-    const coag_kernel *get() const noexcept { return k_.get(); }
-
-  private:
-    template <class F>
-    static Kernel make(F f) {
-        coag_kernel *k = nullptr;
-        check(f(&k));
-        Kernel out;
-        out.k_.reset(k);
-        return out;
-    }
-    std::unique_ptr<coag_kernel, detail::KernelFree> k_;
+/// A registry scheme and its capabilities (coag_scheme_info_get).
+struct SchemeInfo {
+    std::size_t index = 0;
+    std::string name, paper, summary;
+    int model = 0;            ///< COAG_MODEL_*
+    std::uint32_t inits = 0;  ///< COAG_INIT_* bits
+    int sizes = 0;            ///< COAG_SAMPLES_*
+    bool fragmentation = false;
+    int memory = 0;  ///< COAG_MEMORY_*
+    int law = 0;     ///< COAG_LAW_*
+    std::uint64_t tag = 0;
+    std::vector<std::string> options;      ///< the keys that apply besides seed and stream
+    std::vector<std::string> observables;  ///< Sim::observable names
+    bool takes(std::uint32_t init) const noexcept { return (inits & init) != 0; }
 };
 
-/// A fragmentation kernel.
-class Fragmentation {
-  public:
-    static Fragmentation binary_uniform(double lambda) {
-        coag_fragmentation *f = nullptr;
-        check(coag_fragmentation_new_binary_uniform(lambda, &f));
-        Fragmentation out;
-        out.f_.reset(f);
-        return out;
-    }
-    static Fragmentation user(const coag_user_fragmentation &desc) {
-        coag_fragmentation *f = nullptr;
-        check(coag_fragmentation_new_user(&desc, &f));
-        Fragmentation out;
-        out.f_.reset(f);
-        return out;
-    }
-    const coag_fragmentation *get() const noexcept { return f_.get(); }
-
-  private:
-    std::unique_ptr<coag_fragmentation, detail::FragFree> f_;
-};
-
-/// The library version.
-inline std::string version() { return coag_version(); }
-/// The name of a status code.
-inline std::string status_name(std::int32_t status) { return coag_status_name(status); }
-/// The message of the last failed call on this thread.
-inline std::string last_error_message() {
-    size_t len = 0;
-    coag_last_error_message(nullptr, 0, &len);
-    std::string msg(len + 1, '\0');
-    coag_last_error_message(&msg[0], msg.size(), nullptr);
-    msg.resize(len);
-    return msg;
+inline std::size_t scheme_count() {
+    size_t n = 0;
+    check(coag_scheme_count(&n));
+    return n;
 }
+/// The index of the scheme named `name` (an unknown name throws COAG_INVALID_ARGUMENT).
+inline std::size_t scheme_find(const std::string &name) {
+    size_t i = 0;
+    check(coag_scheme_find(name.c_str(), &i));
+    return i;
+}
+inline SchemeInfo scheme_info(std::size_t index) {
+    coag_scheme_info c{};
+    check(coag_scheme_info_get(index, &c, sizeof c));
+    SchemeInfo s;
+    s.index = index;
+    s.name = detail::str(c.name);
+    s.paper = detail::str(c.paper);
+    s.summary = detail::str(c.summary);
+    s.model = c.model;
+    s.inits = c.inits;
+    s.sizes = c.sizes;
+    s.fragmentation = c.fragmentation != 0;
+    s.memory = c.memory;
+    s.law = c.law;
+    s.tag = c.tag;
+    for (std::size_t i = 0; i < c.option_count; ++i) {
+        const char *p = nullptr;
+        check(coag_scheme_option(index, i, &p));
+        s.options.push_back(detail::str(p));
+    }
+    for (std::size_t i = 0; i < c.observable_count; ++i) {
+        const char *p = nullptr;
+        check(coag_scheme_observable(index, i, &p));
+        s.observables.push_back(detail::str(p));
+    }
+    return s;
+}
+inline SchemeInfo scheme_info(const std::string &name) { return scheme_info(scheme_find(name)); }
+/// Every scheme of the registry.
+inline std::vector<SchemeInfo> schemes() {
+    std::vector<SchemeInfo> v;
+    for (std::size_t i = 0, n = scheme_count(); i < n; ++i) v.push_back(scheme_info(i));
+    return v;
+}
+
+/// An option key (coag_option_info_get).
+struct OptionInfo {
+    std::string name;
+    int kind = 0;  ///< COAG_OPTION_*
+    bool must_match = false;
+    std::string default_value, doc;
+};
+inline std::size_t option_count() {
+    size_t n = 0;
+    check(coag_option_count(&n));
+    return n;
+}
+inline OptionInfo option_info(std::size_t index) {
+    coag_option_info c{};
+    check(coag_option_info_get(index, &c, sizeof c));
+    return OptionInfo{detail::str(c.name), c.kind, c.must_match != 0, detail::str(c.default_value),
+                      detail::str(c.doc)};
+}
+/// Every option key.
+inline std::vector<OptionInfo> option_infos() {
+    std::vector<OptionInfo> v;
+    for (std::size_t i = 0, n = option_count(); i < n; ++i) v.push_back(option_info(i));
+    return v;
+}
+
+/// A parameter of a built-in kernel (coag_builtin_param).
+struct ParamInfo {
+    std::string name;
+    bool has_default = false;
+    double default_value = 0.0;  ///< NaN when required
+    std::string unit, doc;
+};
+/// A built-in kernel (coag_builtin_info_get) with its parameters in Kernel::builtin's order.
+struct BuiltinInfo {
+    std::string name;
+    int family = 0;  ///< COAG_FAMILY_*
+    std::string formula, source, units;
+    std::vector<ParamInfo> params;
+};
+inline std::size_t builtin_count() {
+    size_t n = 0;
+    check(coag_builtin_count(&n));
+    return n;
+}
+inline BuiltinInfo builtin_info(std::size_t index) {
+    coag_builtin_info c{};
+    check(coag_builtin_info_get(index, &c, sizeof c));
+    BuiltinInfo b{detail::str(c.name), c.family, detail::str(c.formula), detail::str(c.source),
+                  detail::str(c.units), {}};
+    for (std::size_t j = 0; j < c.param_count; ++j) {
+        coag_param_info p{};
+        check(coag_builtin_param(index, j, &p, sizeof p));
+        b.params.push_back(
+            ParamInfo{detail::str(p.name), p.has_default != 0, p.default_value, detail::str(p.unit), detail::str(p.doc)});
+    }
+    return b;
+}
+/// Every built-in kernel.
+inline std::vector<BuiltinInfo> builtins() {
+    std::vector<BuiltinInfo> v;
+    for (std::size_t i = 0, n = builtin_count(); i < n; ++i) v.push_back(builtin_info(i));
+    return v;
+}
+
 /// Exact moment M_m(t) of a COAG_EXACT_* solution.
 inline double exact_moment(std::int32_t solution, std::uint32_t m, double t) {
     double v;
@@ -148,12 +219,7 @@ inline double exact_density(std::int32_t solution, std::uint64_t k, double t) {
     check(coag_exact_density(solution, k, t, &v));
     return v;
 }
-/// Bytes of workspace a mass-flow sim of n particles needs (Sim::massflow_in).
-inline std::size_t massflow_workspace_size(std::size_t n) {
-    size_t b;
-    check(coag_massflow_workspace_size(n, &b));
-    return b;
-}
+
 /// A zeroed step report with its struct_size set.
 inline coag_step_report step_report() {
     coag_step_report r;
@@ -161,80 +227,223 @@ inline coag_step_report step_report() {
     return r;
 }
 
-inline coag_massflow_config massflow_default_config() {
-    coag_massflow_config c;
-    check(coag_massflow_default_config(&c, sizeof c));
-    return c;
-}
+// ---------------------------------------------------------------- handles
 
-inline coag_counts_config counts_default_config() {
-    coag_counts_config c;
-    check(coag_counts_default_config(&c, sizeof c));
-    return c;
-}
+/// A kernel: a coagulation kernel, a temperature model or a gas (core's built-in
+/// table), or a coagulation kernel from C callbacks.
+class Kernel {
+  public:
+    /// Built-in kernel `name` with its parameters in the table's order (those past
+    /// params.size() take their defaults; builtin_info lists them).
+    static Kernel builtin(const std::string &name, const std::vector<double> &params = {}) {
+        coag_kernel *k = nullptr;
+        check(coag_kernel_new(name.c_str(), params.empty() ? nullptr : params.data(), params.size(), &k));
+        return Kernel(k);
+    }
+    // Shorthands for builtin(name, params): parameters left out take the table's
+    // defaults (the library's, not restated here).
+    /// K = b.
+    static Kernel constant() { return builtin("constant"); }
+    static Kernel constant(double coefficient) { return builtin("constant", {coefficient}); }
+    /// K = b (x + y), its bounds holding for sizes >= min_size.
+    static Kernel additive() { return builtin("additive"); }
+    static Kernel additive(double coefficient) { return builtin("additive", {coefficient}); }
+    static Kernel additive(double coefficient, double min_size) { return builtin("additive", {coefficient, min_size}); }
+    /// K = b x y.
+    static Kernel multiplicative() { return builtin("multiplicative"); }
+    static Kernel multiplicative(double coefficient) { return builtin("multiplicative", {coefficient}); }
+    /// K = b (x y)^a.
+    static Kernel product(double a) { return builtin("product", {a}); }
+    static Kernel product(double a, double coefficient) { return builtin("product", {a, coefficient}); }
+    /// A kernel from C callbacks (see coag_user_kernel); its callbacks and user_data
+    /// must outlive every object made from it.
+    static Kernel user(const coag_user_kernel &desc) {
+        coag_kernel *k = nullptr;
+        check(coag_kernel_new_user(&desc, &k));
+        return Kernel(k);
+    }
 
-/// Bytes of workspace an event-driven sim of n particles needs (Sim::eventflow_in).
-inline std::size_t eventflow_workspace_size(const coag_eventflow_config &c, const Fragmentation *f, std::size_t n) {
-    size_t b;
-    check(coag_eventflow_workspace_size(&c, f ? f->get() : nullptr, n, &b));
-    return b;
-}
+    /// K(x, y) of a coagulation kernel (COAG_UNSUPPORTED for a temperature model or a gas).
+    double rate(double x, double y) const {
+        double v;
+        check(coag_kernel_rate(k_.get(), x, y, &v));
+        return v;
+    }
+    const coag_kernel *get() const noexcept { return k_.get(); }
 
-inline coag_eventflow_config eventflow_default_config() {
-    coag_eventflow_config c;
-    check(coag_eventflow_default_config(&c, sizeof c));
-    return c;
-}
+  private:
+    explicit Kernel(coag_kernel *k) noexcept : k_(k) {}
+    std::unique_ptr<coag_kernel, detail::KernelFree> k_;
+};
 
-/// A simulation: any scheme, stepped with advance_to.
+/// A fragmentation kernel.
+class Fragmentation {
+  public:
+    /// Binary break-up into two uniform pieces at rate lambda per particle.
+    static Fragmentation binary_uniform(double lambda) {
+        coag_fragmentation *f = nullptr;
+        check(coag_fragmentation_new_binary_uniform(lambda, &f));
+        return Fragmentation(f);
+    }
+    /// From C callbacks (see coag_user_fragmentation).
+    static Fragmentation user(const coag_user_fragmentation &desc) {
+        coag_fragmentation *f = nullptr;
+        check(coag_fragmentation_new_user(&desc, &f));
+        return Fragmentation(f);
+    }
+    const coag_fragmentation *get() const noexcept { return f_.get(); }
+
+  private:
+    explicit Fragmentation(coag_fragmentation *f) noexcept : f_(f) {}
+    std::unique_ptr<coag_fragmentation, detail::FragFree> f_;
+};
+
+/// The settings a sim is built with, by key (option_infos() lists the keys; a key set
+/// here that does not apply to the scheme makes the constructor throw COAG_UNSUPPORTED).
+class Options {
+  public:
+    /// Every key at its default.
+    Options() {
+        coag_options *o = nullptr;
+        check(coag_options_new(&o));
+        o_.reset(o);
+    }
+    Options clone() const {
+        coag_options *o = nullptr;
+        check(coag_options_clone(o_.get(), &o));
+        return Options(o);
+    }
+    /// A real (COAG_OPTION_REAL; a whole number also sets a count).
+    Options &set(const std::string &key, double value) {
+        check(coag_options_set_real(o_.get(), key.c_str(), value));
+        return *this;
+    }
+    /// An integer (COAG_OPTION_COUNT; a negative one is refused by the library).
+    template <class T, typename std::enable_if<std::is_integral<T>::value && !std::is_same<T, bool>::value,
+                                               int>::type = 0>
+    Options &set(const std::string &key, T value) {
+        if (detail::negative(value, std::is_signed<T>()))
+            check(coag_options_set_real(o_.get(), key.c_str(), static_cast<double>(value)));
+        else
+            check(coag_options_set_count(o_.get(), key.c_str(), static_cast<std::uint64_t>(value)));
+        return *this;
+    }
+    /// On or off (COAG_OPTION_FLAG).
+    Options &set(const std::string &key, bool value) {
+        check(coag_options_set_flag(o_.get(), key.c_str(), value ? 1 : 0));
+        return *this;
+    }
+    /// A name (COAG_OPTION_NAME).
+    Options &set(const std::string &key, const std::string &value) {
+        check(coag_options_set_name(o_.get(), key.c_str(), value.c_str()));
+        return *this;
+    }
+    Options &set(const std::string &key, const char *value) { return set(key, std::string(value ? value : "")); }
+    const coag_options *get() const noexcept { return o_.get(); }
+
+  private:
+    explicit Options(coag_options *o) noexcept : o_(o) {}
+    std::unique_ptr<coag_options, detail::OptionsFree> o_;
+};
+
+/// The occupied sizes of a size-count sim and their counts (Sim::pairs).
+struct Pairs {
+    std::vector<std::uint64_t> sizes, counts;
+    double volume = 0.0;
+};
+/// A per-size quantity for every occupied size (Sim::size_values).
+struct SizeValues {
+    std::vector<std::uint64_t> sizes;
+    std::vector<double> values;
+};
+/// The particles of a gas: sizes and velocities, 3 per particle (Sim::particles).
+struct Particles {
+    std::vector<std::uint64_t> sizes;
+    std::vector<double> velocities;
+};
+
+/// A simulation of any registry scheme, stepped with advance_to. The optional
+/// Options and Fragmentation (nullptr: defaults, none) may be freed after construction.
 class Sim {
   public:
-    /// The time-driven mass-flow scheme over `sizes` (a power of two of them).
-    static Sim massflow(const coag_massflow_config &c, const Kernel &k, const Fragmentation *f,
-                        const std::vector<double> &sizes) {
+    /// counts[i] particles of size i + 1 in `volume` (COAG_INIT_COUNTS).
+    static Sim from_counts(const std::string &scheme, const Kernel &k, const std::vector<std::uint64_t> &counts,
+                           double volume, const Options *o = nullptr, const Fragmentation *f = nullptr) {
         coag_sim *s = nullptr;
-        check(coag_massflow_new(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), &s));
+        check(coag_sim_new_counts(scheme.c_str(), k.get(), frag(f), opts(o), counts.data(), counts.size(), volume, &s));
         return Sim(s);
     }
-    /// The mass-flow scheme in caller-owned memory (`bytes` ≥ massflow_workspace_size,
-    /// aligned for double), which must outlive the Sim.
-    static Sim massflow_in(const coag_massflow_config &c, const Kernel &k, const Fragmentation *f,
-                           const std::vector<double> &sizes, void *workspace, std::size_t bytes) {
+    /// Particle sizes carrying the mass `mass` (COAG_INIT_SIZES; SchemeInfo::sizes
+    /// says whether they sample the mass or the number distribution).
+    static Sim from_sizes(const std::string &scheme, const Kernel &k, const std::vector<double> &sizes, double mass,
+                          const Options *o = nullptr, const Fragmentation *f = nullptr) {
         coag_sim *s = nullptr;
-        check(coag_massflow_new_in(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), workspace,
-                                   bytes, &s));
+        check(coag_sim_new_sizes(scheme.c_str(), k.get(), frag(f), opts(o), sizes.data(), sizes.size(), mass, &s));
         return Sim(s);
     }
-    /// An event-driven scheme over the particle sizes `sizes` (c.method: Eibeck &
-    /// Wagner's COAG_EVENTFLOW_MFA or COAG_EVENTFLOW_DSA, or Osinsky's low-rank
-    /// COAG_EVENTFLOW_LOWRANK); `f` may be null.
-    static Sim eventflow(const coag_eventflow_config &c, const Kernel &k, const Fragmentation *f,
-                         const std::vector<double> &sizes) {
+    /// Bytes of caller workspace from_sizes_in needs for n sizes (COAG_MEMORY_FIXED
+    /// schemes; COAG_UNSUPPORTED for the others).
+    static std::size_t workspace_size(const std::string &scheme, std::size_t n, const Options *o = nullptr,
+                                      const Fragmentation *f = nullptr) {
+        size_t b = 0;
+        check(coag_sim_workspace_size(scheme.c_str(), frag(f), opts(o), n, &b));
+        return b;
+    }
+    /// from_sizes in caller-owned memory (bytes >= workspace_size, aligned for double),
+    /// which must outlive the Sim and is zeroed first.
+    static Sim from_sizes_in(const std::string &scheme, const Kernel &k, const std::vector<double> &sizes,
+                             double mass, void *workspace, std::size_t bytes, const Options *o = nullptr,
+                             const Fragmentation *f = nullptr) {
         coag_sim *s = nullptr;
-        check(coag_eventflow_new(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), &s));
+        check(coag_sim_new_sizes_in(scheme.c_str(), k.get(), frag(f), opts(o), sizes.data(), sizes.size(), mass,
+                                    workspace, bytes, &s));
         return Sim(s);
     }
-    /// The event-driven scheme in caller-owned memory (`bytes` ≥ eventflow_workspace_size,
-    /// aligned for double), which must outlive the Sim.
-    static Sim eventflow_in(const coag_eventflow_config &c, const Kernel &k, const Fragmentation *f,
-                            const std::vector<double> &sizes, void *workspace, std::size_t bytes) {
+    /// counts[i] particles of size i + 1 at partial temperature temperatures[i]
+    /// (COAG_INIT_TEMPERATURES, under a temperature model).
+    static Sim from_temperatures(const std::string &scheme, const Kernel &k, const std::vector<std::uint64_t> &counts,
+                                 const std::vector<double> &temperatures, double volume, const Options *o = nullptr) {
+        if (counts.size() != temperatures.size())
+            throw Error(COAG_BUFFER_TOO_SMALL, "from_temperatures: counts and temperatures differ in length");
         coag_sim *s = nullptr;
-        check(coag_eventflow_new_in(&c, k.get(), f ? f->get() : nullptr, sizes.data(), sizes.size(), workspace,
-                                    bytes, &s));
+        check(coag_sim_new_temperatures(scheme.c_str(), k.get(), opts(o), counts.data(), temperatures.data(),
+                                        counts.size(), volume, &s));
         return Sim(s);
     }
-    /// A size-count scheme: counts[i] particles of size i + 1.
-    static Sim counts(const coag_counts_config &c, const Kernel &k, const std::vector<std::uint64_t> &counts) {
+    /// Particle p of size sizes[p] with velocity velocities[3p .. 3p + 3]
+    /// (COAG_INIT_VELOCITIES, under a gas).
+    static Sim from_velocities(const std::string &scheme, const Kernel &k, const std::vector<std::uint64_t> &sizes,
+                               const std::vector<double> &velocities, double volume, const Options *o = nullptr) {
+        if (velocities.size() != 3 * sizes.size())
+            throw Error(COAG_BUFFER_TOO_SMALL, "from_velocities: velocities must hold 3 values per particle");
         coag_sim *s = nullptr;
-        check(coag_counts_new(&c, k.get(), counts.data(), counts.size(), &s));
+        check(coag_sim_new_velocities(scheme.c_str(), k.get(), opts(o), sizes.data(), velocities.data(), sizes.size(),
+                                      volume, &s));
         return Sim(s);
     }
-    /// An exact, independent copy (coag_sim_clone).
+    /// counts[i] particles of size i + 1 with Maxwellian velocities at temperatures[i],
+    /// drawn from the options' seed and stream (COAG_INIT_VELOCITIES).
+    static Sim from_maxwellian(const std::string &scheme, const Kernel &k, const std::vector<std::uint64_t> &counts,
+                               const std::vector<double> &temperatures, double volume, const Options *o = nullptr) {
+        if (counts.size() != temperatures.size())
+            throw Error(COAG_BUFFER_TOO_SMALL, "from_maxwellian: counts and temperatures differ in length");
+        coag_sim *s = nullptr;
+        check(coag_sim_new_maxwellian(scheme.c_str(), k.get(), opts(o), counts.data(), temperatures.data(),
+                                      counts.size(), volume, &s));
+        return Sim(s);
+    }
+    /// An exact, independent copy (in memory the library owns).
     Sim clone() const {
         coag_sim *s = nullptr;
         check(coag_sim_clone(s_.get(), &s));
         return Sim(s);
     }
+
+    /// The registry name of the sim's scheme.
+    std::string scheme() const { return name_of(coag_sim_scheme); }
+    /// The engine of the bucketed low-rank scheme ("slots" or "counted"; throws
+    /// COAG_UNSUPPORTED for any other scheme).
+    std::string engine() const { return name_of(coag_sim_engine); }
 
     /// Runs to t; a call stopped by its work limit or cancellation throws coagula::Error
     /// with code COAG_INTERRUPTED (see advance_within to continue instead).
@@ -243,15 +452,18 @@ class Sim {
         check(coag_sim_advance_to(s_.get(), t, &r));
         return r;
     }
-    /// Runs towards t; returns false when the work limit or the cancellation callback
-    /// stopped the call (the sim is consistent at report->time; call again), true when t
-    /// was reached. Errors throw.
+    /// Runs towards t; false when the work limit or the cancellation callback stopped
+    /// the call (the sim is consistent at report->time; call again), true when t was
+    /// reached. Errors throw.
     bool advance_within(double t, coag_step_report *report = nullptr) {
         coag_step_report r = step_report();
         std::int32_t st = coag_sim_advance_to(s_.get(), t, &r);
-        if (report) *report = r;
-        if (st == COAG_INTERRUPTED) return false;
+        if (st == COAG_INTERRUPTED) {
+            if (report) *report = r;
+            return false;
+        }
         check(st);
+        if (report) *report = r;
         return true;
     }
     /// Totals of every advance so far.
@@ -261,126 +473,147 @@ class Sim {
         return r;
     }
     void set_work_limit(std::uint64_t units) { check(coag_sim_set_work_limit(s_.get(), units)); }
+    /// cb (nullptr removes it) must not throw; it and user_data must stay valid while installed.
     void set_cancel_callback(coag_cancel_callback cb, void *user_data) {
         check(coag_sim_set_cancel_callback(s_.get(), cb, user_data));
     }
+    /// Draws from cb (nullptr: the sim's own stream again); must not throw.
     void set_rng_callback(coag_rng_callback cb, void *user_data) {
         check(coag_sim_set_rng_callback(s_.get(), cb, user_data));
     }
     void reseed(std::uint64_t seed, std::uint64_t stream) { check(coag_sim_reseed(s_.get(), seed, stream)); }
-    void set_dt(double dt) { check(coag_sim_set_dt(s_.get(), dt)); }
-    void set_time(double t) { check(coag_sim_set_time(s_.get(), t)); }
-    void set_mass(double mass) { check(coag_sim_set_mass(s_.get(), mass)); }
-    void set_fragmentation(const Fragmentation *f) {
-        check(coag_sim_set_fragmentation(s_.get(), f ? f->get() : nullptr));
-    }
-    coag_massflow_config massflow_config() const {
-        coag_massflow_config c;
-        check(coag_sim_massflow_config(s_.get(), &c, sizeof c));
-        return c;
-    }
-    coag_eventflow_config eventflow_config() const {
-        coag_eventflow_config c;
-        check(coag_sim_eventflow_config(s_.get(), &c, sizeof c));
-        return c;
-    }
-    coag_counts_config counts_config() const {
-        coag_counts_config c;
-        check(coag_sim_counts_config(s_.get(), &c, sizeof c));
-        return c;
-    }
-    /// Occupied sizes (size-count sims) or particles (mass flow).
-    std::size_t occupied() const {
-        size_t n;
-        check(coag_sim_occupied(s_.get(), &n));
-        return n;
-    }
-    /// The occupied sizes and their counts, ascending (no dense vector).
-    void pairs(std::vector<std::uint64_t> &sizes, std::vector<std::uint64_t> &counts,
-               double *volume = nullptr) const {
-        std::size_t n = occupied();
-        sizes.resize(n);
-        counts.resize(n);
-        size_t written = 0;
-        check(coag_sim_get_pairs(s_.get(), sizes.data(), counts.data(), n, volume, &written));
-        sizes.resize(written);
-        counts.resize(written);
-    }
-    void set_pairs(const std::vector<std::uint64_t> &sizes, const std::vector<std::uint64_t> &counts,
-                   double volume) {
-        if (sizes.size() != counts.size()) throw Error(COAG_INVALID_ARGUMENT, "pairs: sizes and counts differ in length");
-        check(coag_sim_set_pairs(s_.get(), sizes.data(), counts.data(), sizes.size(), volume));
-    }
-    double time() const { return get(coag_sim_time); }
-    /// The `COAG_METHOD_*` of a size-count sim (throws for a mass-flow sim).
-    int method() const {
-        std::int32_t m = -1;
-        check(coag_sim_method(s_.get(), &m));
-        return m;
-    }
-    /// The `COAG_BUCKET_SLOTS` or `_COUNTED` engine of a bucketed low-rank sim (throws
-    /// for any other method).
-    int bucket_mode() const {
-        std::int32_t m = -1;
-        check(coag_sim_bucket_mode(s_.get(), &m));
-        return m;
-    }
-    double moment(double m) const {
-        double v;
-        check(coag_sim_moment(s_.get(), m, &v));
-        return v;
-    }
-    double concentration(double a, double b) const {
-        double v;
-        check(coag_sim_concentration(s_.get(), a, b, &v));
-        return v;
-    }
-    double gel_mass() const { return get(coag_sim_gel_mass); }
-    std::uint64_t particle_count() const {
-        std::uint64_t n;
-        check(coag_sim_particle_count(s_.get(), &n));
-        return n;
-    }
-    std::vector<double> sizes() const {
-        std::vector<double> v(state_len());
-        check(coag_sim_get_sizes(s_.get(), v.data(), v.size()));
-        return v;
-    }
-    void set_sizes(const std::vector<double> &v) { check(coag_sim_set_sizes(s_.get(), v.data(), v.size())); }
-    std::vector<std::uint64_t> counts(double *volume = nullptr) const {
-        std::vector<std::uint64_t> v(state_len());
-        check(coag_sim_get_counts(s_.get(), v.data(), v.size(), volume));
-        return v;
-    }
-    void set_counts(const std::vector<std::uint64_t> &v, double volume) {
-        check(coag_sim_set_counts(s_.get(), v.data(), v.size(), volume));
-    }
-    void set_kernel(const Kernel &k) { check(coag_sim_set_kernel(s_.get(), k.get())); }
+
+    /// The full state, own random stream included.
     std::vector<std::uint8_t> checkpoint() const {
-        size_t n;
+        size_t n = 0;
         check(coag_sim_checkpoint_size(s_.get(), &n));
         std::vector<std::uint8_t> buf(n);
         check(coag_sim_checkpoint(s_.get(), buf.data(), buf.size(), &n));
         buf.resize(n);
         return buf;
     }
+    /// Restores a checkpoint of a sim of the same scheme, settings and physics.
     void restore(const std::vector<std::uint8_t> &buf) { check(coag_sim_restore(s_.get(), buf.data(), buf.size())); }
-    coag_sim *get() noexcept { return s_.get(); }
+
+    double time() const { return real(coag_sim_time); }
+    double moment(double m) const {
+        double v;
+        check(coag_sim_moment(s_.get(), m, &v));
+        return v;
+    }
+    /// Number concentration of sizes in [a, b].
+    double concentration(double a, double b) const {
+        double v;
+        check(coag_sim_concentration(s_.get(), a, b, &v));
+        return v;
+    }
+    double gel_mass() const { return real(coag_sim_gel_mass); }
+    /// A named observable of the scheme (SchemeInfo::observables).
+    double observable(const std::string &name) const {
+        double v;
+        check(coag_sim_observable(s_.get(), name.c_str(), &v));
+        return v;
+    }
+    std::uint64_t particle_count() const {
+        std::uint64_t n;
+        check(coag_sim_particle_count(s_.get(), &n));
+        return n;
+    }
+    /// Particles (sims over sizes) or the largest occupied size (size-count sims).
     std::size_t state_len() const {
         size_t n;
         check(coag_sim_state_len(s_.get(), &n));
         return n;
     }
+    /// Occupied sizes (size-count sims) or particles (sims over sizes).
+    std::size_t occupied() const {
+        size_t n;
+        check(coag_sim_occupied(s_.get(), &n));
+        return n;
+    }
+    /// The occupied sizes and their counts, ascending (no dense vector), and the volume.
+    Pairs pairs() const {
+        Pairs p;
+        std::size_t n = occupied();
+        p.sizes.resize(n);
+        p.counts.resize(n);
+        size_t written = 0;
+        check(coag_sim_get_pairs(s_.get(), p.sizes.data(), p.counts.data(), n, &p.volume, &written));
+        p.sizes.resize(written);
+        p.counts.resize(written);
+        return p;
+    }
+    /// The particle sizes of a sim over sizes.
+    std::vector<double> sizes() const {
+        std::vector<double> v(state_len());
+        check(coag_sim_get_sizes(s_.get(), v.data(), v.size()));
+        return v;
+    }
+    /// The dense counts (v[i]: size i + 1) of a size-count sim; its volume to *volume.
+    std::vector<std::uint64_t> counts(double *volume = nullptr) const {
+        std::vector<std::uint64_t> v(state_len());
+        check(coag_sim_get_counts(s_.get(), v.data(), v.size(), volume));
+        return v;
+    }
+    /// A per-size quantity by name ("temperature") for every occupied size.
+    SizeValues size_values(const std::string &name) const {
+        SizeValues r;
+        std::size_t n = occupied();
+        r.sizes.resize(n);
+        r.values.resize(n);
+        size_t written = 0;
+        check(coag_sim_size_values(s_.get(), name.c_str(), r.sizes.data(), r.values.data(), n, &written));
+        r.sizes.resize(written);
+        r.values.resize(written);
+        return r;
+    }
+    /// The particles of a gas.
+    Particles particles() const {
+        Particles p;
+        std::uint64_t n = particle_count();
+        p.sizes.resize(static_cast<std::size_t>(n));
+        p.velocities.resize(3 * p.sizes.size());
+        check(coag_sim_velocities(s_.get(), p.sizes.data(), p.velocities.data(), p.sizes.size()));
+        return p;
+    }
+
+    void set_pairs(const Pairs &p) {
+        if (p.sizes.size() != p.counts.size())
+            throw Error(COAG_BUFFER_TOO_SMALL, "set_pairs: sizes and counts differ in length");
+        check(coag_sim_set_pairs(s_.get(), p.sizes.data(), p.counts.data(), p.sizes.size(), p.volume));
+    }
+    void set_sizes(const std::vector<double> &v) { check(coag_sim_set_sizes(s_.get(), v.data(), v.size())); }
+    void set_counts(const std::vector<std::uint64_t> &v, double volume) {
+        check(coag_sim_set_counts(s_.get(), v.data(), v.size(), volume));
+    }
+    void set_kernel(const Kernel &k) { check(coag_sim_set_kernel(s_.get(), k.get())); }
+    /// nullptr: no fragmentation.
+    void set_fragmentation(const Fragmentation *f) { check(coag_sim_set_fragmentation(s_.get(), frag(f))); }
+    void set_dt(double dt) { check(coag_sim_set_dt(s_.get(), dt)); }
+    void set_time(double t) { check(coag_sim_set_time(s_.get(), t)); }
+    void set_mass(double mass) { check(coag_sim_set_mass(s_.get(), mass)); }
+
+    coag_sim *get() noexcept { return s_.get(); }
+    const coag_sim *get() const noexcept { return s_.get(); }
 
   private:
-    explicit Sim(coag_sim *s) : s_(s) {}
-    double get(std::int32_t (*f)(const coag_sim *, double *)) const {
+    explicit Sim(coag_sim *s) noexcept : s_(s) {}
+    static const coag_fragmentation *frag(const Fragmentation *f) noexcept { return f ? f->get() : nullptr; }
+    static const coag_options *opts(const Options *o) noexcept { return o ? o->get() : nullptr; }
+    double real(std::int32_t (*f)(const coag_sim *, double *)) const {
         double v;
         check(f(s_.get(), &v));
         return v;
     }
+    std::string name_of(std::int32_t (*f)(const coag_sim *, const char **)) const {
+        const char *p = nullptr;
+        check(f(s_.get(), &p));
+        return detail::str(p);
+    }
     std::unique_ptr<coag_sim, detail::SimFree> s_;
 };
+
+// ---------------------------------------------------------------- Langevin
 
 inline coag_langevin_config langevin_default_config() {
     coag_langevin_config c;
@@ -408,6 +641,7 @@ class Langevin {
     /// generator (seed, first_id + i).
     static Langevin make(const coag_langevin_config &c, std::uint64_t n, const std::vector<double> &x0,
                          const std::vector<double> &u0, std::uint64_t seed, std::uint64_t first_id = 0) {
+        check_start(c, x0, u0);
         coag_langevin *h = nullptr;
         check(coag_langevin_new(&c, n, x0.data(), u0.data(), seed, first_id, &h));
         return Langevin(h);
@@ -417,14 +651,35 @@ class Langevin {
     static Langevin make_in(const coag_langevin_config &c, std::uint64_t n, const std::vector<double> &x0,
                             const std::vector<double> &u0, std::uint64_t seed, std::uint64_t first_id,
                             void *workspace, std::size_t bytes) {
+        check_start(c, x0, u0);
         coag_langevin *h = nullptr;
         check(coag_langevin_new_in(&c, n, x0.data(), u0.data(), seed, first_id, workspace, bytes, &h));
         return Langevin(h);
     }
+    /// An exact, independent copy (in memory the library owns).
+    Langevin clone() const {
+        coag_langevin *h = nullptr;
+        check(coag_langevin_clone(h_.get(), &h));
+        return Langevin(h);
+    }
+    /// Steps to t; a stopped call throws COAG_INTERRUPTED (see advance_within).
     coag_step_report advance_to(double t) {
         coag_step_report r = step_report();
         check(coag_langevin_advance_to(h_.get(), t, &r));
         return r;
+    }
+    /// Steps towards t; false when the work limit or the cancellation callback stopped it.
+    bool advance_within(double t, coag_step_report *report = nullptr) {
+        coag_step_report r = step_report();
+        std::int32_t st = coag_langevin_advance_to(h_.get(), t, &r);
+        if (st != COAG_INTERRUPTED) check(st);
+        if (report) *report = r;
+        return st == COAG_OK;
+    }
+    void set_work_limit(std::uint64_t units) { check(coag_langevin_set_work_limit(h_.get(), units)); }
+    /// cb (nullptr removes it) must not throw.
+    void set_cancel_callback(coag_cancel_callback cb, void *user_data) {
+        check(coag_langevin_set_cancel_callback(h_.get(), cb, user_data));
     }
     double time() const {
         double t;
@@ -432,7 +687,7 @@ class Langevin {
         return t;
     }
     std::size_t dim() const {
-        std::size_t d;
+        size_t d;
         check(coag_langevin_info(h_.get(), nullptr, &d, nullptr));
         return d;
     }
@@ -443,37 +698,37 @@ class Langevin {
     }
     /// Positions (n·dim, trajectory-major).
     std::vector<double> positions() const {
-        std::vector<double> x(size() * dim());
-        check(coag_langevin_state(h_.get(), x.data(), nullptr, nullptr, nullptr, size()));
+        std::vector<double> x(len() * dim());
+        check(coag_langevin_state(h_.get(), x.data(), nullptr, nullptr, nullptr, len()));
         return x;
     }
     /// Velocities (n·dim, trajectory-major).
     std::vector<double> velocities() const {
-        std::vector<double> u(size() * dim());
-        check(coag_langevin_state(h_.get(), nullptr, u.data(), nullptr, nullptr, size()));
+        std::vector<double> u(len() * dim());
+        check(coag_langevin_state(h_.get(), nullptr, u.data(), nullptr, nullptr, len()));
         return u;
     }
     /// Wall hits of each trajectory.
     std::vector<std::uint64_t> hits() const {
-        std::vector<std::uint64_t> k(size());
-        check(coag_langevin_state(h_.get(), nullptr, nullptr, k.data(), nullptr, size()));
+        std::vector<std::uint64_t> k(len());
+        check(coag_langevin_state(h_.get(), nullptr, nullptr, k.data(), nullptr, k.size()));
         return k;
     }
     /// Time of each trajectory's first hit (+inf when none).
     std::vector<double> first_hits() const {
-        std::vector<double> t(size());
-        check(coag_langevin_state(h_.get(), nullptr, nullptr, nullptr, t.data(), size()));
+        std::vector<double> t(len());
+        check(coag_langevin_state(h_.get(), nullptr, nullptr, nullptr, t.data(), t.size()));
         return t;
     }
     /// Mean and SE of f(X, U) over the trajectories (f null: hits per trajectory);
-    /// count = absorbed trajectories.
+    /// count = absorbed trajectories. f must not throw.
     Estimate mean(coag_observable_fn f = nullptr, void *user_data = nullptr) const {
         Estimate e{};
         check(coag_langevin_mean(h_.get(), f, user_data, &e.mean, &e.std_error, &e.count));
         return e;
     }
     std::vector<std::uint8_t> checkpoint() const {
-        std::size_t n = 0;
+        size_t n = 0;
         check(coag_langevin_checkpoint_size(h_.get(), &n));
         std::vector<std::uint8_t> buf(n);
         check(coag_langevin_save(h_.get(), buf.data(), buf.size(), &n));
@@ -484,12 +739,12 @@ class Langevin {
     coag_langevin *get() const noexcept { return h_.get(); }
 
   private:
-    explicit Langevin(coag_langevin *h) : h_(h) {}
-    static coag_step_report step_report() {
-        coag_step_report r;
-        check(coag_step_report_init(&r, sizeof r));
-        return r;
+    explicit Langevin(coag_langevin *h) noexcept : h_(h) {}
+    static void check_start(const coag_langevin_config &c, const std::vector<double> &x0, const std::vector<double> &u0) {
+        if (x0.size() != c.dim || u0.size() != c.dim)
+            throw Error(COAG_BUFFER_TOO_SMALL, "Langevin: x0 and u0 must hold config.dim values");
     }
+    std::size_t len() const { return static_cast<std::size_t>(size()); }
     std::unique_ptr<coag_langevin, detail::LangevinFree> h_;
 };
 
@@ -499,186 +754,6 @@ inline Estimate first_hit_kernel(const coag_first_hits &p, std::uint64_t seed, s
     check(coag_first_hit_kernel(&p, seed, first_id, &e.mean, &e.std_error, &e.count));
     return e;
 }
-
-inline coag_thermal_config thermal_default_config() {
-    coag_thermal_config c;
-    check(coag_thermal_default_config(&c, sizeof c));
-    return c;
-}
-
-/// The model family's closed form (coag_thermal_model_exact): {N(t), mean temperature}.
-inline std::pair<double, double> thermal_model_exact(double c, double gamma, double n0, double t0, double t) {
-    double n, tm;
-    check(coag_thermal_model_exact(c, gamma, n0, t0, t, &n, &tm));
-    return {n, tm};
-}
-
-/// Temperature-dependent low-rank Monte Carlo (Osinsky 2023 §4).
-class Thermal {
-  public:
-    /// counts[i-1] = N_i particles of size i at temperature temperatures[i-1], in volume v.
-    static Thermal make(const coag_thermal_config &c, const std::vector<std::uint64_t> &counts,
-                        const std::vector<double> &temperatures, double volume) {
-        if (counts.size() != temperatures.size()) check(COAG_INVALID_ARGUMENT);
-        coag_thermal *h = nullptr;
-        check(coag_thermal_new(&c, counts.data(), temperatures.data(), counts.size(), volume, &h));
-        return Thermal(h);
-    }
-    coag_step_report advance_to(double t) {
-        coag_step_report r;
-        check(coag_step_report_init(&r, sizeof r));
-        check(coag_thermal_advance_to(h_.get(), t, &r));
-        return r;
-    }
-    double time() const {
-        double t;
-        check(coag_thermal_info(h_.get(), &t, nullptr, nullptr, nullptr));
-        return t;
-    }
-    std::uint64_t particles() const {
-        std::uint64_t n;
-        check(coag_thermal_info(h_.get(), nullptr, &n, nullptr, nullptr));
-        return n;
-    }
-    double volume() const {
-        double v;
-        check(coag_thermal_info(h_.get(), nullptr, nullptr, &v, nullptr));
-        return v;
-    }
-    /// sum i^m N_i / V.
-    double moment(double m) const {
-        double v;
-        check(coag_thermal_observe(h_.get(), m, &v, nullptr, nullptr));
-        return v;
-    }
-    /// sum N_i T_i / N.
-    double mean_temperature() const {
-        double v;
-        check(coag_thermal_observe(h_.get(), 0.0, nullptr, &v, nullptr));
-        return v;
-    }
-    /// sum N_i T_i / V.
-    double energy() const {
-        double v;
-        check(coag_thermal_observe(h_.get(), 0.0, nullptr, nullptr, &v));
-        return v;
-    }
-    /// counts[i-1] = N_i for i = 1..max size.
-    std::vector<std::uint64_t> counts() const {
-        std::vector<std::uint64_t> c(max_size());
-        check(coag_thermal_state(h_.get(), c.data(), nullptr, c.size()));
-        return c;
-    }
-    /// temperatures[i-1] = T_i for i = 1..max size.
-    std::vector<double> temperatures() const {
-        std::vector<double> t(max_size());
-        check(coag_thermal_state(h_.get(), nullptr, t.data(), t.size()));
-        return t;
-    }
-    std::vector<std::uint8_t> checkpoint() const {
-        std::size_t n = 0;
-        check(coag_thermal_checkpoint_size(h_.get(), &n));
-        std::vector<std::uint8_t> buf(n);
-        check(coag_thermal_save(h_.get(), buf.data(), buf.size(), &n));
-        buf.resize(n);
-        return buf;
-    }
-    void restore(const std::vector<std::uint8_t> &buf) { check(coag_thermal_restore(h_.get(), buf.data(), buf.size())); }
-    coag_thermal *get() const noexcept { return h_.get(); }
-
-  private:
-    explicit Thermal(coag_thermal *h) : h_(h) {}
-    std::size_t max_size() const {
-        std::size_t m;
-        check(coag_thermal_info(h_.get(), nullptr, nullptr, nullptr, &m));
-        return m;
-    }
-    std::unique_ptr<coag_thermal, detail::ThermalFree> h_;
-};
-
-inline coag_dsmc_config dsmc_default_config() {
-    coag_dsmc_config c;
-    check(coag_dsmc_default_config(&c, sizeof c));
-    return c;
-}
-
-/// Low-rank DSMC (Osinsky 2023 §5): particles with 3-D velocities.
-class Dsmc {
-  public:
-    /// Particles of sizes[p] with velocities[3p..3p+3], in volume v.
-    static Dsmc make(const coag_dsmc_config &c, const std::vector<std::uint64_t> &sizes,
-                     const std::vector<double> &velocities, double volume) {
-        if (velocities.size() != 3 * sizes.size()) check(COAG_INVALID_ARGUMENT);
-        coag_dsmc *h = nullptr;
-        check(coag_dsmc_new(&c, sizes.data(), velocities.data(), sizes.size(), volume, &h));
-        return Dsmc(h);
-    }
-    /// counts[i-1] Maxwellian particles of size i at temperature temperatures[i-1].
-    static Dsmc maxwellian(const coag_dsmc_config &c, const std::vector<std::uint64_t> &counts,
-                           const std::vector<double> &temperatures, double volume) {
-        if (counts.size() != temperatures.size()) check(COAG_INVALID_ARGUMENT);
-        coag_dsmc *h = nullptr;
-        check(coag_dsmc_new_maxwellian(&c, counts.data(), temperatures.data(), counts.size(), volume, &h));
-        return Dsmc(h);
-    }
-    coag_step_report advance_to(double t) {
-        coag_step_report r;
-        check(coag_step_report_init(&r, sizeof r));
-        check(coag_dsmc_advance_to(h_.get(), t, &r));
-        return r;
-    }
-    double time() const {
-        double t;
-        check(coag_dsmc_info(h_.get(), &t, nullptr, nullptr));
-        return t;
-    }
-    std::uint64_t particles() const {
-        std::uint64_t n;
-        check(coag_dsmc_info(h_.get(), nullptr, &n, nullptr));
-        return n;
-    }
-    double volume() const {
-        double v;
-        check(coag_dsmc_info(h_.get(), nullptr, nullptr, &v));
-        return v;
-    }
-    std::vector<double> momentum() const {
-        std::vector<double> p(3);
-        check(coag_dsmc_observe(h_.get(), p.data(), nullptr, nullptr));
-        return p;
-    }
-    double energy() const {
-        double e;
-        check(coag_dsmc_observe(h_.get(), nullptr, &e, nullptr));
-        return e;
-    }
-    double mean_temperature() const {
-        double t;
-        check(coag_dsmc_observe(h_.get(), nullptr, nullptr, &t));
-        return t;
-    }
-    /// The particles' sizes and velocities (3 per particle).
-    std::pair<std::vector<std::uint64_t>, std::vector<double>> state() const {
-        std::vector<std::uint64_t> s(particles());
-        std::vector<double> v(3 * s.size());
-        check(coag_dsmc_particles(h_.get(), s.data(), v.data(), s.size()));
-        return {s, v};
-    }
-    std::vector<std::uint8_t> checkpoint() const {
-        std::size_t n = 0;
-        check(coag_dsmc_checkpoint_size(h_.get(), &n));
-        std::vector<std::uint8_t> buf(n);
-        check(coag_dsmc_save(h_.get(), buf.data(), buf.size(), &n));
-        buf.resize(n);
-        return buf;
-    }
-    void restore(const std::vector<std::uint8_t> &buf) { check(coag_dsmc_restore(h_.get(), buf.data(), buf.size())); }
-    coag_dsmc *get() const noexcept { return h_.get(); }
-
-  private:
-    explicit Dsmc(coag_dsmc *h) : h_(h) {}
-    std::unique_ptr<coag_dsmc, detail::DsmcFree> h_;
-};
 
 }  // namespace coagula
 

@@ -142,7 +142,7 @@ pub fn fingerprint(plan: &Plan) -> u64 {
     p.memory = 0;
     p.scenario.run.threads = 0;
     // (from the machine's memory: ranks on other machines must agree)
-    p.options.memory_budget = 0;
+    p.options = p.options.with_memory_budget(0);
     let text = format!("{} {p:?}", env!("CARGO_PKG_VERSION"));
     // FNV-1a, 64 bits
     text.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
@@ -411,7 +411,7 @@ fn run_share(
     let label = if points.len() > 1 {
         format!("{} sweep points", points.len())
     } else {
-        format!("{} x {}", points[0].replicas, points[0].scheme.name())
+        format!("{} x {}", points[0].replicas, points[0].scheme.name)
     };
     let progress = Progress::new(ticks, &label, quiet || rank != 0);
     let tick = || progress.tick();
@@ -624,7 +624,7 @@ mod tests {
             ("output.t-end".to_string(), toml::Value::Float(2.0)),
             ("output.count".to_string(), toml::Value::Integer(3)),
         ];
-        crate::run::points(Some("quickstart-constant"), ov, None)
+        crate::plans::points(Some("quickstart-constant"), ov, None)
             .unwrap()
             .into_iter()
             .map(|(_, p)| p)
@@ -671,7 +671,9 @@ mod tests {
         let p = plans(16, 1, 5).remove(0);
         let mut q = plans(16, 2, 5).remove(0);
         // a machine with more memory and cores
-        q.options.memory_budget = p.options.memory_budget * 2 + 1;
+        q.options = q
+            .options
+            .with_memory_budget(p.options.memory_budget() * 2 + 1);
         q.memory += 12345;
         assert_eq!(fingerprint(&q), fingerprint(&p));
         for other in [plans(16, 1, 6), plans(24, 1, 5)] {

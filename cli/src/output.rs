@@ -2,7 +2,7 @@
 //! every output time.
 
 use crate::runner::Outcome;
-use crate::scenario::{InitData, Plan, Start};
+use crate::scenario::Plan;
 use serde::Serialize;
 use std::io::Write;
 
@@ -83,35 +83,36 @@ pub fn describe(plan: &Plan) -> String {
     if let Some(src) = &s.source {
         d.push_str(&format!("\nsource: {src}"));
     }
-    let n = match &plan.start {
-        Start::Fixed(InitData::Counts { counts, .. }) => counts.iter().sum::<u64>(),
-        Start::Fixed(InitData::Sizes { sizes, .. }) => sizes.len() as u64,
-        Start::Quantiles { n, .. } => *n as u64,
-    };
     d.push_str(&format!(
-        "\nscheme: {} ({}), {n} particles",
-        plan.scheme.name(),
-        plan.scheme.info().summary
+        "\nscheme: {} ({}), {} particles",
+        plan.scheme.name, plan.scheme.summary, plan.particles
     ));
-    if plan.scheme == coagula_core::scheme::registry::SchemeId::MassFlow {
+    if plan.scheme.takes_option("dt") {
+        let r = plan.options.randomization();
         d.push_str(&format!(
-            ", dt = {}, {:?} points",
-            plan.options.dt, plan.points
+            ", dt = {}, {:?} points{}",
+            plan.options.dt(),
+            plan.options.points(),
+            if r == coagula_core::qmc::Randomization::None {
+                String::new()
+            } else {
+                format!(" ({r:?})")
+            }
         ));
     }
-    let coefficient = match s.kernel.units {
-        crate::scenario::Units::Physical => {
-            // the physical coefficient, before the kernel was narrowed to sizes ≥ 1
-            format!(
-                "{:.4e} m³/s",
-                plan.kernel.coefficient() / plan.size_unit.powf(plan.kernel.homogeneity())
-            )
-        }
-        crate::scenario::Units::Dimensionless => format!("{}", s.kernel.coefficient.unwrap_or(1.0)),
+    let coefficient = if plan.units.is_empty() {
+        format!("{}", plan.coefficient)
+    } else {
+        // the physical coefficient, in the units of the table
+        format!(
+            "{:.4e} {}",
+            plan.coefficient,
+            plan.units.split(';').next().unwrap_or("")
+        )
     };
     d.push_str(&format!(
         "\nkernel: {} (coefficient {coefficient}){}, initial: {:?}",
-        plan.kernel.name(),
+        plan.kernel_name,
         if plan.size_unit != 1.0 {
             format!(", sizes on a grid of {}", plan.size_unit)
         } else {
@@ -119,7 +120,7 @@ pub fn describe(plan: &Plan) -> String {
         },
         s.initial.kind
     ));
-    if plan.frag != crate::frag::Frag::None {
+    if plan.model.fragments() {
         d.push_str(", binary uniform fragmentation");
     }
     d.push_str(&format!(
@@ -245,7 +246,7 @@ pub fn table(
 }
 
 fn physical_note(plan: &Plan) -> &'static str {
-    if plan.scenario.kernel.units == crate::scenario::Units::Physical {
+    if !plan.units.is_empty() {
         " in s; concentrations per m³, sizes in monomers"
     } else {
         " in the kernel's units (1/(K·c0))"
@@ -293,7 +294,7 @@ fn csv_head(plan: &Plan) -> Vec<String> {
 }
 
 /// Refuses a sweep whose points would write different CSV columns (before the run).
-pub fn check_sweep_columns(points: &[crate::run::Point]) -> Result<(), String> {
+pub fn check_sweep_columns(points: &[crate::plans::Point]) -> Result<(), String> {
     let Some((_, first)) = points.first() else {
         return Ok(());
     };
@@ -303,7 +304,7 @@ pub fn check_sweep_columns(points: &[crate::run::Point]) -> Result<(), String> {
         if other != head {
             return Err(format!(
                 "--csv: sweep point {} has other columns than the first ({} vs {}): write --json instead",
-                crate::run::label(set),
+                crate::plans::label(set),
                 other.join(","),
                 head.join(",")
             ));
@@ -358,7 +359,7 @@ pub fn csv_sweep(runs: &[SweepRun<'_>], w: &mut dyn Write) -> Result<(), String>
             Some(h) if *h != head => {
                 return Err(format!(
                     "--csv: sweep point {} has other columns than the first ({} vs {}): write --json instead",
-                    crate::run::label(set),
+                    crate::plans::label(set),
                     head.join(","),
                     h.join(",")
                 ));
@@ -450,7 +451,7 @@ fn report<'a>(plan: &'a Plan, out: &Outcome) -> Report<'a> {
     let t = &out.totals;
     Report {
         title: &plan.title,
-        scheme: plan.scheme.name(),
+        scheme: plan.scheme.name,
         replicas: plan.replicas,
         seed: plan.seed,
         exact_solution: plan.exact.map(|e| e.name),

@@ -6,22 +6,15 @@
 //! replica order and merged sequentially, so every figure is bit-identical whatever
 //! the number of threads.
 
-use crate::frag::Frag;
-use crate::scenario::{InitData, Observable, Plan, Points};
-use coagula_core::kernel::Coagulation;
+use crate::scenario::plan::Sim;
+use crate::scenario::{Observable, Plan};
 use coagula_core::observe::Replicas;
-use coagula_core::qmc::Randomization;
 use coagula_core::random::{Generator, Purpose, substream};
 use coagula_core::scheme::StepReport;
-use coagula_core::scheme::massflow::PointSource;
-use coagula_core::scheme::registry::{self, Init, Simulation};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
-
-/// The facade as the CLI instantiates it.
-pub type Sim = dyn Simulation<Coagulation, Frag, Generator>;
 
 /// What the runs gave.
 #[derive(Clone, Debug)]
@@ -38,70 +31,30 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
-/// The point source of replica r.
-pub fn points_of(points: Points, seed: u64, replica: u64) -> PointSource {
-    match points {
-        Points::Qmc => PointSource::niederreiter(),
-        Points::Sobol => PointSource::sobol(),
-        Points::Mc => PointSource::monte_carlo(),
-        Points::Rqmc => {
-            let mut rng = substream(seed, replica, Purpose::Scrambling);
-            PointSource::randomized_niederreiter(Randomization::Owen, &mut rng)
-        }
-    }
-}
-
-/// Whether replica runs draw random numbers beyond the scheme's own (everything but
-/// deterministic QMC points).
-fn randomised(plan: &Plan) -> bool {
-    plan.scheme != coagula_core::scheme::registry::SchemeId::MassFlow
-        || matches!(plan.points, Points::Mc | Points::Rqmc)
-}
-
-/// Replica r's initial state: the lattice of quantiles centred for deterministic
-/// points, randomly shifted (its own substream) otherwise.
-pub fn initial(plan: &Plan, replica: u64) -> Result<InitData, String> {
-    let shift = if randomised(plan) {
-        let mut g = substream(plan.seed, replica, Purpose::Initial);
-        coagula_core::random::unit_f64(rand_core::Rng::next_u64(&mut g))
-    } else {
-        0.5
-    };
-    plan.start.data(shift)
-}
-
 /// The generator of replica r: the core's seed policy (`Purpose::Replica`; replica 0
 /// is `generator(seed, 0)`, the stream a C-ABI run with that seed uses).
 pub fn rng_of(plan: &Plan, replica: u64) -> Generator {
     substream(plan.seed, 0, Purpose::Replica(replica))
 }
 
-/// Builds replica r's simulation.
+/// Builds replica r's simulation: its start (the quantile lattice shifted by the
+/// core's `initial::lattice_shift` of the seed and the replica) and its options.
 pub fn build(plan: &Plan, replica: u64) -> Result<Box<Sim>, String> {
-    let opts = plan
-        .options
-        .clone()
-        .with_points(points_of(plan.points, plan.seed, replica));
-    let data = initial(plan, replica)?;
-    let init = match &data {
-        InitData::Counts { counts, volume } => Init::Counts {
-            counts,
-            volume: *volume,
-        },
-        InitData::Sizes { sizes, mass } => Init::Sizes { sizes, mass: *mass },
-    };
-    registry::build(plan.scheme, plan.kernel, plan.frag, &init, &opts).map_err(|e| e.to_string())
+    let shift = coagula_core::initial::lattice_shift(plan.randomised(), plan.seed, replica);
+    let start = plan.start(shift, replica)?;
+    plan.build(&start, replica)
 }
 
 /// An observable of a simulation, in the scenario's size units.
 pub fn observe(plan: &Plan, sim: &Sim, o: &Observable) -> f64 {
     let d = plan.size_unit;
-    match *o {
-        Observable::Moment(m) => sim.moment(m) * if d == 1.0 { 1.0 } else { d.powf(m) },
-        Observable::Density(k) => sim.number_density(k as f64 / d),
+    match o {
+        Observable::Moment(m) => sim.moment(*m) * if d == 1.0 { 1.0 } else { d.powf(*m) },
+        Observable::Density(k) => sim.number_density(*k as f64 / d),
         Observable::Concentration(a, b) => sim.concentration(a / d, b / d),
         Observable::Gel => sim.gel_mass().unwrap_or(f64::NAN) * d,
         Observable::Particles => sim.particles() as f64,
+        Observable::Named(n) => sim.observable(n).unwrap_or(f64::NAN),
     }
 }
 
@@ -184,7 +137,7 @@ pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
     let start = Instant::now();
     let progress = Progress::new(
         plan.replicas * plan.times.len() as u64,
-        &format!("{} x {}", plan.replicas, plan.scheme.name()),
+        &format!("{} x {}", plan.replicas, plan.scheme.name),
         quiet,
     );
     let pool = rayon::ThreadPoolBuilder::new()

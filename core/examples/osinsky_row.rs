@@ -11,7 +11,8 @@
 
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::random::{Generator, generator};
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::scheme::facade::{Init, Model, Options, Simulation};
+use coagula_core::scheme::registry;
 use std::process::ExitCode;
 use std::time::Instant;
 
@@ -44,9 +45,8 @@ fn main() -> ExitCode {
     let run = kernel.and_then(|k| {
         let mut sim: Box<dyn Simulation<Coagulation, NoFragmentation, Generator>> =
             registry::build(
-                SchemeId::LowRank,
-                k,
-                NoFragmentation,
+                registry::find("lowrank").unwrap(),
+                Model::coagulation(k, NoFragmentation),
                 &init,
                 &Options::default(),
             )?;

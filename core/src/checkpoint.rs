@@ -33,7 +33,7 @@ use crate::error::{Error, Result};
 use alloc::vec::Vec;
 
 const MAGIC: u64 = u64::from_le_bytes(*b"COAGCKPT");
-const VERSION: u64 = 2;
+const VERSION: u64 = 3;
 
 /// Appends little-endian fields to a caller buffer, counting what would not fit.
 #[derive(Debug)]

@@ -106,6 +106,18 @@ pub enum Error {
         /// What it takes.
         expected: &'static str,
     },
+    /// A name (of a scheme, an option, a built-in kernel) that is not known.
+    UnknownName {
+        /// What kind of name.
+        what: &'static str,
+        /// The names that are.
+        known: &'static [&'static str],
+    },
+    /// A checkpoint was written under another value of a setting that must match.
+    CheckpointOption {
+        /// The setting's key.
+        key: &'static str,
+    },
     /// A setting was given to a scheme it does not apply to.
     OptionNotApplicable {
         /// The setting's key.
@@ -113,10 +125,16 @@ pub enum Error {
         /// The scheme's registry name.
         scheme: &'static str,
     },
-    /// No setting has this key (the keys are `scheme::facade::KEYS`).
-    UnknownOption,
-    /// No scheme of the registry has this name (`scheme::registry::SCHEMES`).
-    UnknownScheme,
+    /// A parameter of a built-in kernel is unknown (`param` empty), given twice or
+    /// missing.
+    KernelParameter {
+        /// The kernel.
+        kernel: &'static str,
+        /// The parameter (empty: one the kernel does not have).
+        param: &'static str,
+        /// What is wrong with it.
+        why: &'static str,
+    },
     /// A kernel returned a rate above the bound it declared (the low-rank bound, or
     /// the supremum acceptance–rejection proposes with): a scheme built on that bound
     /// would be biased, so it stops instead.
@@ -202,12 +220,23 @@ impl fmt::Display for Error {
                 f,
                 "option {key} does not apply to scheme {scheme} (its registry entry lists the options that do)"
             ),
-            Error::UnknownOption => f.write_str(
-                "unknown option: the keys are dt, points, randomization, sorting, size-limit, memory-budget, batched-clock, capacity, truncation, strict-bound, sampler, engine, directions, seed, stream",
+            Error::CheckpointOption { key } => write!(
+                f,
+                "cannot restore checkpoint: it was written under another value of option {key}"
             ),
-            Error::UnknownScheme => f.write_str(
-                "unknown scheme: the registry lists its schemes (coagula schemes, coag_scheme_count/coag_scheme_name, coagula.schemes())",
+            Error::UnknownName { what, known } => {
+                write!(f, "unknown {what}: the {what}s are ")?;
+                list(f, known.iter().copied())
+            }
+            Error::KernelParameter {
+                kernel, param: "", ..
+            } => write!(
+                f,
+                "kernel {kernel} has no such parameter (the table of built-in kernels lists its parameters)"
             ),
+            Error::KernelParameter { kernel, param, why } => {
+                write!(f, "kernel {kernel}: parameter {param} {why}")
+            }
             Error::BoundExceeded { name, rate, bound } => write!(
                 f,
                 "the kernel returned {}, above its declared {name} {}: the bound must hold for every pair",
@@ -216,6 +245,22 @@ impl fmt::Display for Error {
             ),
         }
     }
+}
+
+/// Writes names separated by commas (`(none)` for none).
+fn list<'a>(f: &mut fmt::Formatter<'_>, names: impl Iterator<Item = &'a str>) -> fmt::Result {
+    let mut first = true;
+    for n in names {
+        if !first {
+            f.write_str(", ")?;
+        }
+        f.write_str(n)?;
+        first = false;
+    }
+    if first {
+        f.write_str("(none)")?;
+    }
+    Ok(())
 }
 
 #[cfg(feature = "std")]

@@ -10,6 +10,7 @@
 //! * [`checkpoint`] — save and restore a scheme's state into a caller buffer;
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
 //! * [`exact`] — exact solutions used as validation targets;
+//! * [`initial`] — initial states every front end draws the same way;
 //! * [`sample`] — weighted samplers: the flat-array sum tree ([`tree`]) and Walker alias
 //!   tables;
 //! * [`random`] — random variates and the seed policy (`seed, stream → generator`);
@@ -43,8 +44,10 @@ extern crate std;
 pub mod checkpoint;
 pub mod error;
 pub mod exact;
+pub mod initial;
 pub mod kernel;
 pub mod langevin;
+pub mod memory;
 pub mod observe;
 pub mod qmc;
 pub mod random;

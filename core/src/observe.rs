@@ -61,6 +61,13 @@ pub trait Observe {
     /// The gel-mass estimate, where the scheme defines one (size-count schemes: the
     /// largest cluster's mass per volume, Eibeck & Wagner eq. 6.15); `None` otherwise.
     fn gel_mass(&self) -> Option<f64>;
+
+    /// A scheme-specific observable by name (the mean temperature, the kinetic energy,
+    /// the momentum, …; the names a scheme answers are its registry entry's
+    /// `observables`), `None` for a name the scheme does not know.
+    fn observable(&self, _name: &str) -> Option<f64> {
+        None
+    }
 }
 
 /// `C(a, b)` from occupied `(size, N)` pairs: `Σ N / V` over the sizes in `[a, b]`

@@ -135,6 +135,8 @@ pub enum Purpose {
     Replica(u64),
     /// Random parameters of an initial state (e.g. the shift of a lattice of quantiles).
     Initial,
+    /// The velocities of a gas's initial particles (Maxwellian draws).
+    Velocities,
 }
 
 /// An independent generator derived from `(seed, stream)` for `purpose`: the scrambling
@@ -144,6 +146,7 @@ pub fn substream(seed: u64, stream: u64, purpose: Purpose) -> Generator {
     match purpose {
         Purpose::Scrambling => generator(seed ^ 0x5c4a_3b1e_0000_0001, stream),
         Purpose::Initial => generator(seed ^ 0x1a17_0c3d_0000_0002, stream),
+        Purpose::Velocities => generator(seed, stream ^ 0x5645_4c4f_4349_5459),
         Purpose::Replica(0) => generator(seed, stream),
         Purpose::Replica(r) => generator(mix64(seed ^ r.wrapping_mul(GOLDEN)), stream ^ mix64(r)),
     }

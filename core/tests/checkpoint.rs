@@ -321,7 +321,8 @@ fn auto_bucketed_pinned_engine() {
     assert_eq!(b.counts(), a.counts());
     // through the registry
     use coagula_core::kernel::NoFragmentation;
-    use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+    use coagula_core::scheme::facade::{Init, Model, Options, Simulation};
+    use coagula_core::scheme::registry;
     for (pin, want) in [
         (None, BucketMode::Counted),
         (Some(BucketMode::Slots), BucketMode::Slots),
@@ -330,13 +331,23 @@ fn auto_bucketed_pinned_engine() {
             counts: &[900],
             volume: 900.0,
         };
-        let opts = Options::default().with_bucket_mode(pin);
-        let sim: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> =
-            registry::build(SchemeId::LowRank, k, NoFragmentation, &init, &opts).unwrap();
-        assert_eq!(sim.bucket_mode(), Some(want));
-        let tree: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> =
-            registry::build(SchemeId::LowRankTree, k, NoFragmentation, &init, &opts).unwrap();
-        assert_eq!(tree.bucket_mode(), None);
+        let opts = Options::default().with_engine(pin);
+        let sim: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> = registry::build(
+            registry::find("lowrank").unwrap(),
+            Model::coagulation(k, NoFragmentation),
+            &init,
+            &opts,
+        )
+        .unwrap();
+        assert_eq!(sim.engine(), Some(want));
+        let tree: Box<dyn Simulation<Coagulation, NoFragmentation, Pcg64Mcg>> = registry::build(
+            registry::find("lowrank-tree").unwrap(),
+            Model::coagulation(k, NoFragmentation),
+            &init,
+            &Options::default(),
+        )
+        .unwrap();
+        assert_eq!(tree.engine(), None);
     }
 }
 

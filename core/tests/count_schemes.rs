@@ -5,7 +5,8 @@
 use coagula_core::exact::Exact;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::scheme::facade::{Init, Model, Options, SchemeId, Simulation};
+use coagula_core::scheme::registry;
 use rand_pcg::Pcg64Mcg;
 
 const REPLICAS: u64 = 16;
@@ -24,24 +25,14 @@ fn z2() -> f64 {
     z()
 }
 
-/// The registry's size-count schemes (every scheme these tests cover).
-fn count_schemes() -> impl Iterator<Item = SchemeId> {
-    let probe = Init::Counts {
-        counts: &[1],
-        volume: 1.0,
-    };
-    registry::SCHEMES
-        .iter()
-        .filter(move |s| s.accepts(&probe))
-        .map(|s| s.id)
-}
+use crate::common::count_schemes;
 
 /// Runs R replicas of scheme `id` (through the registry's facade) to each time in
 /// `times`, and returns for each time the replica statistics of `n_1..n_kmax` (index
 /// 0..kmax) followed by M0 and M2.
 fn run(id: SchemeId, kernel: Coagulation, times: &[f64], kmax: usize) -> Vec<Vec<Replicas>> {
     let mut stats = vec![vec![Replicas::new(); kmax + 2]; times.len()];
-    let tag = registry::SCHEMES.iter().position(|s| s.id == id).unwrap() as u128;
+    let tag = id.tag as u128;
     for rep in 0..REPLICAS {
         let mut rng = Pcg64Mcg::new(
             0x1234_5678_9abc_def0 ^ (rep as u128 * 0x9e37_79b9_7f4a_7c15) ^ (tag << 100),
@@ -50,8 +41,13 @@ fn run(id: SchemeId, kernel: Coagulation, times: &[f64], kmax: usize) -> Vec<Vec
             counts: &[N0],
             volume: N0 as f64,
         };
-        let mut s: Box<dyn Simulation<_, _, Pcg64Mcg>> =
-            registry::build(id, kernel, NoFragmentation, &init, &Options::default()).unwrap();
+        let mut s: Box<dyn Simulation<_, _, Pcg64Mcg>> = registry::build(
+            id,
+            Model::coagulation(kernel, NoFragmentation),
+            &init,
+            &Options::default(),
+        )
+        .unwrap();
         for (ti, &t) in times.iter().enumerate() {
             s.advance_to(t, &mut rng).unwrap();
             for k in 1..=kmax {
@@ -87,7 +83,7 @@ fn check_exact(kernel: Coagulation, exact: Exact, times: &[f64]) {
             for k in 1..=kmax {
                 let e = exact.number_density(k as u64, t).unwrap();
                 within(
-                    &format!("{method:?} {exact:?} t={t} n_{k}"),
+                    &format!("{} {exact:?} t={t} n_{k}", method.name),
                     &stats[ti][k - 1],
                     e,
                     &mut failures,
@@ -95,7 +91,7 @@ fn check_exact(kernel: Coagulation, exact: Exact, times: &[f64]) {
             }
             let e = exact.moment(0, t).unwrap();
             within(
-                &format!("{method:?} {exact:?} t={t} M0"),
+                &format!("{} {exact:?} t={t} M0", method.name),
                 &stats[ti][kmax],
                 e,
                 &mut failures,
@@ -135,8 +131,8 @@ fn multiplicative_kernel_matches_exact_solution_before_gelation() {
 fn methods_agree_for_brownian_and_ballistic_kernels() {
     fn compare(kernel: Coagulation, times: &[f64], failures: &mut String) {
         let kmax = 3;
-        let lr = run(SchemeId::LowRankTree, kernel, times, kmax);
-        for other in count_schemes().filter(|&s| s != SchemeId::LowRankTree) {
+        let lr = run(registry::find("lowrank-tree").unwrap(), kernel, times, kmax);
+        for other in count_schemes().filter(|&s| s.name != "lowrank-tree") {
             let st = run(other, kernel, times, kmax);
             for ti in 0..times.len() {
                 for q in 0..kmax + 2 {
@@ -146,7 +142,8 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
                     let d = (a.mean() - b.mean()).abs();
                     if d > z2() * se + 1e-12 {
                         failures.push_str(&format!(
-                            "LowRankTree vs {other:?} t={} quantity {q}: {} vs {} (diff {d:.3e} > {:.2} SE {se:.3e})\n",
+                            "lowrank-tree vs {} t={} quantity {q}: {} vs {} (diff {d:.3e} > {:.2} SE {se:.3e})\n",
+                            other.name,
                             times[ti],
                             a.mean(),
                             b.mean(),
@@ -165,4 +162,12 @@ fn methods_agree_for_brownian_and_ballistic_kernels() {
         &mut failures,
     );
     assert!(failures.is_empty(), "{failures}");
+}
+
+/// Acceptance–rejection needs the kernel's supremum (Osinsky 2023 §2): a kernel
+/// without one is refused at construction, not run on a wrong bound.
+#[test]
+fn rejection_refuses_a_kernel_without_a_supremum() {
+    let no_sup = |x: f64, y: f64| x + y;
+    assert!(coagula_core::scheme::baseline::AcceptanceRejection::monodisperse(no_sup, 10).is_err());
 }

@@ -7,12 +7,12 @@
 
 use crate::common::z_max;
 use coagula_core::Error;
-use coagula_core::checkpoint::Checkpoint;
+use coagula_core::kernel::gas::{NeverStick, StickBelow, Sticking};
 use coagula_core::observe::Replicas;
+use coagula_core::scheme::lowrank::BinaryTree;
 use coagula_core::scheme::lowrank::dsmc::{
-    Collisions, Directions, Gas, LowRankDsmc, NeverStick, RejectionDsmc, StickBelow, Sticking,
+    Collisions, Directions, Gas, LowRankDsmc, RejectionDsmc,
 };
-use coagula_core::scheme::lowrank::{BinaryTree, WideTree};
 use coagula_core::scheme::lowrank::{LowRankMc, ProposalEngine, TreeEngine, UniformEngine};
 use coagula_core::scheme::{Budget, Scheme};
 use rand_pcg::Pcg64Mcg;
@@ -157,65 +157,6 @@ fn check_events<E: ProposalEngine<3>>(directions: Directions) {
     assert_eq!(s.particles(), s.kernel().counts().iter().sum::<u64>());
 }
 
-/// From a fixed state of 24 particles of sizes 1–3, the time to the first collision is
-/// exponential with rate `R = Σ_{k<l} π (R_k + R_l)² |V_k − V_l| / V` (`R_k` = half
-/// the diameter `size^{1/3}`): its mean over 40 000 replicas matches `1/R` within the
-/// suite's threshold (SE 0.5 %). A factor N/(N − 1) in the pair count is 4 % (8 SE), a
-/// factor 2 in the direction's law or the cross-section 100 %.
-#[test]
-fn the_first_collision_comes_at_the_exact_rate() {
-    for d in [Directions::Conditional, Directions::Uniform] {
-        first_collision::<TreeEngine<3, WideTree<3>>>(d);
-        first_collision::<UniformEngine<3>>(d);
-    }
-}
-
-fn first_collision<E: ProposalEngine<3>>(directions: Directions) {
-    let mut r0 = rng(3);
-    let gas = Gas::maxwellian(0.9, &[12, 8, 4], &[1.0, 2.0, 0.5], &mut r0)
-        .unwrap()
-        .with_directions(directions);
-    let volume = 500.0;
-    let parts: Vec<(u64, [f64; 3])> = {
-        let s = On::<NeverStick, E>::new_gas(gas.clone(), volume).unwrap();
-        particles(&s)
-    };
-    let mut rate = 0.0;
-    for (a, pa) in parts.iter().enumerate() {
-        for pb in &parts[a + 1..] {
-            let rr = ((pa.0 as f64).cbrt() + (pb.0 as f64).cbrt()) / 2.0;
-            let g = (0..3)
-                .map(|k| (pa.1[k] - pb.1[k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            rate += std::f64::consts::PI * rr * rr * g / volume;
-        }
-    }
-    let reps = 40_000u64;
-    let mut st = Replicas::new();
-    let mut rng = rng(4);
-    for _ in 0..reps {
-        let mut s = On::<_, E>::new_gas(gas.clone(), volume).unwrap();
-        loop {
-            let rep = s
-                .advance_within(1e12, &mut Budget::work(1), &mut rng)
-                .unwrap();
-            if rep.events > 0 {
-                break;
-            }
-        }
-        st.push(s.time());
-    }
-    let zz = (st.mean() - 1.0 / rate) / st.std_error();
-    println!(
-        "first collision ({directions:?}): {} ± {} vs 1/R = {} ({zz:+.2} SE)",
-        st.mean(),
-        st.std_error(),
-        1.0 / rate
-    );
-    assert!(zz.abs() < z_max(reps), "{zz:.1} SE");
-}
-
 /// Elastic collisions (ε = 1) from sizes 1–3 at partial temperatures 0.5, 1, 2: the
 /// energy is conserved to rounding, the partial temperatures equilibrate to the mean
 /// (within the replicas' threshold at t = 150, ~100 collisions per particle) and the
@@ -356,54 +297,6 @@ fn low_rank_and_rejection_agree() {
         assert!(zz.abs() < z, "{name}: {zz:.1} SE");
     }
     assert!(a[0].mean() < 1.0, "the gas cools");
-}
-
-fn bits<S: Sticking + Clone, E: ProposalEngine<3>>(s: &On<S, E>) -> Vec<u64> {
-    let mut v: Vec<u64> = particles(s)
-        .iter()
-        .flat_map(|p| [p.0, p.1[0].to_bits(), p.1[1].to_bits(), p.1[2].to_bits()])
-        .collect();
-    v.push(s.time().to_bits());
-    v
-}
-
-/// A run split by a checkpoint equals the unbroken run, bit for bit, on both engines;
-/// the same seed gives the same bits; a corrupted checkpoint is refused and changes
-/// nothing.
-#[test]
-fn checkpoint_split_and_same_seed() {
-    split::<TreeEngine<3, WideTree<3>>>();
-    split::<UniformEngine<3>>();
-}
-
-fn split<E: ProposalEngine<3>>() {
-    let make = || {
-        let gas = Gas::maxwellian(0.9, &[600, 200, 50], &[1.0, 1.0, 1.0], &mut rng(5)).unwrap();
-        On::<NeverStick, E>::new_gas(gas, 8500.0).unwrap()
-    };
-    let mut a = make();
-    let mut ra = rng(6);
-    a.advance_to(3.0, &mut ra).unwrap();
-    let mut buf = vec![0u8; a.checkpoint_len()];
-    a.save_to(&mut buf).unwrap();
-    let saved = ra.clone();
-    a.advance_to(12.0, &mut ra).unwrap();
-    let mut b = make();
-    b.restore_from(&buf).unwrap();
-    let mut rb = saved;
-    b.advance_to(12.0, &mut rb).unwrap();
-    assert_eq!(bits(&a), bits(&b));
-    let mut c = make();
-    c.advance_to(12.0, &mut rng(6)).unwrap();
-    assert_eq!(bits(&a), bits(&c), "same seed, same bits");
-    let mut d = make();
-    let before = bits(&d);
-    let mut bent = buf.clone();
-    let i = bent.len() / 2;
-    bent[i] ^= 0x40;
-    assert!(d.restore_from(&bent).is_err());
-    assert!(d.restore_from(&buf[..buf.len() - 3]).is_err());
-    assert_eq!(bits(&d), before);
 }
 
 /// Bad input is an error: ε outside (0, 1], NaN velocities, lengths that differ,

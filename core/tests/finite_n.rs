@@ -26,7 +26,8 @@ use crate::common;
 use coagula_core::kernel::Coagulation;
 use coagula_core::kernel::NoFragmentation;
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId};
+use coagula_core::scheme::facade::{Init, Model, Options, SchemeId};
+use coagula_core::scheme::registry;
 use std::collections::HashMap;
 
 const N0: u64 = 32;
@@ -207,7 +208,13 @@ fn sizes_sim(id: SchemeId, kernel: Coagulation) -> Box<common::Sim> {
         sizes: &sizes,
         mass: 1.0,
     };
-    registry::build(id, kernel, NoFragmentation, &init, &Options::default()).unwrap()
+    registry::build(
+        id,
+        Model::coagulation(kernel, NoFragmentation),
+        &init,
+        &Options::default(),
+    )
+    .unwrap()
 }
 
 /// Compares every size-count scheme of the registry, low-rank over sizes and direct
@@ -223,11 +230,11 @@ fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
     let runs: Vec<(&str, bool, Vec<[Replicas; 3]>)> = common::count_schemes()
         .enumerate()
         .filter_map(|(i, info)| {
-            common::build(info.id, kernel, &[N0], N0 as f64)?;
-            let make = || common::build(info.id, kernel, &[N0], N0 as f64).unwrap();
+            common::build(info, kernel, &[N0], N0 as f64)?;
+            let make = || common::build(info, kernel, &[N0], N0 as f64).unwrap();
             Some((
                 info.name,
-                info.id != SchemeId::DsaCounts,
+                info.name != "dsa-counts",
                 common::facade_replicas(i as u64 + 1, REPLICAS, times, make),
             ))
         })
@@ -237,14 +244,17 @@ fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
     // doubles, direct simulation does not
     let mut runs = runs;
     let offset = registry::SCHEMES.len() as u64;
-    for (i, id) in [SchemeId::LowRankSizes, SchemeId::Dsa]
-        .into_iter()
-        .enumerate()
+    for (i, id) in [
+        registry::find("lowrank-sizes").unwrap(),
+        registry::find("dsa").unwrap(),
+    ]
+    .into_iter()
+    .enumerate()
     {
         let make = || sizes_sim(id, kernel);
         runs.push((
-            id.name(),
-            id == SchemeId::LowRankSizes,
+            id.name,
+            id.name == "lowrank-sizes",
             common::facade_replicas(offset + i as u64 + 1, REPLICAS, times, make),
         ));
     }

@@ -9,7 +9,7 @@
 use crate::common::{Sim, build, count_schemes};
 use coagula_core::checkpoint::{Reader, Writer};
 use coagula_core::kernel::Coagulation;
-use coagula_core::scheme::registry::State;
+use coagula_core::scheme::facade::State;
 use rand_pcg::Pcg64Mcg;
 
 fn save(s: &Sim) -> Vec<u8> {
@@ -36,20 +36,20 @@ fn counts(s: &Sim) -> Vec<u64> {
 fn a_doubled_sim_restores_from_its_own_checkpoint() {
     let k = Coagulation::constant(1.0).unwrap();
     for info in count_schemes() {
-        let Some(mut a) = build(info.id, k, &[64], 64.0) else {
+        let Some(mut a) = build(info, k, &[64], 64.0) else {
             continue;
         };
         let mut rng = Pcg64Mcg::new(3);
         for h in 1..=40 {
             a.advance_to(f64::from(h), &mut rng).unwrap();
             let buf = save(&*a);
-            let mut b = build(info.id, k, &[64], 64.0).unwrap();
+            let mut b = build(info, k, &[64], 64.0).unwrap();
             b.restore(&mut Reader::new(&buf))
                 .unwrap_or_else(|e| panic!("{} at t = {h}: {e}", info.name));
             assert_eq!(counts(&*b), counts(&*a), "{}", info.name);
         }
         // (direct simulation over counts never doubles: it checks the restores only)
-        if info.id != coagula_core::scheme::registry::SchemeId::DsaCounts {
+        if info.name != "dsa-counts" {
             assert!(a.totals().doublings > 0, "{}: no doubling", info.name);
         }
     }
@@ -65,7 +65,7 @@ fn a_sim_refused_for_a_huge_rate_restores_and_runs_on() {
     let sane = Coagulation::constant(1.0).unwrap();
     for (volume, t0) in [(1.0, 1.0)] {
         for info in count_schemes() {
-            let Some(mut a) = build(info.id, huge, &[3000, 40], volume) else {
+            let Some(mut a) = build(info, huge, &[3000, 40], volume) else {
                 continue;
             };
             let mut rng = Pcg64Mcg::new(5);
@@ -77,7 +77,7 @@ fn a_sim_refused_for_a_huge_rate_restores_and_runs_on() {
                 info.name
             );
             let buf = save(&*a);
-            let mut b = build(info.id, huge, &[3000, 40], volume).unwrap();
+            let mut b = build(info, huge, &[3000, 40], volume).unwrap();
             b.restore(&mut Reader::new(&buf))
                 .unwrap_or_else(|e| panic!("{} V = {volume}: {e}", info.name));
             b.set_kernel(sane).unwrap();
@@ -103,7 +103,7 @@ fn a_state_with_overflowed_rates_clones_and_recovers() {
     let start = [255, 115, 255, 115, 115, 115, 115, 141];
     let mut held = 0;
     for info in count_schemes() {
-        let Some(mut a) = build(info.id, sane, &[60], 60.0) else {
+        let Some(mut a) = build(info, sane, &[60], 60.0) else {
             continue;
         };
         if a.set_kernel(huge).is_err() || a.set_counts(&start, 1.0).is_err() {
@@ -111,7 +111,7 @@ fn a_state_with_overflowed_rates_clones_and_recovers() {
         }
         held += 1;
         let buf = save(&*a);
-        let mut b = build(info.id, huge, &[60], 60.0).unwrap();
+        let mut b = build(info, huge, &[60], 60.0).unwrap();
         b.restore(&mut Reader::new(&buf))
             .unwrap_or_else(|e| panic!("{}: {e}", info.name));
         assert_eq!(save(&*b), buf, "{}", info.name);
@@ -146,15 +146,17 @@ fn kernels_near_the_largest_double_do_not_overflow_the_tables() {
     for info in count_schemes() {
         // (a 1 MiB budget, as the fuzzer's sims: the default 2 GiB lets the size table
         // grow for seconds at this rate)
-        let init = coagula_core::scheme::registry::Init::Counts {
+        let init = coagula_core::scheme::facade::Init::Counts {
             counts: &[60],
             volume: 60.0,
         };
-        let opts = coagula_core::scheme::registry::Options::default().with_memory_budget(1 << 20);
+        let opts = coagula_core::scheme::facade::Options::default().with_memory_budget(1 << 20);
         let Ok(mut a) = coagula_core::scheme::registry::build::<_, _, Pcg64Mcg>(
-            info.id,
-            sane,
-            coagula_core::kernel::NoFragmentation,
+            info,
+            coagula_core::scheme::facade::Model::coagulation(
+                sane,
+                coagula_core::kernel::NoFragmentation,
+            ),
             &init,
             &opts,
         ) else {
@@ -190,7 +192,7 @@ fn a_proposal_pending_at_infinity_restores() {
     let mut at_inf = 0;
     for info in count_schemes() {
         for seed in 0..16 {
-            let Some(mut a) = build(info.id, tiny, &[2], 10.0) else {
+            let Some(mut a) = build(info, tiny, &[2], 10.0) else {
                 break;
             };
             let mut rng = Pcg64Mcg::new(seed);
@@ -198,7 +200,7 @@ fn a_proposal_pending_at_infinity_restores() {
                 continue;
             }
             let buf = save(&*a);
-            let mut b = build(info.id, tiny, &[2], 10.0).unwrap();
+            let mut b = build(info, tiny, &[2], 10.0).unwrap();
             b.restore(&mut Reader::new(&buf))
                 .unwrap_or_else(|e| panic!("{} seed {seed}: {e}", info.name));
             assert_eq!(save(&*b), buf, "{}", info.name);
@@ -214,7 +216,7 @@ fn a_proposal_pending_at_infinity_restores() {
 fn counters_near_the_top_of_u64_saturate() {
     let k = Coagulation::additive();
     for info in count_schemes() {
-        let Some(mut a) = build(info.id, k, &[4096], 4096.0) else {
+        let Some(mut a) = build(info, k, &[4096], 4096.0) else {
             continue;
         };
         let mut rng = Pcg64Mcg::new(8);
@@ -234,7 +236,7 @@ fn counters_near_the_top_of_u64_saturate() {
             buf[i..i + 8].copy_from_slice(&(u64::MAX - 2).to_le_bytes());
         }
         // (the facade's save() writes no checksum: the edited bytes are read as they are)
-        let mut b = build(info.id, k, &[4096], 4096.0).unwrap();
+        let mut b = build(info, k, &[4096], 4096.0).unwrap();
         b.restore(&mut Reader::new(&buf))
             .unwrap_or_else(|e| panic!("{}: {e}", info.name));
         assert_eq!(b.totals().events, u64::MAX - 2);
@@ -257,7 +259,7 @@ fn a_state_stopped_after_a_doubling_restores() {
     let mut restored = 0;
     for info in count_schemes() {
         for seed in 0..32 {
-            let Some(mut a) = build(info.id, k, &[2], v) else {
+            let Some(mut a) = build(info, k, &[2], v) else {
                 break;
             };
             let mut rng = Pcg64Mcg::new(seed);
@@ -267,7 +269,7 @@ fn a_state_stopped_after_a_doubling_restores() {
                     break;
                 }
                 let buf = save(&*a);
-                let mut b = build(info.id, k, &[2], v).unwrap();
+                let mut b = build(info, k, &[2], v).unwrap();
                 b.restore(&mut Reader::new(&buf))
                     .unwrap_or_else(|e| panic!("{} seed {seed}: {e}", info.name));
                 assert_eq!(save(&*b), buf, "{}", info.name);

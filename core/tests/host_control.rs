@@ -13,7 +13,8 @@ use crate::common;
 use coagula_core::Error;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::scheme::Budget;
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation, State, StateKind};
+use coagula_core::scheme::facade::{Init, Model, Options, SchemeId, Simulation, State};
+use coagula_core::scheme::registry;
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::{Infallible, TryRng};
 
@@ -26,11 +27,16 @@ fn counts_sim(id: SchemeId, k: Coagulation) -> Option<Box<Sim>> {
         counts: &counts,
         volume: 3000.0,
     };
-    let opts = Options::default().with_batched_clock(false);
-    match registry::build(id, k, NoFragmentation, &init, &opts) {
+    // a budget of 256 MiB: a run whose sizes run away reaches it in milliseconds, not
+    // after growing to half the machine's memory (the default)
+    let mut opts = Options::default().with_memory_budget(256 << 20);
+    if id.takes_option("batched-clock") {
+        opts = opts.with_batched_clock(false);
+    }
+    match registry::build(id, Model::coagulation(k, NoFragmentation), &init, &opts) {
         Ok(s) => Some(s),
         Err(Error::Unsupported { .. }) => None,
-        Err(e) => panic!("{}: {e}", id.name()),
+        Err(e) => panic!("{}: {e}", id.name),
     }
 }
 
@@ -42,9 +48,8 @@ fn massflow_sim() -> Box<Sim> {
     };
     let opts = Options::default().with_dt(0.05);
     registry::build(
-        SchemeId::MassFlow,
-        Coagulation::additive(),
-        NoFragmentation,
+        registry::find("massflow").unwrap(),
+        Model::coagulation(Coagulation::additive(), NoFragmentation),
         &init,
         &opts,
     )
@@ -80,10 +85,10 @@ fn stopping_on_the_way_does_not_change_an_event_driven_run() {
     let mut checked = 0;
     for k in kernels() {
         for info in common::count_schemes() {
-            let Some(mut a) = counts_sim(info.id, k) else {
+            let Some(mut a) = counts_sim(info, k) else {
                 continue;
             };
-            let mut b = counts_sim(info.id, k).unwrap();
+            let mut b = counts_sim(info, k).unwrap();
             let (mut ra, mut rb) = (Pcg64Mcg::new(5), Pcg64Mcg::new(5));
             a.advance_to(2.0, &mut ra).unwrap();
             for t in [0.7, 1.3, 1.3, 2.0] {
@@ -107,7 +112,7 @@ fn a_budget_interrupts_and_the_next_call_continues_the_same_run() {
         200,
     )];
     for info in common::count_schemes() {
-        let id = info.id;
+        let id = info;
         let k = Coagulation::additive();
         if counts_sim(id, k).is_some() {
             sims.push((info.name, Box::new(move || counts_sim(id, k).unwrap()), 97));
@@ -153,8 +158,13 @@ fn a_cancellation_callback_stops_the_call() {
     };
     let opts = Options::default().with_batched_clock(false);
     let k = Coagulation::constant(1.0).unwrap();
-    let mut s: Box<Sim> =
-        registry::build(SchemeId::LowRank, k, NoFragmentation, &init, &opts).unwrap();
+    let mut s: Box<Sim> = registry::build(
+        registry::find("lowrank").unwrap(),
+        Model::coagulation(k, NoFragmentation),
+        &init,
+        &opts,
+    )
+    .unwrap();
     let mut rng = Pcg64Mcg::new(1);
     let mut polls = 0;
     let mut cancel = || {
@@ -197,12 +207,12 @@ fn waiting_times_that_cannot_move_the_clock_are_errors() {
     // K = 1e300: the mean wait between proposals is ~1e-303, below the resolution of
     // any time past 1e-287
     for info in common::count_schemes() {
-        let Some(mut s) = counts_sim(info.id, Coagulation::constant(1e300).unwrap()) else {
+        let Some(mut s) = counts_sim(info, Coagulation::constant(1e300).unwrap()) else {
             continue;
         };
         let mut rng = Pcg64Mcg::new(2);
         let r = s.advance_to(1.0, &mut rng);
-        if info.id == SchemeId::DsaCounts {
+        if info.name == "dsa-counts" {
             // without doubling every particle merges within ~1e-300 (the waits stay
             // resolvable near t = 0): one particle left, then nothing can happen
             assert!(r.is_ok() && s.particles() == 1, "{}: {r:?}", info.name);
@@ -246,39 +256,34 @@ fn a_stuck_random_stream_cannot_hang_a_call() {
     type StuckSim = dyn Simulation<Coagulation, NoFragmentation, Stuck>;
     let mut built = 0;
     for word in [0, u64::MAX, 0x8000_0000_0000_0000, 0x0123_4567_89ab_cdef] {
-        for info in registry::SCHEMES {
+        for &info in registry::SCHEMES {
             for batched in [false, true] {
-                let opts = Options::default().with_batched_clock(batched).with_dt(0.1);
-                let sizes = [1.0, 2.0, 3.0, 4.0];
-                let counts = [5000, 3];
-                // every particle-list scheme (mass flow, MFA, DSA) from sizes
-                let init = if info.state == StateKind::Sizes {
-                    Init::Sizes {
-                        sizes: &sizes,
-                        mass: 1.0,
-                    }
-                } else {
-                    Init::Counts {
-                        counts: &counts,
-                        volume: 5000.0,
-                    }
-                };
-                let mut s: Box<StuckSim> = match registry::build(
-                    info.id,
-                    Coagulation::additive(),
-                    NoFragmentation,
-                    &init,
-                    &opts,
-                ) {
+                let mut opts = crate::common::options_for(info);
+                if info.takes_option("batched-clock") {
+                    opts = opts.with_batched_clock(batched);
+                }
+                if info.takes_option("dt") {
+                    opts = opts.with_dt(0.1);
+                }
+                // sizes a stuck stream runs away with stop at 256 MiB, not at half the
+                // machine's memory (the default)
+                if info.takes_option("memory-budget") {
+                    opts = opts.with_memory_budget(256 << 20);
+                }
+                // every scheme from its standard start (a particle list from 4 sizes)
+                let start = crate::common::Start::monomers(4);
+                let init = start.init(info);
+                let model = crate::common::model_for(info, Coagulation::additive());
+                let mut s: Box<StuckSim> = match registry::build(info, model, &init, &opts) {
                     Ok(s) => s,
                     Err(Error::Unsupported { .. }) => continue,
                     Err(e) => panic!("{e}"),
                 };
                 // bounded by the budget, whatever the stream does
                 let mut rng = Stuck(word);
-                let r = s.advance_within(2.0, &mut Budget::work(1 << 20), &mut rng);
+                let r = s.advance_within(2.0, &mut Budget::work(1 << 14), &mut rng);
                 if let Ok(rep) = r {
-                    assert!(rep.proposals <= 1 << 20, "{}", info.name);
+                    assert!(rep.proposals <= 1 << 14, "{}", info.name);
                 }
                 built += 1;
             }
@@ -293,7 +298,7 @@ fn a_stuck_random_stream_cannot_hang_a_call() {
 fn occupied_sizes_without_a_count_vector_match_the_dense_state() {
     for k in kernels() {
         for info in common::count_schemes() {
-            let Some(mut s) = counts_sim(info.id, k) else {
+            let Some(mut s) = counts_sim(info, k) else {
                 continue;
             };
             s.advance_to(1.5, &mut Pcg64Mcg::new(4)).unwrap();
@@ -315,7 +320,7 @@ fn occupied_sizes_without_a_count_vector_match_the_dense_state() {
             for m in [0.0, 1.0, 2.0, 0.5] {
                 let dense_m = coagula_core::observe::moment_of_counts(&dense, v, m);
                 let got = s.moment(m);
-                if matches!(info.id, SchemeId::Inverse | SchemeId::Rejection) {
+                if matches!(info.name, "inverse" | "rejection") {
                     // (summed in their own order: occupied slots, particles)
                     assert!((got - dense_m).abs() <= 1e-12 * dense_m, "{}", info.name);
                 } else {
@@ -336,9 +341,8 @@ fn an_empty_system_is_valid_and_can_be_refilled() {
             volume: 10.0,
         };
         let mut s: Box<Sim> = match registry::build(
-            info.id,
-            Coagulation::additive(),
-            NoFragmentation,
+            info,
+            Model::coagulation(Coagulation::additive(), NoFragmentation),
             &init,
             &Options::default(),
         ) {
@@ -377,11 +381,11 @@ fn long_runs_restore_from_their_own_checkpoints() {
         Coagulation::free_molecular().with_min_size(1.0).unwrap(),
     ] {
         for info in common::count_schemes() {
-            let Some(mut a) = counts_sim(info.id, k) else {
+            let Some(mut a) = counts_sim(info, k) else {
                 continue;
             };
             let mut rng = Pcg64Mcg::new(8);
-            let mut b = counts_sim(info.id, k).unwrap();
+            let mut b = counts_sim(info, k).unwrap();
             for t in [5.0, 50.0, 400.0, 4000.0] {
                 a.advance_to(t, &mut rng).unwrap();
                 let mut w = coagula_core::checkpoint::Writer::new(&mut []);
@@ -394,7 +398,7 @@ fn long_runs_restore_from_their_own_checkpoints() {
             }
             // (direct simulation over counts does not double: it merges its ~3000
             // particles down to a few hundred by t = 4000)
-            let least = if info.id == SchemeId::DsaCounts {
+            let least = if info.name == "dsa-counts" {
                 2_500
             } else {
                 15_000

@@ -10,8 +10,9 @@ use coagula_core::kernel::{BinaryUniform, Coagulation, FragmentationKernel, NoFr
 use coagula_core::qmc::Randomization;
 use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::Scheme;
+use coagula_core::scheme::facade::{Init, Model, Options, Simulation};
 use coagula_core::scheme::massflow::{MassFlow, PointSource, Sorting, workspace_len};
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::scheme::registry;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -137,15 +138,26 @@ fn the_facade_in_caller_storage_allocates_nothing_after_construction() {
     };
     let k = Coagulation::constant(1.0).unwrap();
     let f = BinaryUniform::new(1.0).unwrap();
-    let len = registry::workspace_len(SchemeId::MassFlow, &init).unwrap();
+    let len = registry::workspace_len(
+        registry::find("massflow").unwrap(),
+        sizes.len(),
+        &Options::default(),
+        true,
+    )
+    .unwrap();
     assert_eq!(len, 6 * 512);
     let mut ws = vec![0.0; len];
-    let opts = Options::default().with_points(PointSource::randomized_niederreiter(
-        Randomization::Owen,
-        &mut generator(4, 0),
-    ));
-    let mut sim: Box<dyn Simulation<_, _, Generator> + '_> =
-        registry::build_in(SchemeId::MassFlow, k, f, &init, &opts, &mut ws).unwrap();
+    let opts = Options::default()
+        .with_randomization(Randomization::Owen)
+        .with_stream(4, 0);
+    let mut sim: Box<dyn Simulation<_, _, Generator> + '_> = registry::build_in(
+        registry::find("massflow").unwrap(),
+        Model::coagulation(k, f),
+        &init,
+        &opts,
+        &mut ws,
+    )
+    .unwrap();
     let mut rng = generator(2, 0);
     sim.advance_to(0.2, &mut rng).unwrap();
     let mut saved = vec![0u8; 1 << 16];
@@ -170,17 +182,37 @@ fn the_facade_in_caller_storage_allocates_nothing_after_construction() {
         counts: &[100],
         volume: 100.0,
     };
-    assert!(registry::workspace_len(SchemeId::LowRank, &counts).is_none());
+    assert!(
+        registry::workspace_len(
+            registry::find("lowrank").unwrap(),
+            100,
+            &Options::default(),
+            false
+        )
+        .is_none()
+    );
     let mut small = vec![0.0; 4];
     assert!(
-        registry::build_in::<_, _, Generator>(SchemeId::LowRank, k, f, &counts, &opts, &mut small)
-            .is_err()
+        registry::build_in::<_, _, Generator>(
+            registry::find("lowrank").unwrap(),
+            Model::coagulation(k, f),
+            &counts,
+            &opts,
+            &mut small
+        )
+        .is_err()
     );
     // too small a workspace is an error, not an overrun
     let mut short = vec![0.0; len - 1];
     assert!(
-        registry::build_in::<_, _, Generator>(SchemeId::MassFlow, k, f, &init, &opts, &mut short)
-            .is_err()
+        registry::build_in::<_, _, Generator>(
+            registry::find("massflow").unwrap(),
+            Model::coagulation(k, f),
+            &init,
+            &opts,
+            &mut short
+        )
+        .is_err()
     );
 }
 
@@ -232,11 +264,9 @@ fn langevin_steps_do_not_allocate() {
             &mut ws[..],
         )
         .unwrap();
-        let mut rng = generator(1, 0);
         let n = allocations(|| {
-            b.advance_to(1.6, &mut rng).unwrap();
-            b.advance_within(3.2, &mut Budget::work(1000), &mut rng)
-                .unwrap();
+            b.advance_to(1.6).unwrap();
+            b.advance_within(3.2, &mut Budget::work(1000)).unwrap();
             let _ = b.statistics(|x, u| paper::observable(x[0], u[0])).mean();
             let _ = b.hit_statistics();
         });
@@ -255,7 +285,7 @@ fn langevin_steps_do_not_allocate() {
     )
     .unwrap();
     let n = allocations(|| {
-        b.advance_to(1.0, &mut generator(2, 0)).unwrap();
+        b.advance_to(1.0).unwrap();
     });
     assert_eq!(n, 0, "3-D: {n} allocations");
 }

@@ -625,7 +625,8 @@ proptest! {
         flip in any::<usize>(),
         value in any::<u8>(),
     ) {
-        use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc, StickBelow};
+        use coagula_core::kernel::gas::StickBelow;
+    use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc};
         let sizes: Vec<u64> = parts.iter().map(|p| p.0).collect();
         let vel: Vec<[f64; 3]> = parts.iter().map(|p| [p.1[0], p.1[1], p.1[2]]).collect();
         let mut rng = Pcg64Mcg::new(11);

@@ -8,11 +8,13 @@
 
 use crate::common::z_max;
 use coagula_core::exact::Exact;
+use coagula_core::initial::Distribution;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::Scheme;
+use coagula_core::scheme::facade::{Init, Model, Options, Simulation, Start};
 use coagula_core::scheme::lowrank::{Bucketed, LowRankSizes};
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::scheme::registry;
 use coagula_core::{Error, observe::Observe};
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::{Rng, SeedableRng};
@@ -132,9 +134,8 @@ fn the_registry_builds_and_refuses() {
     };
     let opts = Options::default();
     let s: Box<dyn Simulation<_, _, Pcg64Mcg>> = registry::build(
-        SchemeId::LowRankSizes,
-        Coagulation::brownian(),
-        NoFragmentation,
+        registry::find("lowrank-sizes").unwrap(),
+        Model::coagulation(Coagulation::brownian(), NoFragmentation),
         &init,
         &opts,
     )
@@ -143,9 +144,8 @@ fn the_registry_builds_and_refuses() {
     approx::assert_relative_eq!(s.moment(1.0), 1.0, max_relative = 1e-15);
     let frag = coagula_core::kernel::BinaryUniform::new(1.0).unwrap();
     let e = registry::build::<_, _, Pcg64Mcg>(
-        SchemeId::LowRankSizes,
-        Coagulation::constant(1.0).unwrap(),
-        frag,
+        registry::find("lowrank-sizes").unwrap(),
+        Model::coagulation(Coagulation::constant(1.0).unwrap(), frag),
         &init,
         &opts,
     )
@@ -223,4 +223,30 @@ fn rank_three_agrees_with_direct_simulation() {
         }
     }
     assert!(failures.is_empty(), "{failures}");
+}
+
+/// The lattice of an exponential for the mass-flow scheme samples the mass
+/// distribution (mean 2μ), for direct simulation the number distribution (mean μ):
+/// a factor 2 would show in either.
+#[test]
+fn lattices_sample_the_distribution_the_scheme_takes() {
+    let e = Distribution::Exponential { mean: 1.5 };
+    let n = 1 << 14;
+    let mean = |s: Start| match s {
+        Start::Sizes { sizes, .. } => sizes.iter().sum::<f64>() / sizes.len() as f64,
+        _ => unreachable!(),
+    };
+    let mf = registry::find("massflow").unwrap();
+    let dsa = registry::find("dsa").unwrap();
+    assert!((mean(e.start(mf, n, 1.0, 1.0, 0.5).unwrap()) - 3.0).abs() < 1e-3);
+    assert!((mean(e.start(dsa, n, 1.0, 1.0, 0.5).unwrap()) - 1.5).abs() < 1e-3);
+    let lr = registry::find("lowrank").unwrap();
+    let Start::Counts { counts, volume } = e.start(lr, n, 2.0, 0.25, 0.5).unwrap() else {
+        panic!()
+    };
+    assert_eq!(counts.iter().sum::<u64>(), n as u64);
+    assert_eq!(volume, n as f64 / 2.0);
+    // a gas takes no distribution
+    let gas = registry::find("dsmc").unwrap();
+    assert!(e.start(gas, n, 1.0, 1.0, 0.5).is_err());
 }

@@ -16,7 +16,7 @@ use crate::common::{LABELS, Sim, mass, z_max};
 use coagula_core::exact::Exact;
 use coagula_core::kernel::Coagulation;
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::registry::{SchemeId, State};
+use coagula_core::scheme::facade::{SchemeId, State};
 use proptest::prelude::*;
 use rand_pcg::Pcg64Mcg;
 
@@ -42,12 +42,12 @@ fn run_all(
     let init = &init;
     common::count_schemes()
         .enumerate()
-        .filter(|(_, info)| n0 < 100_000 || info.id != SchemeId::Inverse)
+        .filter(|(_, info)| n0 < 100_000 || info.name != "inverse")
         .filter_map(|(i, info)| {
-            common::build(info.id, kernel, init, v)?;
+            common::build(info, kernel, init, v)?;
             let start = std::time::Instant::now();
             let st = common::facade_replicas(11 + i as u64, reps, times, || {
-                common::build(info.id, kernel, init, v).unwrap()
+                common::build(info, kernel, init, v).unwrap()
             });
             eprintln!(
                 "N0 {n0} len {len} {}: {:.2} s",
@@ -71,7 +71,7 @@ fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
         let z = z_max(reps);
         let tree = &runs
             .iter()
-            .find(|(n, _)| *n == SchemeId::LowRankTree.name())
+            .find(|(n, _)| *n == "lowrank-tree")
             .expect("the tree layout is registered")
             .1;
         for (scheme, stats) in &runs {
@@ -81,9 +81,7 @@ fn sweep(name: &str, kernel: Coagulation, exact: Exact, times: &[f64]) {
                     // (direct simulation over counts does not double: its small-N law
                     // is the plain Marcus–Lushnikov process, checked against its exact
                     // master equation in finite_n.rs, not the doubling tree's)
-                    if *scheme != SchemeId::LowRankTree.name()
-                        && *scheme != SchemeId::DsaCounts.name()
-                    {
+                    if *scheme != "lowrank-tree" && *scheme != "dsa-counts" {
                         let se = (a.std_error().powi(2) + b.std_error().powi(2)).sqrt();
                         let d = b.mean() - a.mean();
                         if d.abs() > z * se + 1e-15 {
@@ -210,7 +208,7 @@ proptest! {
             _ => (Coagulation::brownian(), t),
         };
         for info in common::count_schemes() {
-            invariants(info.id, k, init, v, t, seed, mass0)?;
+            invariants(info, k, init, v, t, seed, mass0)?;
         }
     }
 }

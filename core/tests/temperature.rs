@@ -1,4 +1,4 @@
-//! Temperature-dependent low-rank Monte Carlo (Osinsky 2023 §4; `scheme::lowrank::thermal`):
+//! Temperature-dependent low-rank Monte Carlo (Osinsky 2023 §4; `scheme::lowrank::temperature`):
 //! the model family's closed form, the exact finite-N reference where the family is a
 //! pure death process, the energy each event moves (to rounding, event by event), the
 //! ballistic model against a deterministic solve of its equations, checkpoints, bad
@@ -6,12 +6,11 @@
 
 use crate::common::z_max;
 use coagula_core::Error;
-use coagula_core::checkpoint::Checkpoint;
 use coagula_core::kernel::temperature::{Ballistic, ClosedForm, TemperatureKernel, integrate};
 use coagula_core::observe::Replicas;
 use coagula_core::scheme::lowrank::{
-    BinaryTree, BucketedEngine, Collide, LowRankMc, ProposalEngine, TemperatureMc,
-    TemperatureRejection, Temperatures, TreeEngine, UniformEngine, WideTree,
+    BinaryTree, BucketedEngine, Collide, LowRankMc, ProposalEngine, TemperatureMc, Temperatures,
+    TreeEngine, UniformEngine, WideTree,
 };
 use coagula_core::scheme::{Budget, Scheme};
 use rand_pcg::Pcg64Mcg;
@@ -374,69 +373,13 @@ fn ballistic<E: ProposalEngine<3>>(engine: &str) -> String {
     failures
 }
 
+/// Every bit of a temperature sim's state.
 fn state_bits<TK: TemperatureKernel + Clone, E: ProposalEngine<3>>(s: &On<TK, E>) -> Vec<u64> {
     let mut v: Vec<u64> = s.counts().iter().copied().collect();
     v.extend(s.kernel().temperatures().iter().map(|t| t.to_bits()));
     v.push(s.time().to_bits());
     v.push(s.volume().to_bits());
     v
-}
-
-/// A run split by a checkpoint equals the unbroken run, bit for bit; the same seed
-/// gives the same bits; corrupted temperatures are refused and change nothing.
-#[test]
-fn checkpoint_split_and_same_seed() {
-    split_and_seed::<TreeEngine<3, WideTree<3>>>();
-    split_and_seed::<UniformEngine<3>>();
-    // one engine's checkpoint does not restore into the other
-    let k = Temperatures::new(ClosedForm::new(1.0, 0.5).unwrap(), &[1.0]).unwrap();
-    let a = TemperatureMc::<_>::new(k.clone(), &[100], 100.0).unwrap();
-    let mut b = TemperatureRejection::new(k, &[100], 100.0).unwrap();
-    let mut buf = vec![0u8; a.checkpoint_len()];
-    a.save_to(&mut buf).unwrap();
-    assert!(b.restore_from(&buf).is_err());
-}
-
-fn split_and_seed<E: ProposalEngine<3>>() {
-    let make = || {
-        let k = Temperatures::new(Ballistic::new(0.9, 1.0, 0.4).unwrap(), &[1.0, 2.0]).unwrap();
-        On::<_, E>::new(k, &[3000, 500], 3000.0).unwrap()
-    };
-    let mut a = make();
-    let mut rng_a = rng(9);
-    a.advance_to(5.0, &mut rng_a).unwrap();
-    let mut buf = vec![0u8; a.checkpoint_len()];
-    a.save_to(&mut buf).unwrap();
-    let rng_saved = rng_a.clone();
-    a.advance_to(40.0, &mut rng_a).unwrap();
-
-    let mut b = make();
-    b.restore_from(&buf).unwrap();
-    let mut rng_b = rng_saved;
-    b.advance_to(40.0, &mut rng_b).unwrap();
-    assert_eq!(state_bits(&a), state_bits(&b));
-
-    let mut c = make();
-    c.advance_to(40.0, &mut rng(9)).unwrap();
-    assert_eq!(state_bits(&a), state_bits(&c), "same seed, same bits");
-    let mut d = make();
-    d.advance_to(40.0, &mut rng(10)).unwrap();
-    assert_ne!(state_bits(&a), state_bits(&d), "another seed, another run");
-
-    // a checkpoint of a plain low-rank scheme, a truncated one: refused, state kept
-    let mut plain = coagula_core::scheme::lowrank::LowRank::<_, 1>::monodisperse(
-        coagula_core::kernel::Coagulation::constant(1.0).unwrap(),
-        100,
-    )
-    .unwrap();
-    let mut pbuf = vec![0u8; plain.checkpoint_len()];
-    plain.save_to(&mut pbuf).unwrap();
-    let mut e = make();
-    let before = state_bits(&e);
-    assert!(e.restore_from(&pbuf).is_err());
-    assert!(e.restore_from(&buf[..buf.len() - 9]).is_err());
-    assert!(plain.restore_from(&buf).is_err());
-    assert_eq!(state_bits(&e), before);
 }
 
 /// Bad input is an error, never a panic: invalid temperatures, the bucketed engine

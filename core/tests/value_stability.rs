@@ -298,7 +298,6 @@ fn lowrank_sizes_is_value_stable() {
 fn langevin_batches_are_value_stable() {
     use coagula_core::langevin::{Batch, Config, Friction, Wall, paper};
     let mut failures = String::new();
-    let mut rng = Pcg64Mcg::seed_from_u64(42);
     let state = |xs: Vec<u64>| fnv(xs);
     for (name, wall, want) in [
         (
@@ -313,7 +312,7 @@ fn langevin_batches_are_value_stable() {
         ),
     ] {
         let mut b = paper::batch(wall, 0.05, paper::Choices::default(), 500, 42, 0).unwrap();
-        let rep = b.advance_to(paper::T, &mut rng).unwrap();
+        let rep = b.advance_to(paper::T).unwrap();
         let mut words: Vec<u64> = b
             .positions()
             .chain(b.velocities())
@@ -327,7 +326,7 @@ fn langevin_batches_are_value_stable() {
         ([1.5, 0.0, 0.0], [-1.0, 0.0, 0.0])
     })
     .unwrap();
-    let rep = b.advance_to(1.0, &mut rng).unwrap();
+    let rep = b.advance_to(1.0).unwrap();
     let mut words: Vec<u64> = b
         .positions()
         .chain(b.velocities())
@@ -388,7 +387,8 @@ fn temperature_schemes_are_value_stable() {
 
 #[test]
 fn dsmc_is_value_stable() {
-    use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc, StickBelow};
+    use coagula_core::kernel::gas::StickBelow;
+    use coagula_core::scheme::lowrank::dsmc::{Gas, LowRankDsmc, RejectionDsmc};
     let mut failures = String::new();
     let mut rng = Pcg64Mcg::seed_from_u64(42);
     let gas = Gas::maxwellian(0.9, &[600, 200, 60], &[1.0, 1.0, 2.0], &mut rng)
@@ -423,6 +423,56 @@ fn dsmc_is_value_stable() {
     ] {
         if got != want {
             failures.push_str(&format!("{name}: got {got:?}, pinned {want:?}\n"));
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
+/// Every scheme of the registry, built through it from the suite's standard start (the
+/// conformance tests' `common::standard`: 2048 monomers, the additive kernel, or the
+/// scheme's temperature model or gas), run to t = 1.5 on seed 42: the report and a hash
+/// of the whole state (`common::state_bits`). A scheme added to the registry fails here
+/// until it is pinned.
+#[test]
+fn every_registry_scheme_is_value_stable() {
+    use crate::common::{Sim, standard, state_bits};
+    use coagula_core::scheme::registry;
+    // lowrank-tree and lowrank-binary-tree agree: a sum tree's search maps one uniform
+    // to the same particle whatever its arity
+    const PINS: &[(&str, Pin)] = &[
+        ("massflow", (9673, 307200, 0, 0, 5290409906748756131)),
+        ("lowrank", (2166, 2168, 2, 2, 1325362049796669126)),
+        ("lowrank-tree", (2269, 2270, 1, 2, 6494809902827688707)),
+        (
+            "lowrank-binary-tree",
+            (2269, 2270, 1, 2, 6494809902827688707),
+        ),
+        ("inverse", (2282, 2282, 0, 2, 5247040761069309302)),
+        ("rejection", (2155, 25337, 23182, 2, 5272263596675280727)),
+        ("mfa", (10241, 32280, 22039, 0, 12727288476529336162)),
+        ("dsa", (1627, 3670, 2043, 0, 3078326075113058261)),
+        ("dsa-counts", (1621, 3603, 1982, 0, 221548900314250824)),
+        ("lowrank-sizes", (2279, 2279, 0, 2, 2364236902791145940)),
+        ("temperature", (1605, 2284, 679, 0, 3419479300055532468)),
+        (
+            "temperature-rejection",
+            (1624, 2450, 826, 0, 5229304295555439157),
+        ),
+        ("dsmc", (1075, 1711, 636, 0, 1657399837960174287)),
+        (
+            "dsmc-rejection",
+            (1089, 4421, 3332, 0, 10542260871445829706),
+        ),
+    ];
+    let mut failures = String::new();
+    for &info in registry::SCHEMES {
+        let mut s: Box<Sim> = standard(info, 2048, Coagulation::additive())
+            .unwrap_or_else(|| panic!("{}: not built", info.name));
+        let rep = s.advance_to(1.5, &mut Pcg64Mcg::seed_from_u64(42)).unwrap();
+        let got = pin(rep, fnv(state_bits(&*s)));
+        match PINS.iter().find(|(n, _)| *n == info.name) {
+            Some(&(_, want)) => check(info.name, got, want, &mut failures),
+            None => failures.push_str(&format!("(\"{}\", {got:?}),\n", info.name)),
         }
     }
     assert!(failures.is_empty(), "{failures}");

@@ -88,22 +88,27 @@ int main(int argc, char **argv) {
     }
     omp_set_num_threads(nthreads);
     coag_kernel *k;
-    int s = coag_kernel_new_brownian(&k);
-    if (s != COAG_OK) die(s, "kernel");
-    coag_counts_config cfg;
-    coag_counts_default_config(&cfg, sizeof cfg); /* low-rank, bucketed layout */
-    cfg.seed = 2026;
+    int s = coag_kernel_new("brownian", NULL, 0, &k); /* K = (x^1/3 + y^1/3)(x^-1/3 + y^-1/3) */
+    if (s != COAG_OK) die(s, "coag_kernel_new");
+    coag_options *opts;
+    s = coag_options_new(&opts);
+    if (s != COAG_OK) die(s, "coag_options_new");
+    s = coag_options_set_count(opts, "seed", 2026);
+    if (s != COAG_OK) die(s, "coag_options_set_count");
     uint64_t counts[1] = {(uint64_t)particles}; /* all monomers */
 
     coag_sim **cells = malloc((size_t)ncells * sizeof *cells);
     if (!cells) return 1;
     double rss0 = rss_bytes();
     for (long c = 0; c < ncells; c++) {
-        cfg.stream = (uint64_t)c; /* an independent stream per cell */
-        s = coag_counts_new(&cfg, k, counts, 1, &cells[c]);
-        if (s != COAG_OK) die(s, "coag_counts_new");
+        s = coag_options_set_count(opts, "stream", (uint64_t)c); /* an independent stream per cell */
+        if (s != COAG_OK) die(s, "coag_options_set_count");
+        /* the low-rank scheme (bucketed layout); volume = particles, so M0 = 1 */
+        s = coag_sim_new_counts("lowrank", k, NULL, opts, counts, 1, (double)particles, &cells[c]);
+        if (s != COAG_OK) die(s, "coag_sim_new_counts");
     }
     double per_cell = (rss_bytes() - rss0) / (double)ncells;
+    coag_options_free(opts); /* the sims copied what they need */
     coag_kernel_free(k);
 
     int threads = omp_get_max_threads();

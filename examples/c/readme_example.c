@@ -15,19 +15,21 @@ static void die(int status) {
 int main(void) {
     coag_kernel *k;
     coag_fragmentation *f;
-    TRY(coag_kernel_new_constant(1.0, &k));                /* K(x, y) = 1 */
+    TRY(coag_kernel_new("constant", (const double[]){1.0}, 1, &k)); /* K(x, y) = 1 */
     TRY(coag_fragmentation_new_binary_uniform(1.0, &f));   /* F(x, y) = 2/(x + y) */
 
-    coag_massflow_config cfg;
-    TRY(coag_massflow_default_config(&cfg, sizeof cfg));               /* QMC, dt = 0.01 */
+    coag_options *opts;                                    /* every option at its default: */
+    TRY(coag_options_new(&opts));                          /* QMC points, seed 0 */
+    TRY(coag_options_set_real(opts, "dt", 0.01));          /* the time step */
     enum { N = 1 << 14 };
     static double sizes[N];
     for (int i = 0; i < N; i++) sizes[i] = 1.0;            /* c(x, 0) = delta(x - 1) */
 
-    coag_sim *sim;
-    TRY(coag_massflow_new(&cfg, k, f, sizes, N, &sim));
+    coag_sim *sim;                                         /* scheme "massflow", mass M1 = 1 */
+    TRY(coag_sim_new_sizes("massflow", k, f, opts, sizes, N, 1.0, &sim));
     coag_kernel_free(k);                                   /* the sim keeps a copy */
     coag_fragmentation_free(f);
+    coag_options_free(opts);
 
     for (int step = 1; step <= 10; step++) {               /* the host's outer steps */
         double t = 0.1 * step, m2, exact;

@@ -1,7 +1,7 @@
 //! What dynamic dispatch costs: the bucketed low-rank scheme on Osinsky's Brownian
 //! row (10^7 monomers to t = 10), called three ways — the Rust generic path
 //! (`Bucketed<_, 2, 4>`), the facade of the registry (`Box<dyn Simulation>`), and the C
-//! ABI (`coag_counts_new` + `coag_sim_advance_to`, which adds the kernel handle's and
+//! ABI (`coag_sim_new_counts` + `coag_sim_advance_to`, which adds the kernel handle's and
 //! the random source's enum dispatch). Each path advances in 200 slices, as the CLI's
 //! bench does. The paths alternate, `ROUNDS` rounds; the minimum of each is reported
 //! with its ratio to the generic path.
@@ -13,8 +13,9 @@ use coagula::*;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::Scheme;
+use coagula_core::scheme::facade::{Init, Model, Options, Simulation};
 use coagula_core::scheme::lowrank::Bucketed;
-use coagula_core::scheme::registry::{self, Init, Options, SchemeId, Simulation};
+use coagula_core::scheme::registry;
 use std::time::Instant;
 
 const T: f64 = 10.0;
@@ -51,9 +52,8 @@ fn facade(n0: u64, seed: u64) -> (f64, u64) {
         volume: n0 as f64,
     };
     let mut s: Box<dyn Simulation<Coagulation, NoFragmentation, Generator>> = registry::build(
-        SchemeId::LowRank,
-        Coagulation::brownian(),
-        NoFragmentation,
+        registry::find("lowrank").unwrap(),
+        Model::coagulation(Coagulation::brownian(), NoFragmentation),
         &init,
         &Options::default(),
     )
@@ -74,16 +74,28 @@ fn c_abi(n0: u64, seed: u64) -> (f64, u64) {
     let mut ev = 0;
     unsafe {
         let mut k = std::ptr::null_mut();
-        assert_eq!(coag_kernel_new_brownian(&mut k), COAG_OK);
-        let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
         assert_eq!(
-            coag_counts_default_config(cfg.as_mut_ptr(), std::mem::size_of::<coag_counts_config>()),
+            coag_kernel_new(c"brownian".as_ptr(), std::ptr::null(), 0, &mut k),
             COAG_OK
         );
-        let mut cfg = cfg.assume_init();
-        cfg.seed = seed;
+        let mut o = std::ptr::null_mut();
+        assert_eq!(coag_options_new(&mut o), COAG_OK);
+        assert_eq!(coag_options_set_count(o, c"seed".as_ptr(), seed), COAG_OK);
         let mut s = std::ptr::null_mut();
-        assert_eq!(coag_counts_new(&cfg, k, [n0].as_ptr(), 1, &mut s), COAG_OK);
+        assert_eq!(
+            coag_sim_new_counts(
+                c"lowrank".as_ptr(),
+                k,
+                std::ptr::null(),
+                o,
+                [n0].as_ptr(),
+                1,
+                n0 as f64,
+                &mut s
+            ),
+            COAG_OK
+        );
+        coag_options_free(o);
         let mut rep = std::mem::MaybeUninit::<coag_step_report>::uninit();
         assert_eq!(
             coag_step_report_init(rep.as_mut_ptr(), std::mem::size_of::<coag_step_report>()),

@@ -17,20 +17,25 @@ struct CSim(*mut coag_sim);
 
 impl CSim {
     fn new(k: *const coag_kernel, seed: u64) -> Self {
-        let mut cfg = std::mem::MaybeUninit::<coag_counts_config>::uninit();
         let mut s = std::ptr::null_mut();
         unsafe {
+            let mut o = std::ptr::null_mut();
+            assert_eq!(coag_options_new(&mut o), COAG_OK);
+            assert_eq!(coag_options_set_count(o, c"seed".as_ptr(), seed), COAG_OK);
             assert_eq!(
-                coag_counts_default_config(
-                    cfg.as_mut_ptr(),
-                    std::mem::size_of::<coag_counts_config>()
+                coag_sim_new_counts(
+                    c"lowrank-tree".as_ptr(),
+                    k,
+                    std::ptr::null(),
+                    o,
+                    [N0].as_ptr(),
+                    1,
+                    N0 as f64,
+                    &mut s
                 ),
                 COAG_OK
             );
-            let mut cfg = cfg.assume_init();
-            cfg.seed = seed;
-            cfg.method = COAG_METHOD_LOWRANK_TREE;
-            assert_eq!(coag_counts_new(&cfg, k, [N0].as_ptr(), 1, &mut s), COAG_OK);
+            coag_options_free(o);
         }
         CSim(s)
     }
@@ -45,7 +50,12 @@ impl Drop for CSim {
 fn overhead(c: &mut Criterion) {
     let kernel = Coagulation::constant(1.0).unwrap();
     let mut k = std::ptr::null_mut();
-    unsafe { assert_eq!(coag_kernel_new_constant(1.0, &mut k), COAG_OK) };
+    unsafe {
+        assert_eq!(
+            coag_kernel_new(c"constant".as_ptr(), [1.0].as_ptr(), 1, &mut k),
+            COAG_OK
+        )
+    };
 
     let mut g = c.benchmark_group("advance_to/empty-step");
     let mut sim = LowRank::<_, 1>::monodisperse(kernel, N0).unwrap();

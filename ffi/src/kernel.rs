@@ -1,11 +1,14 @@
-//! Kernel and fragmentation handles: the built-in kernels, and user kernels from C
-//! function pointers with their bound information.
+//! Kernel and fragmentation handles: the built-in kernels of core's table (by name and
+//! parameters), and user kernels from C function pointers with their bound information.
 
-use crate::{COAG_INVALID_ARGUMENT, Fail, fail, guard, non_null, write};
+use crate::status::{COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, Fail, fail, guard};
+use crate::util::{non_null, slice, text, write};
+use coagula_core::kernel::builtin::{self, Builtin};
 use coagula_core::kernel::{
     BinaryUniform, Coagulation, CoagulationKernel, FragmentationKernel, MAX_RANK,
 };
-use std::ffi::c_void;
+use coagula_core::scheme::facade::Model;
+use std::ffi::{c_char, c_void};
 
 /// `K(x, y)` from C.
 pub type coag_rate_fn = Option<unsafe extern "C" fn(x: f64, y: f64, user_data: *mut c_void) -> f64>;
@@ -58,20 +61,64 @@ pub struct coag_user_fragmentation {
     pub user_data: *mut c_void,
 }
 
-/// What a `coag_kernel` handle holds.
+/// A coagulation kernel as a sim holds it: built in, or a C callback.
 #[derive(Clone, Copy, Debug)]
 pub enum Kernel {
     Builtin(Coagulation),
     User(coag_user_kernel),
 }
 
+/// What a `coag_kernel` handle holds: a coagulation kernel, or the physics of the
+/// temperature-dependent and DSMC schemes (core's built-in table).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Physics {
+    Coagulation(Kernel),
+    Other(Builtin),
+}
+
 /// Opaque kernel handle (`coag_kernel` in C).
 #[derive(Debug)]
 pub struct coag_kernel {
-    pub(crate) k: Kernel,
+    pub(crate) k: Physics,
+}
+
+impl coag_kernel {
+    /// The coagulation kernel (`COAG_UNSUPPORTED` for a temperature model or a gas).
+    pub(crate) fn coagulation(&self) -> Result<Kernel, Fail> {
+        match self.k {
+            Physics::Coagulation(k) => Ok(k),
+            Physics::Other(_) => fail(
+                COAG_UNSUPPORTED,
+                "kernel: a temperature model or a gas is not a coagulation kernel",
+            ),
+        }
+    }
+
+    /// The model a sim is built under, with `frag`.
+    pub(crate) fn model(&self, frag: Fragmentation) -> Result<Model<Kernel, Fragmentation>, Fail> {
+        Ok(match self.k {
+            Physics::Coagulation(k) => Model::coagulation(k, frag),
+            Physics::Other(b) => Model::of_builtin(b, Kernel::Builtin, frag)?,
+        })
+    }
 }
 
 impl CoagulationKernel for Kernel {
+    /// A built-in kernel's parameters; for a C callback what it declares (its code is
+    /// not stored).
+    fn fingerprint(&self) -> u64 {
+        match self {
+            Kernel::Builtin(c) => c.fingerprint(),
+            Kernel::User(u) => coagula_core::checkpoint::fingerprint([
+                0x5553_4552, // "USER"
+                u64::from(u.rank),
+                u.low_rank_exact as u64,
+                u64::from(u.majorant.is_some()),
+                u64::from(u.factors.is_some()),
+                u64::from(u.sup.is_some()),
+            ]),
+        }
+    }
     #[inline]
     fn rate(&self, x: f64, y: f64) -> f64 {
         match self {
@@ -161,6 +208,20 @@ pub enum Fragmentation {
     User(coag_user_fragmentation),
 }
 
+impl Fragmentation {
+    /// The kernel of a handle that may be NULL (none).
+    ///
+    /// # Safety
+    /// `frag` NULL or live.
+    pub(crate) unsafe fn of(frag: *const coag_fragmentation) -> Result<Fragmentation, Fail> {
+        if frag.is_null() {
+            return Ok(Fragmentation::None);
+        }
+        // SAFETY: non-null; live by contract.
+        Ok(unsafe { crate::util::handle(frag, "frag") }?.f)
+    }
+}
+
 /// Opaque fragmentation handle (`coag_fragmentation` in C).
 #[derive(Debug)]
 pub struct coag_fragmentation {
@@ -196,105 +257,55 @@ impl FragmentationKernel for Fragmentation {
     fn is_none(&self) -> bool {
         matches!(self, Fragmentation::None)
     }
+    fn fingerprint(&self) -> u64 {
+        match self {
+            Fragmentation::None => 0,
+            Fragmentation::Binary(b) => b.fingerprint(),
+            Fragmentation::User(u) => {
+                coagula_core::checkpoint::fingerprint([2, u.sup_rate.to_bits()])
+            }
+        }
+    }
 }
 
 /// # Safety
 /// `out` checked non-null and writable (the C caller's contract).
-unsafe fn new_kernel(k: Kernel, out: *mut *mut coag_kernel) -> Result<(), Fail> {
+unsafe fn new_kernel(k: Physics, out: *mut *mut coag_kernel) -> Result<(), Fail> {
     // SAFETY: the function's contract.
     unsafe { write(out, Box::into_raw(Box::new(coag_kernel { k }))) };
     Ok(())
 }
 
+/// A built-in kernel of core's table by name (`coag_builtin_count`/`coag_builtin_info`
+/// list them: coagulation kernels, the temperature models and the hard-sphere gas) with
+/// `n` parameters in the table's order (`coag_builtin_param`); parameters past `n` take
+/// their defaults (`params` may be NULL with `n` 0). The kernel convention is that of
+/// the Smoluchowski equation with the ½ of the gain term: each unordered pair of
+/// particles in a volume V coagulates at rate `K/V`. Errors: an unknown name, a
+/// required parameter missing, a value outside its range (`COAG_INVALID_ARGUMENT`).
+///
 /// # Safety
-/// `out` must be NULL or writable (the C caller's contract).
-unsafe fn builtin(make: coagula_core::Result<Coagulation>, out: *mut *mut coag_kernel) -> i32 {
+/// `name` NULL or NUL-terminated; `params` NULL or valid for `n` doubles; `out` NULL or
+/// writable.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_new(
+    name: *const c_char,
+    params: *const f64,
+    n: usize,
+    out: *mut *mut coag_kernel,
+) -> i32 {
     guard(|| {
+        // SAFETY (both): NULL checked; valid by contract.
+        let name = unsafe { text(name, "name") }?;
+        let p = unsafe { slice(params, n, "params") }?;
         non_null(out, "out")?;
+        let k = match builtin::make_positional(name, p)? {
+            Builtin::Coagulation(c) => Physics::Coagulation(Kernel::Builtin(c)),
+            b => Physics::Other(b),
+        };
         // SAFETY: `out` checked non-null above; writable (caller contract).
-        unsafe { new_kernel(Kernel::Builtin(make?), out) }
+        unsafe { new_kernel(k, out) }
     })
-}
-
-/// Constant kernel `K = k0` (k0 > 0).
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_constant(k0: f64, out: *mut *mut coag_kernel) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Coagulation::constant(k0), out) }
-}
-
-/// Additive kernel `K = x + y`; bounds valid for sizes `≥ min_size` (0: all sizes,
-/// 1: integer sizes, with a tighter majorant).
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_additive(
-    min_size: f64,
-    out: *mut *mut coag_kernel,
-) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Coagulation::additive().with_min_size(min_size), out) }
-}
-
-/// Multiplicative kernel `K = x y`.
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_multiplicative(out: *mut *mut coag_kernel) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Ok(Coagulation::multiplicative()), out) }
-}
-
-/// Product kernel `K = (x y)^a`, `0 < a ≤ 1`.
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_product(a: f64, out: *mut *mut coag_kernel) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Coagulation::product(a), out) }
-}
-
-/// Homogeneous kernel of Eibeck & Wagner eq. 6.6, `1 < gamma ≤ 2`.
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_homogeneous(
-    gamma: f64,
-    out: *mut *mut coag_kernel,
-) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Coagulation::homogeneous(gamma), out) }
-}
-
-/// Free-molecular (ballistic) kernel; bounds valid for sizes `≥ min_size` (0: all
-/// sizes, 1: integer sizes).
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_free_molecular(
-    min_size: f64,
-    out: *mut *mut coag_kernel,
-) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Coagulation::free_molecular().with_min_size(min_size), out) }
-}
-
-/// Brownian (continuum) kernel.
-///
-/// # Safety
-/// `out` must be NULL or valid for writing one pointer.
-#[unsafe(no_mangle)]
-pub unsafe extern "C" fn coag_kernel_new_brownian(out: *mut *mut coag_kernel) -> i32 {
-    // SAFETY: `out` as the caller passed it (NULL is checked).
-    unsafe { builtin(Ok(Coagulation::brownian()), out) }
 }
 
 /// A user kernel from C callbacks (see `coag_user_kernel`). Errors: `rate` NULL,
@@ -323,11 +334,12 @@ pub unsafe extern "C" fn coag_kernel_new_user(
             );
         }
         // SAFETY: `out` checked non-null above; writable (caller contract).
-        unsafe { new_kernel(Kernel::User(d), out) }
+        unsafe { new_kernel(Physics::Coagulation(Kernel::User(d)), out) }
     })
 }
 
-/// Evaluates `K(x, y)` of a kernel handle.
+/// Evaluates `K(x, y)` of a coagulation kernel handle (`COAG_UNSUPPORTED` for a
+/// temperature model or a gas, whose rates depend on more than two sizes).
 ///
 /// # Safety
 /// `kernel` must be NULL or a live handle; `out` NULL or writable.
@@ -339,11 +351,10 @@ pub unsafe extern "C" fn coag_kernel_rate(
     out: *mut f64,
 ) -> i32 {
     guard(|| {
-        non_null(kernel, "kernel")?;
+        // SAFETY: NULL checked; a live handle by contract.
+        let k = unsafe { crate::util::handle(kernel, "kernel") }?.coagulation()?;
         non_null(out, "out")?;
-        // SAFETY: checked non-null; a live handle from coag_kernel_new_*.
-        let k = unsafe { &(*kernel).k };
-        let v = coagula_core::kernel::checked_rate(k, x, y)?;
+        let v = coagula_core::kernel::checked_rate(&k, x, y)?;
         // SAFETY: checked non-null; writable by the caller's contract.
         unsafe { write(out, v) };
         Ok(())

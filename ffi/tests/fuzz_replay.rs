@@ -40,7 +40,7 @@ fn checkpoint_restore_corpus_and_regressions() {
 fn checkpoint_restore_seeds_are_current() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz/corpus/checkpoint_restore");
     let seeds = fuzz::seeds();
-    assert_eq!(seeds.len(), 6 * (fuzz::KINDS + 1) + 2);
+    assert_eq!(seeds.len(), 6 * (fuzz::kinds() + 1) + 2);
     for (name, data) in seeds {
         let committed = std::fs::read(dir.join(&name)).unwrap_or_default();
         assert!(

@@ -2,11 +2,8 @@
 //! scenario is loaded or refused with a message, never a panic or a hang.
 #![no_main]
 
-#[path = "../../cli/src/frag.rs"]
-#[allow(dead_code)]
-mod frag;
-#[path = "../../cli/src/scenario.rs"]
-#[allow(dead_code)]
+#[path = "../../cli/src/scenario/mod.rs"]
+#[allow(dead_code, unused_imports)]
 mod scenario;
 
 use libfuzzer_sys::fuzz_target;

@@ -4,29 +4,43 @@
 use coagula::*;
 use std::ptr::null_mut;
 
-/// The scheme kinds the targets build: mass flow, then the `COAG_METHOD_*` (0–4 as
-/// 1–5), then the event-driven schemes over particles (MFA, DSA). The bucketed low-rank
-/// kind (1) has two engines: kind numbers `1 + KINDS·(2j + 1)` pin the slot engine,
-/// which a small system would not otherwise reach ([`SLOTS_KIND`]).
-pub const KINDS: usize = 8;
+/// The scheme kinds the targets build: every scheme of core's registry in its order,
+/// and, at `kinds() + i`, scheme i with the options that pin what a small system would
+/// not reach by itself (the bucketed low-rank scheme's slot engine).
+pub fn kinds() -> usize {
+    coagula_core::scheme::registry::SCHEMES.len()
+}
 
-/// The bucketed low-rank kind on the slot engine (see [`KINDS`]).
-pub const SLOTS_KIND: usize = 1 + KINDS;
+/// The registry's bucketed low-rank scheme on the slot engine (see [`kinds`]).
+pub fn slots_kind() -> usize {
+    kinds()
+        + coagula_core::scheme::registry::SCHEMES
+            .iter()
+            .position(|s| s.name == "lowrank")
+            .unwrap_or(0)
+}
 
 /// Statuses a call may return (anything else, in particular `COAG_PANIC`, is a bug).
 pub fn is_status(st: i32) -> bool {
-    (COAG_OK..=COAG_RNG_FAILURE).contains(&st) && st != COAG_PANIC
+    (COAG_OK..=COAG_REENTRANT).contains(&st) && st != COAG_PANIC
 }
 
-/// A small sim of kind `kind % KINDS` (see [`KINDS`]) under the additive kernel (mass flow and the
-/// event-driven schemes over particles: 16 particles; counts: 300 monomers and a few
-/// larger), its growing tables capped at
-/// 16 MiB and every call at 20 000 proposals, so that an execution stays short.
+/// A small sim of kind `kind` (see [`kinds`]) from its registry entry's capabilities:
+/// the additive kernel, a temperature model or hard spheres as its model takes;
+/// 16 particle sizes, counts of 300 monomers and a few larger, the same counts at
+/// temperature 1, or 45 Maxwellian particles; its growing tables capped at 16 MiB and
+/// every call at 20 000 proposals, so that an execution stays short.
 ///
 /// # Safety
 /// Returns a live handle, freed by the caller with `coag_sim_free`.
 pub unsafe fn small_sim(kind: usize) -> *mut coag_sim {
     unsafe { sim_of(kind, 300, 16 << 20) }
+}
+
+/// The scheme of kind `kind` (see [`kinds`]).
+pub fn scheme_of(kind: usize) -> coagula_core::scheme::facade::SchemeId {
+    let all = coagula_core::scheme::registry::SCHEMES;
+    all[kind % all.len()]
 }
 
 /// As [`small_sim`] with `monomers` monomers (and 20 dimers, 3 of size 4) in a count
@@ -35,51 +49,84 @@ pub unsafe fn small_sim(kind: usize) -> *mut coag_sim {
 /// # Safety
 /// Returns a live handle, freed by the caller with `coag_sim_free`.
 pub unsafe fn sim_of(kind: usize, monomers: u64, budget: u64) -> *mut coag_sim {
+    use coagula_core::scheme::facade::{InitKind, ModelKind};
+    let id = scheme_of(kind);
     unsafe {
+        let (kname, params): (&std::ffi::CStr, &[f64]) = match id.model {
+            ModelKind::Coagulation => (c"additive", &[1.0]),
+            ModelKind::Temperature => (c"temperature-ballistic", &[]),
+            ModelKind::Gas => (c"hard-spheres", &[0.9]),
+        };
         let mut k = null_mut();
-        assert_eq!(coag_kernel_new_additive(0.0, &mut k), COAG_OK);
-        let mut s = null_mut();
-        if kind % KINDS >= 6 {
-            let mut c: coag_eventflow_config = std::mem::zeroed();
+        assert_eq!(
+            coag_kernel_new(kname.as_ptr(), params.as_ptr(), params.len(), &mut k),
+            COAG_OK
+        );
+        let mut o = null_mut();
+        assert_eq!(coag_options_new(&mut o), COAG_OK);
+        if id.takes_option("memory-budget") {
             assert_eq!(
-                coag_eventflow_default_config(&mut c, size_of_val(&c)),
+                coag_options_set_count(o, c"memory-budget".as_ptr(), budget),
                 COAG_OK
             );
-            c.method = [COAG_EVENTFLOW_MFA, COAG_EVENTFLOW_DSA][kind % KINDS - 6];
-            let x: Vec<f64> = (0..16).map(|i| 1.0 + (i % 3) as f64).collect();
-            assert_eq!(
-                coag_eventflow_new(&c, k, std::ptr::null(), x.as_ptr(), 16, &mut s),
-                COAG_OK
-            );
-        } else if kind.is_multiple_of(KINDS) {
-            let mut c: coag_massflow_config = std::mem::zeroed();
-            assert_eq!(
-                coag_massflow_default_config(&mut c, size_of_val(&c)),
-                COAG_OK
-            );
-            c.dt = 0.05;
-            let x: Vec<f64> = (0..16).map(|i| 1.0 + (i % 3) as f64).collect();
-            assert_eq!(
-                coag_massflow_new(&c, k, std::ptr::null(), x.as_ptr(), 16, &mut s),
-                COAG_OK
-            );
-        } else {
-            let mut c: coag_counts_config = std::mem::zeroed();
-            assert_eq!(coag_counts_default_config(&mut c, size_of_val(&c)), COAG_OK);
-            c.method = [
-                COAG_METHOD_LOWRANK,
-                COAG_METHOD_LOWRANK_TREE,
-                COAG_METHOD_INVERSE,
-                COAG_METHOD_REJECTION,
-                COAG_METHOD_DSA_COUNTS,
-            ][kind % KINDS - 1];
-            c.memory_budget = budget;
-            if kind % KINDS == 1 && (kind / KINDS) % 2 == 1 {
-                c.bucket_mode = COAG_BUCKET_SLOTS;
-            }
-            let n = [monomers, 20, 0, 3];
-            assert_eq!(coag_counts_new(&c, k, n.as_ptr(), n.len(), &mut s), COAG_OK);
         }
+        if id.takes_option("dt") {
+            assert_eq!(coag_options_set_real(o, c"dt".as_ptr(), 0.05), COAG_OK);
+        }
+        if id.takes_option("engine") && (kind / kinds()) % 2 == 1 {
+            assert_eq!(
+                coag_options_set_name(o, c"engine".as_ptr(), c"slots".as_ptr()),
+                COAG_OK
+            );
+        }
+        let name = std::ffi::CString::new(id.name).unwrap();
+        let n = [monomers, 20, 0, 3];
+        let x: Vec<f64> = (0..16).map(|i| 1.0 + (i % 3) as f64).collect();
+        let mut s = null_mut();
+        let st = match id.inits[0] {
+            InitKind::Counts => coag_sim_new_counts(
+                name.as_ptr(),
+                k,
+                std::ptr::null(),
+                o,
+                n.as_ptr(),
+                n.len(),
+                monomers as f64,
+                &mut s,
+            ),
+            InitKind::Sizes => coag_sim_new_sizes(
+                name.as_ptr(),
+                k,
+                std::ptr::null(),
+                o,
+                x.as_ptr(),
+                x.len(),
+                1.0,
+                &mut s,
+            ),
+            InitKind::Temperatures => coag_sim_new_temperatures(
+                name.as_ptr(),
+                k,
+                o,
+                n.as_ptr(),
+                [1.0; 4].as_ptr(),
+                n.len(),
+                monomers as f64,
+                &mut s,
+            ),
+            InitKind::Velocities => coag_sim_new_maxwellian(
+                name.as_ptr(),
+                k,
+                o,
+                [40, 5].as_ptr(),
+                [1.0, 1.0].as_ptr(),
+                2,
+                450.0,
+                &mut s,
+            ),
+        };
+        assert_eq!(st, COAG_OK, "{}: {}", id.name, last_error());
+        coag_options_free(o);
         coag_kernel_free(k);
         assert_eq!(coag_sim_set_work_limit(s, 20_000), COAG_OK);
         s
@@ -190,16 +237,17 @@ pub fn checkpoint_restore(data: &[u8]) {
 /// starts from checkpoints that are all refused at the configuration record).
 pub fn seeds() -> Vec<(String, Vec<u8>)> {
     let mut out = Vec::new();
-    for kind in (0..KINDS).chain([SLOTS_KIND]) {
+    for kind in (0..kinds()).chain([slots_kind()]) {
         unsafe {
             let s = small_sim(kind);
-            if kind % KINDS == 1 {
-                let mut m = -1;
-                assert_eq!(coag_sim_bucket_mode(s, &mut m), COAG_OK);
-                let want = if kind == SLOTS_KIND {
-                    COAG_BUCKET_SLOTS
+            if scheme_of(kind).name == "lowrank" {
+                let mut m = std::ptr::null();
+                assert_eq!(coag_sim_engine(s, &mut m), COAG_OK);
+                let m = std::ffi::CStr::from_ptr(m).to_str().unwrap();
+                let want = if kind == slots_kind() {
+                    "slots"
                 } else {
-                    COAG_BUCKET_COUNTED
+                    "counted"
                 };
                 assert_eq!(m, want, "kind {kind}: the engine");
             }
@@ -212,8 +260,8 @@ pub fn seeds() -> Vec<(String, Vec<u8>)> {
     // the slot engine drawing proposals ahead (2^21 monomers: past 2^20 slots), whose
     // queue of them is in the checkpoint; restorable into the small sim of its kind
     unsafe {
-        let s = sim_of(SLOTS_KIND, 1 << 21, 16 << 20);
-        seed_at(s, SLOTS_KIND, 3, 1e-3, &mut out);
+        let s = sim_of(slots_kind(), 1 << 21, 16 << 20);
+        seed_at(s, slots_kind(), 3, 1e-3, &mut out);
         coag_sim_free(s);
     }
     out
@@ -320,8 +368,10 @@ pub fn langevin_restore(data: &[u8]) {
         let before = langevin_checkpoint(h);
         match coag_langevin_restore(h, buf.as_ptr(), buf.len()) {
             COAG_OK => {
-                // dt is word 5 (after the header's three words, D and n)
-                let dt = f64::from_le_bytes(buf[40..48].try_into().unwrap());
+                // dt is word 11: after the envelope's six words (magic, version, tag,
+                // no records, the drift's fingerprint, no stream) and the batch's
+                // header (three words), D and n
+                let dt = f64::from_le_bytes(buf[88..96].try_into().unwrap());
                 assert!(dt > 0.0 && dt.is_finite(), "restored dt {dt}");
                 let (mut t, mut dim, mut n) = (0.0, 0usize, 0u64);
                 assert_eq!(coag_langevin_info(h, &mut t, &mut dim, &mut n), COAG_OK);

@@ -14,16 +14,14 @@ enum { MAX_CELLS = 96, PARTICLES = 1000, STEPS = 8, THREADS = 2 };
 /* 96 cells; 16 in the quick mode (COAG_TEST_QUICK, under valgrind) */
 static long CELLS = MAX_CELLS;
 
+/* Cell c: the low-rank scheme, Brownian kernel, PARTICLES monomers in volume PARTICLES
+ * (M0 = 1), its own stream (seed 11, stream c). */
 static coag_sim *make_cell(long c) {
-    coag_kernel *k;
-    OK(coag_kernel_new_brownian(&k));
-    coag_counts_config cfg;
-    OK(coag_counts_default_config(&cfg, sizeof cfg));
-    cfg.seed = 11;
-    cfg.stream = (uint64_t)c;
+    coag_kernel *k = KERNEL0("brownian");
+    coag_options *o = options_seeded(11, (uint64_t)c);
     uint64_t counts[1] = {PARTICLES};
-    coag_sim *sim;
-    OK(coag_counts_new(&cfg, k, counts, 1, &sim));
+    coag_sim *sim = sim_counts("lowrank", k, o, counts, 1, (double)PARTICLES);
+    coag_options_free(o);
     coag_kernel_free(k);
     return sim;
 }
@@ -46,14 +44,18 @@ static void *worker(void *arg) {
     return NULL;
 }
 
-/* a bad call on this thread, then (both threads having made theirs) its message
- * names its own failure */
+/* a bad call on this thread (a sim: a target time in the past; none: a kernel with a
+ * parameter out of range), then (both threads having made theirs) its message names
+ * its own failure */
 static pthread_barrier_t both_failed;
 
 static void *own_error(void *arg) {
     coag_sim *sim = arg;
     int expect_time = sim != NULL;
-    int st = expect_time ? coag_sim_advance_to(sim, -1.0, NULL) : coag_kernel_new_product(-2.0, NULL);
+    coag_kernel *k = NULL;
+    int st = expect_time ? coag_sim_advance_to(sim, -1.0, NULL)
+                         : coag_kernel_new("product", (const double[]){-2.0}, 1, &k);
+    coag_kernel_free(k); /* NULL unless the call wrongly succeeded */
     pthread_barrier_wait(&both_failed);
     char msg[256];
     coag_last_error_message(msg, sizeof msg, NULL);
@@ -71,7 +73,7 @@ static size_t state(coag_sim *sim, unsigned char **out) {
 }
 
 int main(void) {
-    if (getenv("COAG_TEST_QUICK")) CELLS = 16;
+    if (test_quick()) CELLS = 16;
     coag_sim *serial[MAX_CELLS], *threaded[MAX_CELLS];
     for (long c = 0; c < CELLS; c++) {
         serial[c] = make_cell(c);

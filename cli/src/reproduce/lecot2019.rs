@@ -5,16 +5,41 @@
 //! (The single case is the scenario `examples/lecot2019-coagulation-fragmentation.toml`,
 //! the CLI's default run; its validation cases are data in `cli/cases/`.)
 
-pub use crate::scenario::Points;
-use coagula_core::exact::Exact;
-use coagula_core::kernel::{BinaryUniform, Coagulation, CoagulationKernel, FragmentationKernel};
+use coagula_core::exact::{ClosedMoments, Exact};
+use coagula_core::kernel::{BinaryUniform, Coagulation, Fragmentation};
 use coagula_core::observe::Replicas;
-use coagula_core::random::generator;
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::massflow::MassFlow;
+use coagula_core::qmc::Randomization;
+use coagula_core::random::{Generator, generator};
+use coagula_core::scheme::facade::{Init, Model, Options, Points as PointSet, Simulation};
+use coagula_core::scheme::registry;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use rayon::prelude::*;
+
+/// The point sets of the experiment: the paper's QMC (Niederreiter), its MC twin, and
+/// QMC randomised by Owen's scrambling (RQMC, one scrambling per seed).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Points {
+    /// Niederreiter's (1,3)-sequence.
+    Qmc,
+    /// Pseudo-random points.
+    Mc,
+    /// Owen-scrambled Niederreiter points.
+    Rqmc,
+}
+
+impl Points {
+    /// The registry's options of the point set, with time step `dt` and the seed's
+    /// stream (the RQMC scrambling draws from it).
+    fn options(self, dt: f64, seed: u64) -> Options {
+        let o = Options::default().with_dt(dt).with_stream(seed, 0);
+        match self {
+            Points::Qmc => o,
+            Points::Mc => o.with_points(PointSet::MonteCarlo),
+            Points::Rqmc => o.with_randomization(Randomization::Owen),
+        }
+    }
+}
 
 /// Discretisation and observation of a mass-flow run.
 #[derive(Clone, Copy, Debug)]
@@ -30,10 +55,11 @@ pub struct Spec {
     pub seed: u64,
 }
 
-/// One run of a mass-flow case; returns `(t, M2, M3)` at each checkpoint.
-pub fn trajectory<K: CoagulationKernel, F: FragmentationKernel>(
-    kernel: K,
-    frag: F,
+/// One run of a mass-flow case (the registry's `massflow`); returns `(t, M2, M3)` at
+/// each checkpoint.
+pub fn trajectory(
+    kernel: Coagulation,
+    frag: Fragmentation,
     spec: Spec,
 ) -> Result<Vec<(f64, f64, f64)>, coagula_core::Error> {
     let Spec {
@@ -44,13 +70,16 @@ pub fn trajectory<K: CoagulationKernel, F: FragmentationKernel>(
         points,
         seed,
     } = spec;
-    let mut sim = MassFlow::new(
-        kernel,
-        frag,
-        &vec![1.0; 1 << m],
-        1.0,
-        t_end / f64::from(steps),
-        crate::runner::points_of(points, seed, 0),
+    let sizes = vec![1.0; 1 << m];
+    let init = Init::Sizes {
+        sizes: &sizes,
+        mass: 1.0,
+    };
+    let mut sim: Box<dyn Simulation<Coagulation, Fragmentation, Generator>> = registry::build(
+        registry::find("massflow")?,
+        Model::coagulation(kernel, frag),
+        &init,
+        &points.options(t_end / f64::from(steps), seed),
     )?;
     let mut rng = generator(seed, 0);
     let mut out = Vec::with_capacity(checkpoints as usize);
@@ -70,7 +99,7 @@ pub fn try_lecot_case(
     seed: u64,
 ) -> Result<Vec<(f64, f64, f64)>, coagula_core::Error> {
     let k = Coagulation::constant(1.0)?;
-    let f = BinaryUniform::new(1.0)?;
+    let f = Fragmentation::BinaryUniform(BinaryUniform::new(1.0)?);
     let spec = Spec {
         m,
         steps,
@@ -114,7 +143,7 @@ pub fn errors(traj: &[(f64, f64, f64)]) -> [[f64; 4]; 2] {
 /// moment equations M2' = 1 − M2/3, M3' = 3 M2 − M3/2.
 pub fn euler_expectation(steps: u32, t: f64) -> (f64, f64) {
     let h = 1.0 / f64::from(steps);
-    let k = crate::moments::Closed::Constant {
+    let k = ClosedMoments::Constant {
         b: 1.0,
         lambda: 1.0,
     };

@@ -1,22 +1,27 @@
 //! Osinsky (2023) §4, the temperature-dependent low-rank Monte Carlo: the `coagula
 //! validate` cases `osinsky2023/temperature/...` and `coagula bench temperature`
-//! (the paper's table 4, low-rank against acceptance–rejection side by side).
+//! (the paper's table 4, low-rank against acceptance–rejection side by side); and §5,
+//! low-rank DSMC: the cases `osinsky2023/dsmc/...` and `coagula bench dsmc` (tables
+//! 5–6).
 //!
 //! The cases: the model family of TEMPERATURE.md against its closed form (N and the
 //! mean temperature at t = 4 for γ = 0, 1/2, 1), and the paper's ballistic model
 //! against an RK4 solve of its equations (N, mean temperature and M2), each on the
-//! low-rank (per-size tree) engine and the acceptance–rejection engine. Tolerances are
-//! the replicas' standard errors times the suite's family-wise Student t threshold.
+//! registry's `temperature` (per-size trees) and `temperature-rejection` schemes. The
+//! tolerances are the replicas' standard errors times the suite's family-wise Student
+//! t threshold. Every run is built through the registry.
 
-use crate::validate::Case;
-use coagula_core::kernel::temperature::{Ballistic, ClosedForm, TemperatureKernel, integrate};
+use crate::cases::Case;
+use crate::scenario::Sim;
+use coagula_core::initial::maxwellian;
+use coagula_core::kernel::Coagulation;
+use coagula_core::kernel::gas::HardSpheres;
+use coagula_core::kernel::temperature::{Ballistic, ClosedForm, TemperatureModel, integrate};
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
-use coagula_core::random::generator;
-use coagula_core::scheme::Scheme;
-use coagula_core::scheme::lowrank::dsmc::{Collisions, Directions, Gas};
-use coagula_core::scheme::lowrank::{
-    Collide, LowRankMc, ProposalEngine, Temperatures, TreeEngine, UniformEngine, WideTree,
-};
+use coagula_core::random::{Generator, generator};
+use coagula_core::scheme::facade::{Directions, Init, Model, Options};
+use coagula_core::scheme::lowrank::dsmc::Gas;
+use coagula_core::scheme::registry;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -24,40 +29,84 @@ fn err(e: coagula_core::Error) -> String {
     e.to_string()
 }
 
-/// The scheme on engine E.
-type On<TK, E> = LowRankMc<Temperatures<TK>, 3, E, Collide>;
-/// The low-rank (per-size 8-ary tree) engine.
-type Tree = TreeEngine<3, WideTree<3>>;
-
 /// The paper's ballistic start: `n_1(0) = 0.3/π`, `T_1(0) = 1`.
 pub const BALLISTIC_N1: f64 = 0.3 / std::f64::consts::PI;
 
-/// `[N, mean temperature, M2]` of a scheme.
-fn observe<TK: TemperatureKernel + Clone, E: ProposalEngine<3>>(s: &On<TK, E>) -> [f64; 3] {
-    [s.moment(0.0), s.mean_temperature(), s.moment(2.0)]
+/// The registry's temperature-dependent scheme `scheme` on `model` from `n0` monomers
+/// at temperature 1 in `volume`.
+fn temperature_sim(
+    scheme: &str,
+    model: TemperatureModel,
+    n0: u64,
+    volume: f64,
+) -> Result<Box<Sim>, String> {
+    let init = Init::Temperatures {
+        counts: &[n0],
+        temperatures: &[1.0],
+        volume,
+    };
+    registry::build(
+        registry::find(scheme).map_err(err)?,
+        Model::<Coagulation, _>::Temperature(model),
+        &init,
+        &Options::default(),
+    )
+    .map_err(err)
+}
+
+/// The registry's gas scheme `scheme` (ε = `eps`, never sticking) from `counts`
+/// particles of each size at temperature 1 in `volume`, their Maxwellian velocities
+/// drawn from `rng` (which the run then continues).
+fn gas_sim(
+    scheme: &str,
+    eps: f64,
+    counts: &[u64],
+    volume: f64,
+    directions: Directions,
+    rng: &mut Generator,
+) -> Result<Box<Sim>, String> {
+    let (sizes, velocities) = maxwellian(counts, &vec![1.0; counts.len()], rng).map_err(err)?;
+    let init = Init::Velocities {
+        sizes: &sizes,
+        velocities: &velocities,
+        volume,
+    };
+    registry::build(
+        registry::find(scheme).map_err(err)?,
+        Model::<Coagulation, _>::Gas(HardSpheres::new(eps, 0.0).map_err(err)?),
+        &init,
+        &Options::default().with_directions(directions),
+    )
+    .map_err(err)
+}
+
+/// An observable the scheme answers.
+fn read(s: &Sim, name: &str) -> f64 {
+    s.observable(name).unwrap_or(f64::NAN)
+}
+
+/// `[N, mean temperature, M2]` of a run.
+fn observe(s: &Sim) -> [f64; 3] {
+    [s.moment(0.0), read(s, "mean-temperature"), s.moment(2.0)]
 }
 
 /// `reps` replicas (in parallel, merged in order) of `make()` observed at `times`.
-fn replicas<TK, E>(
+fn replicas(
     reps: u64,
     seed: u64,
     times: &[f64],
-    make: &(dyn Fn() -> Result<On<TK, E>, coagula_core::Error> + Sync),
-) -> Result<Vec<[Replicas; 3]>, String>
-where
-    TK: TemperatureKernel + Clone,
-    E: ProposalEngine<3>,
-{
+    make: &(dyn Fn() -> Result<Box<Sim>, String> + Sync),
+) -> Result<Vec<[Replicas; 3]>, String> {
     let runs: Vec<Result<Vec<[f64; 3]>, String>> = (0..reps)
         .into_par_iter()
         .map(|r| {
-            let mut s = make().map_err(err)?;
+            let mut s = make()?;
             let mut rng = generator(seed, r);
             times
                 .iter()
                 .map(|&t| {
                     s.advance_to(t, &mut rng).map_err(err)?;
-                    Ok(observe(&s))
+                    Ok(observe(&*s))
                 })
                 .collect()
         })
@@ -118,12 +167,12 @@ pub fn cases(quick: bool) -> Result<Vec<Case>, String> {
     for (g, gamma) in [0.0, 0.5, 1.0].into_iter().enumerate() {
         let model = ClosedForm::new(1.0, gamma).map_err(err)?;
         let exact = model.exact(1.0, 1.0, 4.0);
-        let thermal = Temperatures::new(model, &[1.0]).map_err(err)?;
-        let tree = replicas::<_, Tree>(reps, 10 + g as u64, &[4.0], &|| {
-            On::new(thermal.clone(), &[n0], n0 as f64)
+        let m = TemperatureModel::ClosedForm(model);
+        let tree = replicas(reps, 10 + g as u64, &[4.0], &|| {
+            temperature_sim("temperature", m, n0, n0 as f64)
         })?;
-        let ar = replicas::<_, UniformEngine<3>>(reps, 20 + g as u64, &[4.0], &|| {
-            On::new(thermal.clone(), &[n0], n0 as f64)
+        let ar = replicas(reps, 20 + g as u64, &[4.0], &|| {
+            temperature_sim("temperature-rejection", m, n0, n0 as f64)
         })?;
         for (engine, r) in [("lowrank", &tree), ("rejection", &ar)] {
             let name = format!("osinsky2023/temperature/model-gamma-{gamma}/{engine}");
@@ -147,11 +196,14 @@ pub fn cases(quick: bool) -> Result<Vec<Case>, String> {
         (32, 100_000, &[100.0, 1000.0])
     };
     let want = ballistic_equations(times)?;
-    let thermal = Temperatures::new(Ballistic::paper(), &[1.0]).map_err(err)?;
+    let m = TemperatureModel::Ballistic(Ballistic::paper());
     let v = n0 as f64 / BALLISTIC_N1;
-    let tree = replicas::<_, Tree>(reps, 30, times, &|| On::new(thermal.clone(), &[n0], v))?;
-    let ar =
-        replicas::<_, UniformEngine<3>>(reps, 31, times, &|| On::new(thermal.clone(), &[n0], v))?;
+    let tree = replicas(reps, 30, times, &|| {
+        temperature_sim("temperature", m, n0, v)
+    })?;
+    let ar = replicas(reps, 31, times, &|| {
+        temperature_sim("temperature-rejection", m, n0, v)
+    })?;
     for (engine, r) in [("lowrank", &tree), ("rejection", &ar)] {
         for (ti, &t) in times.iter().enumerate() {
             for (q, name) in ["N", "mean temperature", "M2"].into_iter().enumerate() {
@@ -180,14 +232,13 @@ pub const TABLE4: [(f64, f64, f64); 4] = [
 type Cell = Option<(f64, u64, u64)>;
 
 /// Runs `s` through the checkpoints `times` in slices (so that a run over its `budget`
-/// of seconds stops promptly; the cells past it are `None`); `totals` reads the run's
-/// collisions and proposals.
-fn through<S: Scheme>(
-    s: &mut S,
+/// of seconds stops promptly; the cells past it are `None`), noting its collisions and
+/// proposals.
+fn through(
+    s: &mut Sim,
     times: &[f64],
     budget: f64,
-    rng: &mut coagula_core::random::Generator,
-    totals: impl Fn(&S) -> (u64, u64),
+    rng: &mut Generator,
 ) -> Result<Vec<Cell>, String> {
     let start = Instant::now();
     let mut out = Vec::new();
@@ -200,7 +251,7 @@ fn through<S: Scheme>(
                 break 'times;
             }
         }
-        let (c, p) = totals(s);
+        let (c, p) = (s.totals().events, s.totals().proposals);
         out.push(Some((start.elapsed().as_secs_f64(), c, p)));
     }
     out.resize(times.len(), None);
@@ -218,19 +269,18 @@ fn keep_fastest(best: &mut [Cell], got: Vec<Cell>) {
     }
 }
 
-/// One temperature-dependent engine's run of the paper's ballistic model.
-fn timed<E: ProposalEngine<3>>(
+/// One temperature-dependent scheme's run of the paper's ballistic model.
+fn timed(
+    scheme: &str,
     n0: u64,
     times: &[f64],
     budget: f64,
     seed: u64,
 ) -> Result<Vec<Cell>, String> {
-    let thermal = Temperatures::new(Ballistic::paper(), &[1.0]).map_err(err)?;
-    let mut s = On::<_, E>::new(thermal, &[n0], n0 as f64 / BALLISTIC_N1).map_err(err)?;
+    let m = TemperatureModel::Ballistic(Ballistic::paper());
+    let mut s = temperature_sim(scheme, m, n0, n0 as f64 / BALLISTIC_N1)?;
     let mut rng = generator(seed, 0);
-    through(&mut s, times, budget, &mut rng, |s| {
-        (s.totals().events, s.totals().proposals)
-    })
+    through(&mut *s, times, budget, &mut rng)
 }
 
 /// The settings of `coagula bench temperature` (see [`bench()`]).
@@ -297,9 +347,12 @@ pub fn bench(b: &Table4) -> Result<(), String> {
         let mut best_ar: Vec<Cell> = vec![None; ts.len()];
         for round in 0..repeat {
             let s = seed + u64::from(round);
-            keep_fastest(&mut best_lr, timed::<Tree>(n, ts, budget, s)?);
+            keep_fastest(&mut best_lr, timed("temperature", n, ts, budget, s)?);
             if !skip_baseline {
-                keep_fastest(&mut best_ar, timed::<UniformEngine<3>>(n, ts, budget, s)?);
+                keep_fastest(
+                    &mut best_ar,
+                    timed("temperature-rejection", n, ts, budget, s)?,
+                );
             }
         }
         for (i, &t) in ts.iter().enumerate() {
@@ -334,9 +387,6 @@ pub fn bench(b: &Table4) -> Result<(), String> {
     Ok(())
 }
 
-/// Low-rank DSMC (Osinsky 2023 §5) on the per-size trees.
-type DsmcOn<E> = LowRankMc<Gas, 3, E, Collisions>;
-
 /// The paper's DSMC workload: `N_k = floor(N_1 e^{−a(k−1)})` with N_1 chosen so that
 /// about `total` particles result, all at temperature 1.
 pub fn dsmc_workload(a: f64, total: f64) -> Vec<u64> {
@@ -364,8 +414,9 @@ pub const TABLE6: [(f64, f64, f64, f64); 3] = [
     (100.0, 79.0, 5.3, 7.1e6),
 ];
 
-/// One DSMC engine's run of the paper's workload.
-fn timed_dsmc<E: ProposalEngine<3>>(
+/// One DSMC scheme's run of the paper's workload (ε = 0.99, number density 0.1).
+fn timed_dsmc(
+    scheme: &str,
     counts: &[u64],
     times: &[f64],
     budget: f64,
@@ -373,15 +424,9 @@ fn timed_dsmc<E: ProposalEngine<3>>(
     directions: Directions,
 ) -> Result<Vec<Cell>, String> {
     let mut rng = generator(seed, 0);
-    let temps = vec![1.0; counts.len()];
-    let gas = Gas::maxwellian(0.99, counts, &temps, &mut rng)
-        .map_err(err)?
-        .with_directions(directions);
     let n: u64 = counts.iter().sum();
-    let mut s = DsmcOn::<E>::new_gas(gas, n as f64 / 0.1).map_err(err)?;
-    through(&mut s, times, budget, &mut rng, |s| {
-        (s.totals().events, s.totals().proposals)
-    })
+    let mut s = gas_sim(scheme, 0.99, counts, n as f64 / 0.1, directions, &mut rng)?;
+    through(&mut *s, times, budget, &mut rng)
 }
 
 /// `coagula bench dsmc`: the paper's tables 5–6 workload from `total` particles,
@@ -431,11 +476,11 @@ pub fn bench_dsmc(
             let (c, u) = (Directions::Conditional, Directions::Uniform);
             keep_fastest(
                 &mut best[0],
-                timed_dsmc::<Tree>(&counts, times, budget, s, c)?,
+                timed_dsmc("dsmc", &counts, times, budget, s, c)?,
             );
-            let ar = timed_dsmc::<UniformEngine<3>>(&counts, times, budget, s, c)?;
+            let ar = timed_dsmc("dsmc-rejection", &counts, times, budget, s, c)?;
             keep_fastest(&mut best[1], ar);
-            let ar43 = timed_dsmc::<UniformEngine<3>>(&counts, times, budget, s, u)?;
+            let ar43 = timed_dsmc("dsmc-rejection", &counts, times, budget, s, u)?;
             keep_fastest(&mut best[2], ar43);
         }
         for (i, &t) in times.iter().enumerate() {
@@ -476,37 +521,13 @@ pub fn bench_dsmc(
     Ok(())
 }
 
-/// At t = 0 of the workload: the acceptance–rejection engine's bound
-/// `2 Σ_k max a_k max b_k` (from the gas's factors) over the seed's eq. 43 bound
-/// `2 (π/4) max_i (i^{1/3} + M^{1/3})² max_k |V_k|` (M the largest size).
+/// At t = 0 of the workload: the acceptance–rejection engine's bound over the seed's
+/// eq. 43 bound ([`Gas::bound_over_eq43`]).
 fn bound_ratio(counts: &[u64], seed: u64) -> Result<f64, String> {
-    use coagula_core::kernel::CoagulationKernel;
     let mut rng = generator(seed, 0);
     let temps = vec![1.0; counts.len()];
     let gas = Gas::maxwellian(0.99, counts, &temps, &mut rng).map_err(err)?;
-    let m = counts.len() as f64;
-    let (mut amax, mut bmax) = ([0.0f64; 3], [0.0f64; 3]);
-    let mut eq43 = 0.0f64;
-    for (i, &c) in counts.iter().enumerate() {
-        if c == 0 {
-            continue;
-        }
-        let size = i as u64 + 1;
-        let (mut a, mut b) = ([0.0; 3], [0.0; 3]);
-        gas.factors(size as f64, &mut a, &mut b);
-        for k in 0..3 {
-            amax[k] = amax[k].max(a[k]);
-            bmax[k] = bmax[k].max(b[k]);
-        }
-        let fastest = gas
-            .velocities(size)
-            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
-            .fold(0.0, f64::max);
-        let d = (size as f64).cbrt() + m.cbrt();
-        eq43 = eq43.max(d * d * fastest);
-    }
-    let ours: f64 = 2.0 * (0..3).map(|k| amax[k] * bmax[k]).sum::<f64>();
-    Ok(ours / (2.0 * std::f64::consts::FRAC_PI_4 * eq43))
+    Ok(gas.bound_over_eq43())
 }
 
 /// The DSMC validate cases: Haff's law at t = τ (ε = 0.95, density 0.1, with the first
@@ -524,7 +545,8 @@ pub fn dsmc_cases(quick: bool) -> Result<Vec<Case>, String> {
     let a2 = 16.0 * (1.0 - eps) * (1.0 - 2.0 * eps * eps)
         / (81.0 - 17.0 * eps + 30.0 * eps * eps * (1.0 - eps));
     let zeta = 1.0 + 3.0 * a2 / 16.0;
-    fn haff<E: ProposalEngine<3>>(
+    fn haff(
+        scheme: &str,
         r: u64,
         n: u64,
         eps: f64,
@@ -533,18 +555,23 @@ pub fn dsmc_cases(quick: bool) -> Result<Vec<Case>, String> {
         zeta: f64,
     ) -> Result<f64, String> {
         let mut rng = generator(60, r);
-        let gas = Gas::maxwellian(eps, &[n], &[1.0], &mut rng).map_err(err)?;
-        let mut s = DsmcOn::<E>::new_gas(gas, n as f64 / dens).map_err(err)?;
-        let t0 = s.mean_temperature();
+        let d = Directions::Conditional;
+        let mut s = gas_sim(scheme, eps, &[n], n as f64 / dens, d, &mut rng)?;
+        let t0 = read(&*s, "mean-temperature");
         s.advance_to(tau1, &mut rng).map_err(err)?;
-        Ok(s.mean_temperature() / (t0 / (1.0 + zeta * t0.sqrt()).powi(2)) - 1.0)
+        let t = read(&*s, "mean-temperature");
+        Ok(t / (t0 / (1.0 + zeta * t0.sqrt()).powi(2)) - 1.0)
     }
     for engine in ["lowrank", "rejection"] {
         let vals: Vec<Result<f64, String>> = (0..reps)
             .into_par_iter()
-            .map(|r| match engine {
-                "lowrank" => haff::<Tree>(r, n, eps, dens, tau1, zeta),
-                _ => haff::<UniformEngine<3>>(r, n, eps, dens, tau1, zeta),
+            .map(|r| {
+                let scheme = if engine == "lowrank" {
+                    "dsmc"
+                } else {
+                    "dsmc-rejection"
+                };
+                haff(scheme, r, n, eps, dens, tau1, zeta)
             })
             .collect();
         let mut st = Replicas::new();

@@ -26,6 +26,53 @@ pub trait FragmentationKernel {
     fn is_none(&self) -> bool {
         false
     }
+
+    /// A fingerprint of the kernel and its parameters (for checkpoints); 0 for a
+    /// kernel that cannot say.
+    fn fingerprint(&self) -> u64 {
+        0
+    }
+}
+
+/// The built-in fragmentation kernels as one type: what the registry's front ends
+/// hold (the CLI's `[fragmentation]`, the C ABI's fragmentation handle, Python's).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub enum Fragmentation {
+    /// Pure coagulation.
+    #[default]
+    None,
+    /// `F(x, y) = 2λ/(x + y)` (Lécot et al. 2019, §4).
+    BinaryUniform(BinaryUniform),
+}
+
+impl FragmentationKernel for Fragmentation {
+    fn total_rate(&self, x: f64) -> f64 {
+        match self {
+            Fragmentation::None => 0.0,
+            Fragmentation::BinaryUniform(f) => f.total_rate(x),
+        }
+    }
+    fn inverse_piece(&self, x: f64, u: f64) -> f64 {
+        match self {
+            Fragmentation::None => x,
+            Fragmentation::BinaryUniform(f) => f.inverse_piece(x, u),
+        }
+    }
+    fn sup_rate(&self) -> Option<f64> {
+        match self {
+            Fragmentation::None => Some(0.0),
+            Fragmentation::BinaryUniform(f) => f.sup_rate(),
+        }
+    }
+    fn is_none(&self) -> bool {
+        matches!(self, Fragmentation::None)
+    }
+    fn fingerprint(&self) -> u64 {
+        match self {
+            Fragmentation::None => 0,
+            Fragmentation::BinaryUniform(f) => f.fingerprint(),
+        }
+    }
 }
 
 /// No fragmentation: pure coagulation.
@@ -91,6 +138,9 @@ impl FragmentationKernel for BinaryUniform {
     }
     fn sup_rate(&self) -> Option<f64> {
         Some(self.lambda)
+    }
+    fn fingerprint(&self) -> u64 {
+        crate::checkpoint::fingerprint([1, self.lambda.to_bits()])
     }
 }
 

@@ -30,14 +30,18 @@
 //! assert!(rate <= h(x) * h(y));
 //! ```
 
+pub mod builtin;
 mod check;
 mod coagulation;
 mod fragmentation;
+pub mod gas;
 pub mod temperature;
 
 pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
 pub use coagulation::{BOLTZMANN, Coagulation};
-pub use fragmentation::{BinaryUniform, FragmentationKernel, NoFragmentation, UserFragmentation};
+pub use fragmentation::{
+    BinaryUniform, Fragmentation, FragmentationKernel, NoFragmentation, UserFragmentation,
+};
 
 use crate::error::{Error, Result};
 
@@ -104,6 +108,13 @@ pub trait CoagulationKernel {
     /// `sup K(x, y)` over `lo ≤ x, y ≤ hi`, if known (acceptance–rejection needs it).
     fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
         None
+    }
+
+    /// A fingerprint of the kernel and its parameters, which a checkpoint records so
+    /// that it is restored only under the same kernel; 0 (the default) for a kernel
+    /// that cannot say (closures: their checkpoints are not checked against a change).
+    fn fingerprint(&self) -> u64 {
+        0
     }
 
     /// The low-rank bound `Ã(x, y) = A(x, y) + A(y, x)` evaluated from the factors, or

@@ -211,6 +211,59 @@ impl TemperatureKernel for Ballistic {
     }
 }
 
+/// The built-in temperature kernels as one type: the temperature model a registry
+/// build takes (`Model::Temperature`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TemperatureModel {
+    /// The paper's ballistic kernels.
+    Ballistic(Ballistic),
+    /// The family with a closed-form solution.
+    ClosedForm(ClosedForm),
+}
+
+impl TemperatureModel {
+    /// A fingerprint of the model and its parameters (for checkpoints).
+    pub fn fingerprint(&self) -> u64 {
+        match *self {
+            TemperatureModel::Ballistic(b) => crate::checkpoint::fingerprint([
+                0x5445_4d50_4241_4c4c, // "TEMPBALL"
+                b.eps.to_bits(),
+                b.a.to_bits(),
+                b.lambda.to_bits(),
+            ]),
+            TemperatureModel::ClosedForm(m) => crate::checkpoint::fingerprint([
+                0x5445_4d50_434c_4f53, // "TEMPCLOS"
+                m.c.to_bits(),
+                m.gamma.to_bits(),
+            ]),
+        }
+    }
+}
+
+impl TemperatureKernel for TemperatureModel {
+    #[inline]
+    fn rates(&self, i: u64, ti: f64, j: u64, tj: f64) -> PairRates {
+        match self {
+            TemperatureModel::Ballistic(k) => k.rates(i, ti, j, tj),
+            TemperatureModel::ClosedForm(k) => k.rates(i, ti, j, tj),
+        }
+    }
+    #[inline]
+    fn collision(&self, i: u64, ti: f64, j: u64, tj: f64) -> f64 {
+        match self {
+            TemperatureModel::Ballistic(k) => k.collision(i, ti, j, tj),
+            TemperatureModel::ClosedForm(k) => k.collision(i, ti, j, tj),
+        }
+    }
+    #[inline]
+    fn factors(&self, i: u64, t: f64, a: &mut [f64; 3], b: &mut [f64; 3]) {
+        match self {
+            TemperatureModel::Ballistic(k) => k.factors(i, t, a, b),
+            TemperatureModel::ClosedForm(k) => k.factors(i, t, a, b),
+        }
+    }
+}
+
 /// A model family with a closed-form solution ([`ClosedForm::exact`]): with constants
 /// `c > 0`, `γ ≥ 0`,
 /// `C^agg_ij = c sqrt((T_i/i + T_j/j)/2)`, `C^res_ij = C^agg_ij`, `B_ij = C^agg_ij (T_i + T_j)`,

@@ -31,7 +31,6 @@ use super::{Batch, Config, Drift, Estimate, Wall};
 use crate::error::{Error, Result, finite};
 use crate::observe::Replicas;
 use crate::random::{NormalZiggurat, Purpose, substream};
-use crate::scheme::Scheme;
 use core::f64::consts::PI;
 use rand_core::Rng;
 
@@ -171,7 +170,6 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
     let (mut rep, mut hits) = (Replicas::new(), 0u64);
     let width = p.to - p.from;
     let mut done = 0u64;
-    let mut noop = crate::random::generator(0, 0);
     while done < p.trajectories {
         let m = chunk.min((p.trajectories - done) as usize);
         let id0 = first_id + done;
@@ -187,7 +185,7 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
             },
             &mut ws[..],
         )?;
-        b.advance_to(p.to, &mut noop)?;
+        b.advance_to(p.to)?;
         for (i, t) in b.first_hits().enumerate() {
             let inside = t >= p.from && t < p.to;
             let w = if inside {

@@ -12,11 +12,9 @@
 //!
 //! ```
 //! use coagula_core::langevin::{paper, richardson_romberg, Wall};
-//! use coagula_core::scheme::Scheme;
-//! let mut rng = rand_pcg::Pcg64Mcg::new(1);
 //! let mut run = |dt, first_id| {
 //!     let mut b = paper::batch(Wall::Specular, dt, paper::Choices::default(), 4000, 9, first_id).unwrap();
-//!     b.advance_to(paper::T, &mut rng).unwrap();
+//!     b.advance_to(paper::T).unwrap();
 //!     (b.statistics(|x, u| paper::observable(x[0], u[0])), b.hit_statistics())
 //! };
 //! let (coarse, hits) = run(0.1, 0);

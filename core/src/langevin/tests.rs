@@ -39,7 +39,7 @@ fn free_motion_has_the_discrete_schemes_moments() {
         &mut rng(),
     )
     .unwrap();
-    b.advance_to(h * steps as f64, &mut rng()).unwrap();
+    b.advance_to(h * steps as f64).unwrap();
     let [mx, mu, vxx, vxu, vuu] = discrete_ou(1e6, 0.5, gamma, sigma, h, steps);
     check("E x", &b.statistics(|x, _| x[0] - 1e6), mx - 1e6);
     check("E u", &b.statistics(|_, u| u[0]), mu);
@@ -71,7 +71,7 @@ fn specular_wall_folds_the_free_motion() {
     let cfg = Config::line(h, sigma, Wall::Specular).unwrap();
     let zero = Scalar(|_, _, _| 0.0);
     let mut b = Batch::new(cfg, zero, 20_000, ([0.3], [-0.8]), &mut rng()).unwrap();
-    b.advance_to(h * steps as f64, &mut rng()).unwrap();
+    b.advance_to(h * steps as f64).unwrap();
     let [mx, mu, vxx, vxu, vuu] = discrete_ou(0.3, -0.8, 0.0, sigma, h, steps);
     assert!(b.hit_statistics().mean() > 0.3, "few hits");
     check("E X^2", &b.statistics(|x, _| x[0] * x[0]), vxx + mx * mx);
@@ -92,7 +92,7 @@ fn deterministic_bounce_and_absorption() {
     for wall in [Wall::Specular, Wall::Absorbing] {
         let cfg = Config::line(0.3, 0.0, wall).unwrap();
         let mut b = Batch::new(cfg, Scalar(|_, _, _| 0.0), 1, ([1.0], [-1.0]), &mut rng()).unwrap();
-        let rep = b.advance_to(3.0, &mut rng()).unwrap();
+        let rep = b.advance_to(3.0).unwrap();
         let (x, u) = (
             b.positions().next().unwrap()[0],
             b.velocities().next().unwrap()[0],
@@ -130,7 +130,7 @@ fn ball_reflection_is_the_billiard_path() {
             &mut rng(),
         )
         .unwrap();
-        b.advance_to(4.0, &mut rng()).unwrap();
+        b.advance_to(4.0).unwrap();
         let c = libm::sqrt(0.75);
         let s = 3.0 - c; // time of the hit
         let n = [c, 0.5, 0.0];
@@ -158,7 +158,7 @@ fn ball_keeps_the_velocity_variance() {
         let mut u0 = [0.0; D];
         u0[0] = -2.0;
         let mut b = Batch::new(cfg, zero, 20_000, (x0, u0), &mut rng()).unwrap();
-        b.advance_to(1.0, &mut rng()).unwrap();
+        b.advance_to(1.0).unwrap();
         assert!(b.hit_statistics().mean() > 0.5);
         check("E |U|^2", &b.statistics(|_, u| dot(u, u)), 4.0 + D as f64);
         assert!(
@@ -179,29 +179,26 @@ fn splits_budgets_and_checkpoints_give_the_same_bits() {
     let start = |_| ([0.5], [-1.5]);
     let words = |b: &Batch<1, paper::PaperDrift>| b.records().to_vec();
     let mut whole = Batch::with_starts(cfg, paper::PaperDrift, 100, 9, 0, start).unwrap();
-    whole.advance_to(3.2, &mut rng()).unwrap();
+    whole.advance_to(3.2).unwrap();
     // two shares
     let mut a = Batch::with_starts(cfg, paper::PaperDrift, 37, 9, 0, start).unwrap();
     let mut c = Batch::with_starts(cfg, paper::PaperDrift, 63, 9, 37, start).unwrap();
-    a.advance_to(3.2, &mut rng()).unwrap();
-    c.advance_to(3.2, &mut rng()).unwrap();
+    a.advance_to(3.2).unwrap();
+    c.advance_to(3.2).unwrap();
     let mut joined = words(&a);
     joined.extend(words(&c));
     assert_eq!(joined, words(&whole));
     // split calls, a budget, and a checkpoint in the middle
     let mut s = Batch::with_starts(cfg, paper::PaperDrift, 100, 9, 0, start).unwrap();
-    s.advance_to(0.7, &mut rng()).unwrap();
-    let rep = s
-        .advance_within(3.2, &mut Budget::work(250), &mut rng())
-        .unwrap();
+    s.advance_to(0.7).unwrap();
+    let rep = s.advance_within(3.2, &mut Budget::work(250)).unwrap();
     assert!(rep.interrupted && s.time() < 3.2);
     let mut buf = vec![0u8; s.checkpoint_len()];
     s.save_to(&mut buf).unwrap();
     let mut r = Batch::with_starts(cfg, paper::PaperDrift, 100, 1, 0, |_| ([0.9], [0.0])).unwrap();
     r.restore_from(&buf).unwrap();
     while r.time() < 3.2 {
-        r.advance_within(3.2, &mut Budget::work(1000), &mut rng())
-            .unwrap();
+        r.advance_within(3.2, &mut Budget::work(1000)).unwrap();
     }
     assert_eq!(words(&r), words(&whole));
     assert_eq!(r.totals().events, whole.totals().events);
@@ -215,12 +212,12 @@ fn nan_drift_is_an_error_and_changes_nothing() {
     let cfg = Config::line(0.1, 1.0, Wall::Specular).unwrap();
     for budget in [false, true] {
         let mut b = Batch::new(cfg, bad, 30, ([1.0], [0.0]), &mut rng()).unwrap();
-        b.advance_to(0.3, &mut rng()).unwrap();
+        b.advance_to(0.3).unwrap();
         let before = b.records().to_vec();
         let err = if budget {
-            b.advance_within(1.0, &mut Budget::work(1 << 20), &mut rng())
+            b.advance_within(1.0, &mut Budget::work(1 << 20))
         } else {
-            b.advance_to(1.0, &mut rng())
+            b.advance_to(1.0)
         };
         assert!(matches!(err, Err(Error::InvalidRate { .. })), "{err:?}");
         assert_eq!(b.records(), &before[..]);
@@ -278,9 +275,9 @@ fn bad_input_is_refused() {
         .is_err()
     );
     let mut b = Batch::new(cfg, z, 5, ([1.0], [0.0]), &mut r).unwrap();
-    b.advance_to(1.0, &mut r).unwrap();
-    assert!(b.advance_to(0.5, &mut r).is_err());
-    assert!(b.advance_to(f64::NAN, &mut r).is_err());
+    b.advance_to(1.0).unwrap();
+    assert!(b.advance_to(0.5).is_err());
+    assert!(b.advance_to(f64::NAN).is_err());
     // a checkpoint of another size, or a corrupted one, is refused and changes nothing
     let mut buf = vec![0u8; b.checkpoint_len()];
     b.save_to(&mut buf).unwrap();
@@ -406,17 +403,12 @@ fn cos_2pi_matches_libm() {
 fn edge_targets_and_velocities_are_handled() {
     let cfg = Config::line(0.1, 1.0, Wall::Specular).unwrap();
     let mut b = Batch::new(cfg, Scalar(|_, _, _| 0.0), 4, ([1.0], [0.0]), &mut rng()).unwrap();
-    b.advance_to(0.3, &mut rng()).unwrap();
+    b.advance_to(0.3).unwrap();
     let t = 3.0 * 0.1; // 0.30000000000000004
-    let rep = b
-        .advance_within(t, &mut Budget::work(100), &mut rng())
-        .unwrap();
+    let rep = b.advance_within(t, &mut Budget::work(100)).unwrap();
     assert!(!rep.interrupted);
     assert_eq!(b.time(), t);
-    assert!(matches!(
-        b.advance_to(1e300, &mut rng()),
-        Err(Error::OutOfRange { .. })
-    ));
+    assert!(matches!(b.advance_to(1e300), Err(Error::OutOfRange { .. })));
     assert_eq!(b.time(), t);
     let ball = Config::<3>::ball(1.0, 0.1, 0.0, Wall::Specular).unwrap();
     let zero = Field(|_, _: &[f64; 3], _: &[f64; 3]| [0.0; 3]);
@@ -428,7 +420,7 @@ fn edge_targets_and_velocities_are_handled() {
         &mut rng(),
     )
     .unwrap();
-    assert!(fast.advance_to(1.0, &mut rng()).is_err());
+    assert!(fast.advance_to(1.0).is_err());
     assert_eq!(fast.positions().next().unwrap(), [3.0, 0.0, 0.0]);
 }
 
@@ -438,7 +430,7 @@ fn edge_targets_and_velocities_are_handled() {
 fn crafted_checkpoints_are_refused() {
     let cfg = paper::config(Wall::Specular, 0.1, paper::Choices::default()).unwrap();
     let mut b = Batch::with_starts(cfg, paper::PaperDrift, 3, 9, 0, |_| ([0.5], [-1.5])).unwrap();
-    b.advance_to(1.0, &mut rng()).unwrap();
+    b.advance_to(1.0).unwrap();
     let before = b.records().to_vec();
     let mut w = crate::checkpoint::Writer::new(&mut []);
     b.save(&mut w);

@@ -71,15 +71,7 @@ use rand_core::Rng;
 
 pub use crate::qmc::points::PointSource;
 
-/// How the particles are re-sorted after each step.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Sorting {
-    /// Merge the few changed particles into the unchanged, still sorted, rest.
-    #[default]
-    Adaptive,
-    /// A full unstable sort every step (for comparison).
-    Full,
-}
+pub use super::facade::Sorting;
 
 /// `f64`s of workspace a mass-flow scheme of `n` particles steps in (`6n`: the sizes,
 /// the next sizes, one block of 3-D points and the re-sort's scratch); `None` if it
@@ -691,6 +683,9 @@ impl<K, F, B> MassFlow<K, F, B> {
         Ok(())
     }
 }
+
+mod entry;
+pub use entry::MassFlowEntry;
 
 #[cfg(test)]
 mod tests;

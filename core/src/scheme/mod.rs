@@ -30,6 +30,7 @@ pub(crate) mod clock;
 pub(crate) use crate::random::{Ziggurat, exp1, open_unit};
 pub mod baseline;
 pub mod eventflow;
+pub mod facade;
 pub mod lowrank;
 pub mod massflow;
 pub mod population;
@@ -83,11 +84,15 @@ pub(crate) mod tag {
     pub const DSA: u64 = 7;
     pub const DSA_COUNTS: u64 = 8;
     pub const LANGEVIN: u64 = 9;
-    pub const THERMAL: u64 = 10;
+    pub const TEMPERATURE: u64 = 10;
     pub const UNIFORM: u64 = 11;
     pub const DSMC: u64 = 12;
     pub const LOWRANK_SIZES: u64 = 13;
     pub const BUCKETED_COUNTED: u64 = 14;
+    // registry entries whose scheme shares its engine's tag with another entry
+    pub const LOWRANK_BINARY: u64 = 15;
+    pub const TEMPERATURE_REJECTION: u64 = 16;
+    pub const DSMC_REJECTION: u64 = 17;
 }
 
 impl StepReport {
@@ -101,6 +106,8 @@ impl StepReport {
             self.bound_violations,
             self.clipped,
             self.doublings,
+            self.removed,
+            self.bounces,
         ] {
             w.u64(v);
         }
@@ -116,9 +123,9 @@ impl StepReport {
             bound_violations: r.u64()?,
             clipped: r.u64()?,
             doublings: r.u64()?,
-            // (removals and bounces are written after the report by the schemes that
-            // have them)
-            ..Default::default()
+            removed: r.u64()?,
+            bounces: r.u64()?,
+            interrupted: false,
         })
     }
 
@@ -396,6 +403,18 @@ pub(crate) fn check_target(now: f64, t: f64) -> Result<()> {
     crate::error::finite("t", t)?;
     if t < now {
         return Err(crate::error::Error::TimeBackwards { now, requested: t });
+    }
+    Ok(())
+}
+
+/// Checks a restored pending proposal against the rate of the restored state.
+pub(crate) fn check_pending(p: &Option<Pending>, rate: f64) -> Result<()> {
+    if let Some(p) = p
+        && !(rate > 0.0 && (p.mean_dt * rate - 1.0).abs() <= 1e-9)
+    {
+        return Err(crate::error::Error::Checkpoint {
+            what: "pending proposal at another rate than the state's",
+        });
     }
     Ok(())
 }

@@ -24,10 +24,11 @@
 //! largest cluster's mass over V (E–W 6.15).
 
 use super::super::{Budget, Pending, Scheme, StepReport, check_target, next_proposal};
-use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
+use super::{Sampler, Store, accept, break_rate, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::random::unit_f64;
+use crate::scheme::check_pending;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -382,7 +383,6 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         w.f64(self.time);
         Pending::save(&self.pending, w);
         self.totals.save(w);
-        w.u64(self.totals.removed);
         w.u64(self.store.len() as u64);
         for &y in self.store.sizes() {
             w.f64(y);
@@ -404,8 +404,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             return Err(bad("invalid volume, flag or time"));
         }
         let pending = Pending::read(r, time)?;
-        let mut totals = StepReport::read(r)?;
-        totals.removed = r.u64()?;
+        let totals = StepReport::read(r)?;
         let ys = read_sizes(r, self.store.capacity())?;
         let (k, f) = (&self.kernel, &self.frag);
         let sampler = self.store.read_sampler(r, &ys, |y| raw_weights(k, f, y))?;

@@ -26,11 +26,12 @@ use super::super::population::{
     DEFAULT_MEMORY_BUDGET, Population, check_counts, dense_from_pairs, try_resize, within_budget,
 };
 use super::super::{Budget, Pending, Scheme, StepReport, check_target};
-use super::{accept, check_pending, majorant};
+use super::{accept, majorant};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::random::{Ziggurat, below};
 use crate::sample::wide_tree::WideTree;
+use crate::scheme::check_pending;
 use alloc::borrow::Cow;
 use alloc::vec::Vec;
 use rand_core::Rng;

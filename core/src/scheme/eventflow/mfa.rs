@@ -15,10 +15,11 @@
 //! gel mass `M1 (1 − n/N)` (E–W 6.14).
 
 use super::super::{Budget, Pending, Scheme, StepReport, check_target, next_proposal};
-use super::{Sampler, Store, accept, break_rate, check_pending, majorant, read_sizes};
+use super::{Sampler, Store, accept, break_rate, majorant, read_sizes};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::random::unit_f64;
+use crate::scheme::check_pending;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -414,7 +415,6 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         w.f64(self.time);
         Pending::save(&self.pending, w);
         self.totals.save(w);
-        w.u64(self.totals.removed);
         w.u64(self.store.len() as u64);
         for &x in self.store.sizes() {
             w.f64(x);
@@ -441,8 +441,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             return Err(bad("invalid mass, truncation, flag or time"));
         }
         let pending = Pending::read(r, time)?;
-        let mut totals = StepReport::read(r)?;
-        totals.removed = r.u64()?;
+        let totals = StepReport::read(r)?;
         let xs = read_sizes(r, self.n0)?;
         let (k, f) = (&self.kernel, &self.frag);
         let sampler = self.store.read_sampler(r, &xs, |x| raw_weights(k, f, x))?;

@@ -41,11 +41,13 @@
 
 mod dsa;
 mod dsa_counts;
+mod entry;
 mod groups;
 mod mfa;
 
 pub use dsa::Dsa;
 pub use dsa_counts::DsaCounts;
+pub use entry::{DsaCountsEntry, DsaEntry, MfaEntry};
 pub use mfa::Mfa;
 
 use crate::error::{Error, Result};
@@ -92,20 +94,7 @@ pub fn sample_sizes<R: Rng + ?Sized>(
     Ok(out)
 }
 
-/// How the event-driven schemes draw particles by weight. The defaults are the faster
-/// of the two on the free-molecular kernel from 10^6 particles (docs/results/
-/// eventflow-samplers.md): groups for the mass flow algorithm, whose time goes into
-/// draws, and the sum tree for direct simulation, whose time goes into updates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sampler {
-    /// Flat sum trees in the workspace: `O(log n)` per draw and per update.
-    SumTree,
-    /// The paper's group acceptance–rejection (E–W 2000 §5.1), with binades as the
-    /// groups: about two tries per draw, `O(1)` updates for a weight that stays in its
-    /// binade. Its index tables (four words per particle and weight) are allocated at
-    /// construction, outside the workspace.
-    Groups,
-}
+pub use super::facade::Sampler;
 
 /// Particle sizes and `T` sum trees of weights over them, in one workspace:
 /// `[sizes: cap | tree 0: 2·tcap | tree 1 | ...]`. Tree nodes: 1 is the root, node i
@@ -532,18 +521,6 @@ pub(crate) fn read_sizes(r: &mut crate::checkpoint::Reader, cap: usize) -> Resul
         xs.push(x);
     }
     Ok(xs)
-}
-
-/// Checks a restored pending proposal against the rate of the restored state.
-pub(crate) fn check_pending(p: &Option<super::Pending>, rate: f64) -> Result<()> {
-    if let Some(p) = p
-        && !(rate > 0.0 && (p.mean_dt * rate - 1.0).abs() <= 1e-9)
-    {
-        return Err(Error::Checkpoint {
-            what: "pending proposal at another rate than the state's",
-        });
-    }
-    Ok(())
 }
 
 #[cfg(test)]

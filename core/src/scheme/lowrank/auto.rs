@@ -20,14 +20,7 @@ use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::borrow::Cow;
 use rand_core::Rng;
 
-/// Which engine an [`AutoBucketed`] runs.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BucketMode {
-    /// [`Bucketed`]: slots and alias tables.
-    Slots,
-    /// [`BucketedCounted`]: exact bucket counts in a sum tree.
-    Counted,
-}
+pub use crate::scheme::facade::BucketMode;
 
 /// The bucketed layout with its engine chosen by the initial particle number, or pinned
 /// (see the module docs). `W` must be `2R`.

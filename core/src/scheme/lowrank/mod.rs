@@ -58,6 +58,7 @@ pub mod bound;
 pub mod bucketed;
 mod counted;
 pub mod dsmc;
+mod entry;
 pub mod proposal;
 pub mod rule;
 pub mod sizes;
@@ -71,6 +72,10 @@ pub use auto::{AutoBucketed, BucketMode};
 pub use bound::MAX_PARTICLES;
 pub use bucketed::BucketedEngine;
 pub use counted::CountedEngine;
+pub use entry::{
+    BinaryTreeEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry, TemperatureEntry,
+    TemperatureRejectionEntry, TreeEntry,
+};
 pub use proposal::{Candidate, Outcome, ProposalEngine};
 pub use rule::{Coagulate, EventRule, Reweighed, SPOT_CHECK};
 pub use sizes::LowRankSizes;
@@ -685,33 +690,19 @@ where
     }
 }
 
-/// [`Observe`](crate::observe::Observe) for a size-count scheme from its inherent
-/// `counts`, `volume`, `particles` and `moment` (one definition for all).
-macro_rules! observe_counts {
-    ([$($g:tt)*] $ty:ty) => {
-        impl<$($g)*> crate::observe::Observe for $ty {
-            fn volume(&self) -> f64 {
-                <$ty>::volume(self)
-            }
-            fn particles(&self) -> u64 {
-                <$ty>::particles(self)
-            }
-            fn moment(&self, order: f64) -> f64 {
-                <$ty>::moment(self, order)
-            }
-            fn concentration(&self, a: f64, b: f64) -> f64 {
-                crate::observe::concentration_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self), a, b)
-            }
-            fn gel_mass(&self) -> Option<f64> {
-                Some(crate::observe::largest_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self)))
-            }
-        }
-    };
-}
+use crate::scheme::population::observe_counts;
 
-observe_counts!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>, Rl: EventRule<K>] LowRankMc<K, R, E, Rl>);
-observe_counts!([K: CoagulationKernel] crate::scheme::baseline::Inverse<K>);
-observe_counts!([K: CoagulationKernel] crate::scheme::baseline::AcceptanceRejection<K>);
+observe_counts!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>] LowRankMc<K, R, E, Coagulate>);
+observe_counts!(
+    [TK: crate::kernel::temperature::TemperatureKernel + Clone, E: ProposalEngine<3>]
+    LowRankMc<temperature::Temperatures<TK>, 3, E, temperature::Collide>,
+    observable = entry::temperature_observable
+);
+observe_counts!(
+    [S: crate::kernel::gas::Sticking + Clone, E: ProposalEngine<3>]
+    LowRankMc<dsmc::Gas<S>, 3, E, dsmc::Collisions>,
+    observable = entry::gas_observable
+);
 
 #[cfg(test)]
 mod tests;

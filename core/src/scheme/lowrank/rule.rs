@@ -8,7 +8,7 @@
 //!
 //! A rule may also carry per-size state in its kernel and change the bound's factors
 //! after an event ([`EventRule::REWEIGHS`]): the temperature-dependent scheme
-//! ([`thermal`](super::thermal)) keeps a partial temperature per size, lets a collision
+//! ([`temperature`](super::temperature)) keeps a partial temperature per size, lets a collision
 //! bounce ([`Outcome::Bounce`]) or merge, and moves the factor rows of the sizes whose
 //! temperature changed. Such a rule runs on an engine that can reweigh a size (the
 //! per-size trees).

@@ -745,7 +745,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::checkpoint::Ch
             buckets.get(i).map_or([[0.0; R]; 2], |x| x.leaf::<R>())
         })?;
         let s = rate_sum(&tree, n);
-        crate::scheme::eventflow::check_pending(&pending, s / volume)?;
+        crate::scheme::check_pending(&pending, s / volume)?;
         self.p = Layout {
             sizes,
             at,

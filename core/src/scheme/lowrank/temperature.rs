@@ -229,7 +229,7 @@ fn per(a: f64, b: f64) -> f64 {
 
 impl<TK: TemperatureKernel + Clone> EventRule<Temperatures<TK>> for Collide {
     const REWEIGHS: bool = true;
-    const TAG: Option<u64> = Some(crate::scheme::tag::THERMAL);
+    const TAG: Option<u64> = Some(crate::scheme::tag::TEMPERATURE);
 
     fn for_kernel(_kernel: &Temperatures<TK>) -> Self {
         Collide::default()

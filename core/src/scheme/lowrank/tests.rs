@@ -5,7 +5,6 @@ use super::*;
 use crate::exact::Exact;
 use crate::kernel::{Coagulation, UserKernel};
 use crate::observe::Replicas;
-use crate::scheme::baseline::AcceptanceRejection;
 use alloc::format;
 use alloc::string::String;
 use rand_pcg::Pcg64Mcg;
@@ -226,8 +225,6 @@ fn bad_input_is_an_error() {
         Err(Error::TimeBackwards { .. })
     ));
     assert!(s.advance_to(f64::NAN, &mut rng).is_err());
-    let no_sup = |x: f64, y: f64| x + y;
-    assert!(AcceptanceRejection::monodisperse(no_sup, 10).is_err());
 }
 
 #[test]

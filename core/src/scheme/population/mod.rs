@@ -14,55 +14,38 @@
 use crate::error::{Error, Result};
 use alloc::vec::Vec;
 
-/// Largest size the size-count schemes allow by default (2^32).
-pub const DEFAULT_SIZE_LIMIT: u64 = 1 << 32;
+#[cfg(feature = "std")]
+pub use crate::memory::machine_memory_budget;
+pub use crate::memory::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT, default_memory_budget};
+pub(crate) use crate::memory::{shrink_spare, try_reserve, try_resize, within_budget};
 
-/// Memory the growing size-count schemes may use by default: 2 GiB (their per-size
-/// arrays, trees and particle lists; set with `with_memory_budget`). Growth beyond it,
-/// or an allocation the system refuses, is [`Error::Capacity`] with the state as
-/// before the event — never an abort. (The core has no way to ask the machine; a host
-/// that knows its memory sets the budget.)
-pub const DEFAULT_MEMORY_BUDGET: usize = 2 << 30;
-
-/// The default memory budget of [`Options`](crate::scheme::facade::Options): the
-/// machine's ([`machine_memory_budget`]) with the `std` feature, else
-/// [`DEFAULT_MEMORY_BUDGET`].
-pub fn default_memory_budget() -> usize {
-    #[cfg(feature = "std")]
-    {
-        machine_memory_budget()
+/// Refuses counts that reach past the size limit (`counts.len()` sizes).
+pub(crate) fn check_within_limit(counts: &[u64], limit: u64) -> Result<()> {
+    if counts.len() as u64 > limit {
+        return Err(Error::Capacity {
+            name: "maximum particle size (size-limit)",
+            capacity: usize::try_from(limit).unwrap_or(usize::MAX),
+        });
     }
-    #[cfg(not(feature = "std"))]
-    {
-        DEFAULT_MEMORY_BUDGET
-    }
+    Ok(())
 }
 
-/// A memory budget from what this machine has: half of its physical memory (Linux:
-/// `MemTotal` in `/proc/meminfo`), at least 256 MiB; [`DEFAULT_MEMORY_BUDGET`] where the
-/// machine cannot say. The C ABI and the CLI use it when no budget is given. Read
-/// once per process (a host that builds a simulation per grid cell would otherwise
-/// read `/proc/meminfo` for each).
-#[cfg(feature = "std")]
-pub fn machine_memory_budget() -> usize {
-    static BUDGET: std::sync::OnceLock<usize> = std::sync::OnceLock::new();
-    *BUDGET.get_or_init(read_machine_budget)
-}
-
-#[cfg(feature = "std")]
-fn read_machine_budget() -> usize {
-    let total_kib = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
-        m.lines()
-            .find(|l| l.starts_with("MemTotal:"))
-            .and_then(|l| l.split_whitespace().nth(1))
-            .and_then(|v| v.parse::<u64>().ok())
-    });
-    match total_kib {
-        Some(kib) => usize::try_from(kib.saturating_mul(1024) / 2)
-            .unwrap_or(usize::MAX)
-            .max(256 << 20),
-        None => DEFAULT_MEMORY_BUDGET,
-    }
+/// The bytes an integer-size scheme holds after a build from counts: its per-size
+/// arrays and trees (64 bytes a size) and its particle lists (up to 64 bytes a
+/// particle, for at most 2^24 of them).
+pub(crate) fn counts_memory(init: &crate::scheme::facade::Init<'_>) -> u64 {
+    use crate::scheme::facade::Init;
+    let (len, n) = match *init {
+        Init::Counts { counts, .. } | Init::Temperatures { counts, .. } => (
+            counts.len() as u64,
+            counts.iter().fold(0u64, |a, &c| a.saturating_add(c)),
+        ),
+        Init::Velocities { sizes, .. } => {
+            (sizes.iter().copied().max().unwrap_or(0), sizes.len() as u64)
+        }
+        Init::Sizes { sizes, .. } => (0, sizes.len() as u64),
+    };
+    len.saturating_mul(64).saturating_add(64 * n.min(1 << 24))
 }
 
 /// N, N0, V and the limits of a size-count population (the counts themselves live in
@@ -140,49 +123,6 @@ impl Population {
     pub fn within_budget(&self, bytes: Option<usize>) -> Result<()> {
         within_budget(bytes, self.memory_budget)
     }
-}
-
-/// `Err(Capacity)` unless `bytes` (None: overflowed) fits the budget.
-pub(crate) fn within_budget(bytes: Option<usize>, budget: usize) -> Result<()> {
-    match bytes {
-        Some(b) if b <= budget => Ok(()),
-        _ => Err(Error::Capacity {
-            name: "memory budget in bytes (raise it with with_memory_budget)",
-            capacity: budget,
-        }),
-    }
-}
-
-/// Grows `v` to `len` copies of `value` through `try_reserve` (a refused allocation is
-/// `Err(Capacity)`, `v` unchanged).
-pub(crate) fn try_resize<T: Clone>(v: &mut Vec<T>, len: usize, value: T) -> Result<()> {
-    if len > v.len() {
-        try_reserve(v, len - v.len())?;
-        v.resize(len, value);
-    }
-    Ok(())
-}
-
-/// Gives back the spare capacity of `v` when it passes 4 times its length plus 16: `v`
-/// moves to an allocation of twice its length, if one is to be had (an allocation that
-/// fails leaves `v` as it was). Lists that empty out then hold O(their length), not
-/// their largest length ever. Contents and order are unchanged.
-pub(crate) fn shrink_spare<T: Copy>(v: &mut Vec<T>) {
-    if v.capacity() > v.len().saturating_mul(4).saturating_add(16) {
-        let mut w = Vec::new();
-        if w.try_reserve_exact(v.len().saturating_mul(2)).is_ok() {
-            w.extend_from_slice(v);
-            *v = w;
-        }
-    }
-}
-
-/// `v.try_reserve(additional)`, a refusal mapped to `Err(Capacity)`.
-pub(crate) fn try_reserve<T>(v: &mut Vec<T>, additional: usize) -> Result<()> {
-    v.try_reserve(additional).map_err(|_| Error::Capacity {
-        name: "memory (the allocator refused)",
-        capacity: v.len().saturating_add(additional),
-    })
 }
 
 /// Checks `(size, count)` pairs (sizes ≥ 1, within `size_limit`, each at most once)
@@ -274,6 +214,36 @@ pub(crate) fn rate_overflow(value: f64) -> Error {
         value,
     }
 }
+
+/// [`Observe`](crate::observe::Observe) for a size-count scheme from its inherent
+/// `counts`, `volume`, `particles` and `moment` (one definition for all).
+macro_rules! observe_counts {
+    ([$($g:tt)*] $ty:ty $(, observable = $obs:path)?) => {
+        impl<$($g)*> crate::observe::Observe for $ty {
+            fn volume(&self) -> f64 {
+                <$ty>::volume(self)
+            }
+            fn particles(&self) -> u64 {
+                <$ty>::particles(self)
+            }
+            fn moment(&self, order: f64) -> f64 {
+                <$ty>::moment(self, order)
+            }
+            fn concentration(&self, a: f64, b: f64) -> f64 {
+                crate::observe::concentration_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self), a, b)
+            }
+            fn gel_mass(&self) -> Option<f64> {
+                Some(crate::observe::largest_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self)))
+            }
+            $(
+                fn observable(&self, name: &str) -> Option<f64> {
+                    $obs(self, name)
+                }
+            )?
+        }
+    };
+}
+pub(crate) use observe_counts;
 
 #[cfg(test)]
 mod tests {

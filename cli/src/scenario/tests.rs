@@ -1,0 +1,276 @@
+//! The scenario loader's tests: observables, hostile overrides, the exact references
+//! and where keys are.
+
+use super::*;
+
+#[test]
+fn observables_parse() {
+    assert_eq!(Observable::parse("M2"), Ok(Observable::Moment(2.0)));
+    assert_eq!(Observable::parse("M1.5"), Ok(Observable::Moment(1.5)));
+    assert_eq!(Observable::parse("n3"), Ok(Observable::Density(3)));
+    assert_eq!(
+        Observable::parse("C(100,200)"),
+        Ok(Observable::Concentration(100.0, 200.0))
+    );
+    assert_eq!(Observable::parse("gel"), Ok(Observable::Gel));
+    assert_eq!(
+        Observable::parse("mean-temperature"),
+        Ok(Observable::Named("mean-temperature".into()))
+    );
+    for bad in [
+        "", "M", "Mx", "n0", "n-1", "C(2,1)", "C(0,1)", "C(1)", "Foo!", "Minf", "M100",
+    ] {
+        assert!(Observable::parse(bad).is_err(), "{bad}");
+    }
+}
+
+use proptest::prelude::*;
+
+const KEYS: &[&str] = &[
+    "kernel.kind",
+    "kernel.coefficient",
+    "kernel.a",
+    "kernel.gamma",
+    "kernel.temperature",
+    "kernel.viscosity",
+    "kernel.density",
+    "kernel.monomer-diameter",
+    "fragmentation.kind",
+    "fragmentation.rate",
+    "initial.kind",
+    "initial.particles",
+    "initial.size",
+    "initial.mean",
+    "initial.median",
+    "initial.gsd",
+    "initial.resolution",
+    "initial.sizes",
+    "initial.counts",
+    "initial.concentration",
+    "scheme.name",
+    "scheme.dt",
+    "scheme.points",
+    "scheme.size-limit",
+    "scheme.engine",
+    "scheme.randomization",
+    "initial.temperature",
+    "output.times",
+    "output.t-end",
+    "output.t-start",
+    "output.count",
+    "output.spacing",
+    "output.observables",
+    "run.replicas",
+    "run.seed",
+    "run.threads",
+    "title",
+    "nonsense.key",
+];
+const VALUES: &[&str] = &[
+    "0",
+    "1",
+    "-1",
+    "2",
+    "3",
+    "0.5",
+    "1e308",
+    "-1e-308",
+    "nan",
+    "inf",
+    "4096",
+    "1000",
+    "18446744073709551615",
+    "9223372036854775807",
+    "\"constant\"",
+    "\"additive\"",
+    "\"product\"",
+    "\"physical\"",
+    "\"exponential\"",
+    "\"lognormal\"",
+    "\"sizes\"",
+    "\"counts\"",
+    "\"massflow\"",
+    "\"lowrank\"",
+    "\"rejection\"",
+    "\"inverse\"",
+    "\"owen\"",
+    "\"temperature\"",
+    "\"dsmc\"",
+    "\"hard-spheres\"",
+    "\"log\"",
+    "[1, 2, 3]",
+    "[0.5, 1.0]",
+    "[]",
+    "[\"M0\", \"gel\"]",
+    "[\"C(1,2)\"]",
+    "{}",
+    "true",
+    "\"x\"",
+    "[1.0, 1e300]",
+    "[1, 0]",
+];
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(2000))]
+    /// Random overrides of every key by hostile values on every example never
+    /// panic: the loader returns a plan or an error with a message.
+    #[test]
+    fn overrides_never_panic(
+        ex in 0..crate::examples::EXAMPLES.len(),
+        sets in prop::collection::vec((0..KEYS.len(), 0..VALUES.len()), 1..5),
+        drops in prop::collection::vec(0..KEYS.len(), 0..2),
+    ) {
+        let (name, text) = crate::examples::EXAMPLES[ex];
+        let mut ov = Vec::new();
+        for (k, v) in sets {
+            let (key, value) = parse_override(&format!("{}={}", KEYS[k], VALUES[v])).unwrap();
+            ov.push((key, value));
+        }
+        let drops: Vec<String> = drops.into_iter().map(|k| KEYS[k].to_string()).collect();
+        match load(&Source { name, text, overrides: &ov, drops: &drops }) {
+            Ok(plan) => prop_assert!(!plan.times.is_empty() && !plan.observables.is_empty()),
+            Err(e) => prop_assert!(!e.message.is_empty()),
+        }
+    }
+}
+
+/// Direct simulation, over counts or over particles, is the Marcus–Lushnikov process:
+/// its gel reference for the multiplicative kernel is 1 − t*/t, the mass flow's
+/// Flory's 1 − 1/t.
+#[test]
+fn multiplicative_reference_follows_the_process() {
+    let (name, text) = crate::examples::get("multiplicative-gelation").unwrap();
+    let gel_at_2 = |scheme: &str| {
+        let ov = vec![(
+            "scheme.name".to_string(),
+            toml::Value::String(scheme.into()),
+        )];
+        let plan = load(&Source {
+            name,
+            text,
+            overrides: &ov,
+            drops: &[],
+        })
+        .unwrap();
+        plan.exact.unwrap().value(&Observable::Gel, 2.0).unwrap()
+    };
+    let flory = 0.5;
+    let ml = 1.0 - coagula_core::exact::dual_time(2.0).unwrap() / 2.0;
+    for scheme in ["lowrank", "dsa", "dsa-counts"] {
+        approx::assert_relative_eq!(gel_at_2(scheme), ml, max_relative = 1e-12);
+    }
+    approx::assert_relative_eq!(gel_at_2("mfa"), flory, max_relative = 1e-12);
+}
+
+/// `scheme.engine` pins the bucketed engine, and only lowrank takes it.
+#[test]
+fn engine_key() {
+    let (name, text) = crate::examples::get("quickstart-constant").unwrap();
+    let with = |scheme: &str, engine: &str| {
+        let ov = vec![
+            (
+                "scheme.name".to_string(),
+                toml::Value::String(scheme.into()),
+            ),
+            (
+                "scheme.engine".to_string(),
+                toml::Value::String(engine.into()),
+            ),
+        ];
+        load(&Source {
+            name,
+            text,
+            overrides: &ov,
+            drops: &[],
+        })
+    };
+    use coagula_core::scheme::facade::BucketMode;
+    let plan = with("lowrank", "slots").unwrap();
+    assert_eq!(plan.options.engine(), Some(BucketMode::Slots));
+    let plan = with("lowrank", "counted").unwrap();
+    assert_eq!(plan.options.engine(), Some(BucketMode::Counted));
+    assert!(with("lowrank", "alias").is_err());
+    let e = with("lowrank-tree", "slots").unwrap_err();
+    // core's message, the one C and Python get for the same mistake
+    assert!(
+        e.message.contains("does not apply to scheme lowrank-tree"),
+        "{}",
+        e.message
+    );
+}
+
+/// A named observable parses by its shape; the scheme's entry decides whether it has
+/// one by that name (core's list, not the CLI's).
+#[test]
+fn named_observables_are_the_schemes() {
+    let (name, text) = crate::examples::get("quickstart-constant").unwrap();
+    let with = |scheme: &str, observable: &str| {
+        let ov = vec![
+            (
+                "scheme.name".to_string(),
+                toml::Value::String(scheme.into()),
+            ),
+            (
+                "output.observables".to_string(),
+                toml::Value::Array(vec![toml::Value::String(observable.into())]),
+            ),
+        ];
+        load(&Source {
+            name,
+            text,
+            overrides: &ov,
+            drops: &[],
+        })
+    };
+    assert!(with("lowrank", "M0").is_ok());
+    let e = with("lowrank", "foo").unwrap_err();
+    assert!(e.message.contains("named observables"), "{}", e.message);
+    let e = with("lowrank", "mean-temperature").unwrap_err();
+    assert!(e.message.contains("named observables"), "{}", e.message);
+}
+
+#[test]
+fn lines_of_keys() {
+    let text = "title = \"x\"\n[kernel]\nkind = \"product\"\na = 1.5\n";
+    assert_eq!(line_of(text, "kernel.a"), Some(4));
+    assert_eq!(line_of(text, "title"), Some(1));
+    assert_eq!(line_of(text, "kernel.gamma"), None);
+}
+
+/// The CI smoke run of the scenario-parser fuzz target (`fuzz/`): every input of its
+/// committed corpus and every reproducer under `fuzz/regressions/` is loaded (or
+/// refused with a message) through this parser, as the target does.
+#[test]
+fn scenario_parser_corpus_and_regressions() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../fuzz");
+    let mut n = 0;
+    for dir in ["corpus", "regressions"] {
+        let Ok(entries) = std::fs::read_dir(root.join(dir).join("scenario_parser")) else {
+            continue;
+        };
+        for e in entries.filter_map(|e| e.ok()) {
+            let data = std::fs::read(e.path()).unwrap();
+            n += 1;
+            let Ok(text) = std::str::from_utf8(&data) else {
+                continue;
+            };
+            let (text, overrides) = match text.split_once("\n#--set ") {
+                Some((t, o)) => match parse_override(o.trim()) {
+                    Ok(kv) => (t, vec![kv]),
+                    Err(_) => (t, Vec::new()),
+                },
+                None => (text, Vec::new()),
+            };
+            let src = Source {
+                name: "fuzz.toml",
+                text,
+                overrides: &overrides,
+                drops: &[],
+            };
+            if let Err(e) = load(&src) {
+                assert!(!e.to_string().is_empty());
+            }
+        }
+    }
+    assert!(n >= 10, "{n} inputs");
+}

@@ -1,0 +1,271 @@
+//! The object-safe facade every front end holds, and what a registry entry is.
+//!
+//! This module sits below the schemes and names none of them: a scheme module
+//! implements [`Controls`] (what a host can read and replace) and [`Register`] (its
+//! registry entry: [`SchemeInfo`], the capabilities as data, and how to build it);
+//! [`registry`](super::registry) lists the entries. A front end (the C ABI, the CLI,
+//! Python, the tests) holds a `Box<dyn Simulation<K, F, G>>` and never names a scheme
+//! type.
+//!
+//! The facade is generic over the coagulation kernel type `K`, the fragmentation
+//! kernel `F` and the generator `G`, so a front end fixes them once (the C ABI: its
+//! kernel handles and its random source; the CLI: the built-in kernels and
+//! [`crate::random::Generator`]). Dispatch is dynamic per call (`advance_to`, an
+//! observation), never per random draw or kernel evaluation: inside a call the scheme
+//! runs monomorphised.
+
+mod adapter;
+mod envelope;
+mod model;
+mod options;
+mod start;
+
+pub(crate) use adapter::count_controls;
+pub use adapter::{Boxed, Controls};
+pub use envelope::{ENVELOPE_MAGIC, peek_stream, read_envelope, write_envelope};
+pub use model::Blank;
+pub use model::{Init, InitKind, Model, ModelKind, Samples, number_volume};
+pub use options::{
+    BucketMode, Directions, GENERAL, KEY_NAMES, KEYS, Key, Kind, Options, Points, Sampler, Sorting,
+    Value, key_index,
+};
+pub use start::Start;
+
+use super::{Budget, StepReport};
+use crate::checkpoint::{Reader, Writer};
+use crate::error::Result;
+use crate::kernel::{CoagulationKernel, FragmentationKernel};
+use crate::observe::Observe;
+use alloc::borrow::Cow;
+use alloc::boxed::Box;
+use rand_core::Rng;
+
+/// Whether a scheme's memory is fixed at construction (it may run in a caller's
+/// workspace) or grows within a memory budget.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Memory {
+    /// Fixed: `registry::workspace_len` gives the doubles a caller provides.
+    Fixed,
+    /// Grows with `try_reserve` within the `memory-budget` option.
+    Growing,
+}
+
+/// What kind of process a scheme simulates, for the tests that hold every scheme to
+/// its law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Law {
+    /// The finite-N coagulation process itself (Marcus–Lushnikov): every pair of
+    /// particles coagulates at rate `K/V`, exactly, so a small system follows the
+    /// exact master equation (with particle doubling where the scheme has it, which
+    /// keeps the law of the concentrations).
+    FiniteN,
+    /// A stochastic weighted (mass-flow) process whose expectation solves the
+    /// Smoluchowski equation as N grows (Eibeck & Wagner 2000).
+    MassFlow,
+    /// A time-stepping scheme: exact only as Δt → 0 (an O(Δt) bias; Lécot et al.
+    /// 2019).
+    TimeStepped,
+    /// Temperature-dependent coagulation (Osinsky 2023 §4): the finite-N process of
+    /// counts and partial temperatures.
+    Temperature,
+    /// Direct simulation Monte Carlo of a gas (Osinsky 2023 §5).
+    Gas,
+}
+
+/// A registry entry: a scheme's name, paper and capabilities, as data every front end
+/// reads.
+#[derive(Clone, Copy, Debug)]
+pub struct SchemeInfo {
+    /// Its name in the CLI, the C ABI and Python (unique).
+    pub name: &'static str,
+    /// The paper and section it implements.
+    pub paper: &'static str,
+    /// What it is, in one line.
+    pub summary: &'static str,
+    /// The physics it takes.
+    pub model: ModelKind,
+    /// The initial states it builds from.
+    pub inits: &'static [InitKind],
+    /// What its [`Init::Sizes`] are samples of.
+    pub sizes: Samples,
+    /// Whether it breaks particles (a coagulation model's fragmentation kernel).
+    pub fragmentation: bool,
+    /// The option keys that apply (besides [`GENERAL`]).
+    pub options: &'static [&'static str],
+    /// Fixed or growing memory.
+    pub memory: Memory,
+    /// Its checkpoint tag (a checkpoint of another scheme is refused).
+    pub tag: u64,
+    /// The names [`Observe::observable`] answers besides the common ones.
+    pub observables: &'static [&'static str],
+    /// The law it simulates.
+    pub law: Law,
+}
+
+impl PartialEq for SchemeInfo {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for SchemeInfo {}
+
+impl SchemeInfo {
+    /// Whether the scheme builds from `init`.
+    pub fn accepts(&self, init: &Init<'_>) -> bool {
+        self.inits.contains(&init.kind())
+    }
+
+    /// Whether option `key` applies.
+    pub fn takes_option(&self, key: &str) -> bool {
+        self.options.contains(&key) || GENERAL.contains(&key)
+    }
+}
+
+/// A registered scheme as [`registry::SCHEMES`](super::registry::SCHEMES) holds it.
+pub type SchemeId = &'static SchemeInfo;
+
+/// The kernel types the registry accepts.
+pub trait RegistryKernel: CoagulationKernel + Clone + 'static {}
+impl<K: CoagulationKernel + Clone + 'static> RegistryKernel for K {}
+
+/// The fragmentation kernel types the registry accepts.
+pub trait RegistryFragmentation: FragmentationKernel + Clone + 'static {}
+impl<F: FragmentationKernel + Clone + 'static> RegistryFragmentation for F {}
+
+/// A scheme's registry entry: its [`SchemeInfo`] and how to build it. The registry
+/// checks what the info declares (the model and initial-state kinds, fragmentation,
+/// the options that apply) before calling [`build`](Self::build).
+pub trait Register {
+    /// The capabilities.
+    const INFO: &'static SchemeInfo;
+
+    /// Builds the scheme (the kinds already checked against [`INFO`](Self::INFO)).
+    fn build<K, F, G>(
+        model: Model<K, F>,
+        init: &Init<'_>,
+        opts: &Options,
+    ) -> Result<Box<dyn Simulation<K, F, G>>>
+    where
+        K: RegistryKernel,
+        F: RegistryFragmentation,
+        G: Rng + ?Sized + 'static;
+
+    /// Builds the scheme in a caller's workspace of
+    /// [`workspace_len`](Self::workspace_len) doubles (schemes of fixed memory).
+    fn build_in<'a, K, F, G>(
+        _model: Model<K, F>,
+        _init: &Init<'_>,
+        _opts: &Options,
+        _workspace: &'a mut [f64],
+    ) -> Result<Box<dyn Simulation<K, F, G> + 'a>>
+    where
+        K: RegistryKernel,
+        F: RegistryFragmentation,
+        G: Rng + ?Sized + 'static,
+    {
+        Err(crate::Error::Unsupported {
+            what: "caller-owned workspace: only the fixed-size schemes run in one (the growing ones take a memory budget)",
+        })
+    }
+
+    /// Doubles of caller workspace the scheme needs for `particles` particles
+    /// (fixed-memory schemes, which start from sizes).
+    fn workspace_len(_particles: usize, _opts: &Options, _fragments: bool) -> Option<usize> {
+        None
+    }
+
+    /// Bytes the scheme holds right after a build from `init`: what a front end sums
+    /// to refuse a run that cannot fit (an estimate within a factor 2 of the peak of a
+    /// scheme that does not grow).
+    fn memory_estimate(init: &Init<'_>, opts: &Options, fragments: bool) -> u64;
+
+    /// The smallest initial state of the same shape as `init` (what a clone is built
+    /// from before the original's checkpoint is restored into it).
+    fn blank(init: &Init<'_>, opts: &Options, fragments: bool) -> Blank;
+}
+
+/// A scheme's state, read through the facade.
+#[derive(Clone, Debug)]
+pub enum State<'a> {
+    /// Particle sizes (ascending for the time-driven mass flow; in storage order for
+    /// the event-driven schemes).
+    Sizes(&'a [f64]),
+    /// Counts, `N_i` at index `i − 1`, and the volume.
+    Counts(Cow<'a, [u64]>, f64),
+}
+
+/// Every scheme behind one object-safe interface (see the module docs).
+pub trait Simulation<K, F, G: ?Sized>: Observe {
+    /// The registry entry.
+    fn info(&self) -> &'static SchemeInfo;
+    /// Current time.
+    fn time(&self) -> f64;
+    /// The books of every call so far ([`Scheme::totals`](super::Scheme::totals)).
+    fn totals(&self) -> StepReport;
+    /// Runs until time `t` ([`Scheme::advance_to`](super::Scheme::advance_to)).
+    fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport>;
+    /// At most `budget`'s work, then `interrupted`
+    /// ([`Scheme::advance_within`](super::Scheme::advance_within)).
+    fn advance_within(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport>;
+    /// The state (sizes or counts; the counts as a dense vector up to the largest size:
+    /// see [`for_each_count`](Self::for_each_count) for the occupied sizes only).
+    fn state(&self) -> State<'_>;
+    /// Calls `f(size, N)` for every occupied size, ascending, without a dense count
+    /// vector (integer-size schemes; others: `Unsupported`).
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()>;
+    /// Largest size the state can hold now (integer-size schemes' M), if any.
+    fn max_size(&self) -> Option<u64>;
+    /// The engine the bucketed low-rank scheme runs (others: `None`).
+    fn engine(&self) -> Option<BucketMode>;
+    /// Calls `f(size, value)` for every occupied size with a per-size quantity by name
+    /// (`"temperature"`: the partial temperature of the temperature-dependent schemes,
+    /// the kinetic temperature of a gas's sizes); `Unsupported` where there is none.
+    fn size_values(&self, name: &str, f: &mut dyn FnMut(u64, f64)) -> Result<()>;
+    /// Calls `f(size, velocity)` for every particle of a gas (others: `Unsupported`).
+    fn velocities(&self, f: &mut dyn FnMut(u64, &[f64; 3])) -> Result<()>;
+    /// Replaces counts and volume (integer-size schemes; others: `Unsupported`).
+    fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()>;
+    /// Replaces the state by `counts[i]` particles of size `sizes[i]` in `volume`
+    /// (integer-size schemes).
+    fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()>;
+    /// Replaces the sizes (schemes over particle sizes; others: `Unsupported`).
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()>;
+    /// Replaces the coagulation kernel (coagulation models).
+    fn set_kernel(&mut self, kernel: K) -> Result<()>;
+    /// Replaces the fragmentation kernel (schemes that break particles).
+    fn set_fragmentation(&mut self, frag: F) -> Result<()>;
+    /// Changes the time step (time-driven schemes; others: `Unsupported`).
+    fn set_dt(&mut self, dt: f64) -> Result<()>;
+    /// Sets the clock (finite, not negative); an event-driven scheme draws its next
+    /// proposal afresh.
+    fn set_time(&mut self, t: f64) -> Result<()>;
+    /// Changes the total mass the particles carry (mass-flow schemes).
+    fn set_mass(&mut self, mass: f64) -> Result<()>;
+    /// The settings as they stand (as built, with the setters' changes).
+    fn options(&self) -> &Options;
+    /// The physics.
+    fn model(&self) -> &Model<K, F>;
+    /// Writes the scheme's state ([`Checkpoint::save`](crate::checkpoint::Checkpoint::save)).
+    fn save(&self, w: &mut Writer);
+    /// Restores a state written by `save` of the same scheme and set-up.
+    fn restore(&mut self, r: &mut Reader) -> Result<()>;
+    /// Writes the one checkpoint envelope every front end uses: the scheme, the
+    /// settings as built and as they stand, the physics' fingerprint, the front end's
+    /// random stream (its generator's words, if it has one) and the state; sealed with
+    /// a checksum (see [`write_envelope`]).
+    fn save_checkpoint(&self, stream: Option<[u64; 4]>, w: &mut Writer);
+    /// Restores an envelope written by [`save_checkpoint`](Self::save_checkpoint) of a
+    /// sim of the same scheme, settings and physics (the stream, the memory budget and
+    /// the capacity may differ), returning the stream it carries; on error the sim is
+    /// unchanged.
+    fn restore_checkpoint(&mut self, buf: &[u8]) -> Result<Option<[u64; 4]>>;
+    /// An exact copy in memory the library owns (a sim in caller workspace included):
+    /// the two continue identically and independently.
+    fn duplicate(&self) -> Result<Box<dyn Simulation<K, F, G>>>;
+}

@@ -1,0 +1,547 @@
+//! The registry entries and facade controls of Osinsky's low-rank schemes (2023): the
+//! bucketed layout, the per-size trees (8-ary and binary), low-rank over particle
+//! sizes, the temperature-dependent scheme (§4) and low-rank DSMC (§5), each with its
+//! acceptance–rejection baseline where the paper times one.
+
+use super::dsmc::{Collisions, Gas, LowRankDsmc, RejectionDsmc};
+use super::temperature::{Collide, TemperatureMc, TemperatureRejection, Temperatures};
+use super::{
+    AutoBucketed, BinaryTree, Coagulate, LowRank, LowRankMc, LowRankSizes, ProposalEngine,
+};
+use crate::error::{Error, Result};
+use crate::kernel::CoagulationKernel;
+use crate::kernel::gas::{StickBelow, Sticking};
+use crate::kernel::temperature::{TemperatureKernel, TemperatureModel};
+use crate::scheme::facade::{
+    Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Register,
+    RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State, count_controls,
+    number_volume,
+};
+use crate::scheme::population::{check_within_limit, counts_memory};
+use crate::scheme::tag;
+use alloc::boxed::Box;
+use alloc::vec;
+use rand_core::Rng;
+
+/// Runs `$body` with `$R` (and `$W = 2R`) bound to the kernel's rank, 1..=4.
+macro_rules! by_rank {
+    ($rank:expr, $R:ident, $W:ident => $body:expr) => {
+        match $rank {
+            1 => {
+                const $R: usize = 1;
+                const $W: usize = 2;
+                $body
+            }
+            2 => {
+                const $R: usize = 2;
+                const $W: usize = 4;
+                $body
+            }
+            3 => {
+                const $R: usize = 3;
+                const $W: usize = 6;
+                $body
+            }
+            4 => {
+                const $R: usize = 4;
+                const $W: usize = 8;
+                $body
+            }
+            _ => Err(Error::Unsupported {
+                what: "low-rank schemes: the kernel needs a low-rank bound of rank 1..4",
+            }),
+        }
+    };
+}
+
+fn counts_of<'a>(init: &Init<'a>, opts: &Options) -> Result<(&'a [u64], f64)> {
+    match *init {
+        Init::Counts { counts, volume } => {
+            check_within_limit(counts, opts.size_limit())?;
+            Ok((counts, volume))
+        }
+        _ => Err(Error::Unsupported {
+            what: "initial state: this scheme starts from counts of integer sizes",
+        }),
+    }
+}
+
+const COUNT_OPTIONS: &[&str] = &["size-limit", "memory-budget", "batched-clock"];
+
+/// An entry of low-rank MC over counts: the layouts differ only in their engine.
+macro_rules! counts_entry {
+    ($entry:ident, $name:expr, $paper:expr, $summary:expr, $tag:expr, $options:expr,
+     |$k:ident, $counts:ident, $volume:ident, $opts:ident| $make:expr) => {
+        #[doc = concat!("The registry entry `", $name, "`.")]
+        pub struct $entry;
+
+        impl Register for $entry {
+            const INFO: &'static SchemeInfo = &SchemeInfo {
+                name: $name,
+                paper: $paper,
+                summary: $summary,
+                model: ModelKind::Coagulation,
+                inits: &[InitKind::Counts],
+                sizes: Samples::None,
+                fragmentation: false,
+                options: $options,
+                memory: Memory::Growing,
+                tag: $tag,
+                observables: &[],
+                law: Law::FiniteN,
+            };
+
+            fn build<K, F, G>(
+                model: Model<K, F>,
+                init: &Init<'_>,
+                opts: &Options,
+            ) -> Result<Box<dyn Simulation<K, F, G>>>
+            where
+                K: RegistryKernel,
+                F: RegistryFragmentation,
+                G: Rng + ?Sized + 'static,
+            {
+                let ($k, _) = model.kernels()?;
+                let ($counts, $volume) = counts_of(init, opts)?;
+                let $opts = opts;
+                by_rank!($k.rank(), R, W => {
+                    let _ = W;
+                    let s = $make;
+                    Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+                })
+            }
+
+            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
+                counts_memory(init)
+            }
+
+            fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
+                Blank::Counts(vec![2], 1.0)
+            }
+        }
+    };
+}
+
+counts_entry!(
+    BucketedEntry,
+    "lowrank",
+    "Osinsky 2023, §2-3 (bucketed layout)",
+    "low-rank Monte Carlo, bucketed layout (the default)",
+    tag::BUCKETED,
+    &["size-limit", "memory-budget", "batched-clock", "engine"],
+    |k, counts, volume, opts| AutoBucketed::<K, R, W>::new_with_mode(
+        k,
+        counts,
+        volume,
+        opts.memory_budget(),
+        opts.engine()
+    )?
+    .with_size_limit(opts.size_limit())
+    .with_batched_clock(opts.batched_clock())
+);
+
+counts_entry!(
+    TreeEntry,
+    "lowrank-tree",
+    "Osinsky 2023, §2-3 (per-size segment trees, 8-ary)",
+    "low-rank Monte Carlo with per-size segment trees",
+    tag::LOWRANK,
+    COUNT_OPTIONS,
+    |k, counts, volume, opts| LowRank::<K, R>::new_with_memory_budget(
+        k,
+        counts,
+        volume,
+        opts.memory_budget()
+    )?
+    .with_size_limit(opts.size_limit())
+    .with_batched_clock(opts.batched_clock())
+);
+
+counts_entry!(
+    BinaryTreeEntry,
+    "lowrank-binary-tree",
+    "Osinsky 2023, §2-3 (the paper's binary segment trees)",
+    "low-rank Monte Carlo with the paper's binary segment trees",
+    tag::LOWRANK_BINARY,
+    COUNT_OPTIONS,
+    |k, counts, volume, opts| LowRank::<K, R, BinaryTree<R>>::new_with_memory_budget(
+        k,
+        counts,
+        volume,
+        opts.memory_budget()
+    )?
+    .with_size_limit(opts.size_limit())
+    .with_batched_clock(opts.batched_clock())
+);
+
+/// The registry entry of [`LowRankSizes`].
+pub struct SizesEntry;
+
+impl Register for SizesEntry {
+    const INFO: &'static SchemeInfo = &SchemeInfo {
+        name: "lowrank-sizes",
+        paper: "Osinsky 2023, §2-3 (over particle sizes)",
+        summary: "low-rank Monte Carlo over particle sizes (continuous or sparse; memory O(particles))",
+        model: ModelKind::Coagulation,
+        inits: &[InitKind::Sizes],
+        sizes: Samples::Number,
+        fragmentation: false,
+        options: &["memory-budget"],
+        memory: Memory::Growing,
+        tag: tag::LOWRANK_SIZES,
+        observables: &[],
+        law: Law::FiniteN,
+    };
+
+    fn build<K, F, G>(
+        model: Model<K, F>,
+        init: &Init<'_>,
+        opts: &Options,
+    ) -> Result<Box<dyn Simulation<K, F, G>>>
+    where
+        K: RegistryKernel,
+        F: RegistryFragmentation,
+        G: Rng + ?Sized + 'static,
+    {
+        let (k, _) = model.kernels()?;
+        let &Init::Sizes { sizes, mass } = init else {
+            return Err(Error::Unsupported {
+                what: "initial state: lowrank-sizes starts from particle sizes",
+            });
+        };
+        let v = number_volume(sizes, mass)?;
+        by_rank!(k.rank(), R, W => {
+            let s = LowRankSizes::<K, R, W>::new_with_memory_budget(k, sizes, v, opts.memory_budget())?;
+            Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+        })
+    }
+
+    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
+        match init {
+            Init::Sizes { sizes, .. } => 8 * 7 * sizes.len() as u64,
+            _ => 0,
+        }
+    }
+
+    fn blank(init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
+        let size = match *init {
+            Init::Sizes { sizes, .. } => sizes.iter().copied().reduce(f64::min).unwrap_or(1.0),
+            _ => 1.0,
+        };
+        Blank::Sizes {
+            size,
+            n: 1,
+            mass: size,
+            capacity: 0,
+        }
+    }
+}
+
+/// An entry of the temperature-dependent scheme (Osinsky 2023 §4) on engine `$scheme`.
+macro_rules! temperature_entry {
+    ($entry:ident, $name:expr, $summary:expr, $scheme:ident, $tag:expr) => {
+        #[doc = concat!("The registry entry `", $name, "`.")]
+        pub struct $entry;
+
+        impl Register for $entry {
+            const INFO: &'static SchemeInfo = &SchemeInfo {
+                name: $name,
+                paper: "Osinsky 2023, §4 and appendix A",
+                summary: $summary,
+                model: ModelKind::Temperature,
+                inits: &[InitKind::Temperatures],
+                sizes: Samples::None,
+                fragmentation: false,
+                options: &["size-limit", "memory-budget"],
+                memory: Memory::Growing,
+                tag: $tag,
+                observables: &["mean-temperature", "energy"],
+                law: Law::Temperature,
+            };
+
+            fn build<K, F, G>(
+                model: Model<K, F>,
+                init: &Init<'_>,
+                opts: &Options,
+            ) -> Result<Box<dyn Simulation<K, F, G>>>
+            where
+                K: RegistryKernel,
+                F: RegistryFragmentation,
+                G: Rng + ?Sized + 'static,
+            {
+                let Model::Temperature(m) = model else {
+                    return Err(Error::Unsupported {
+                        what: "model: this scheme takes a temperature model",
+                    });
+                };
+                let &Init::Temperatures {
+                    counts,
+                    temperatures,
+                    volume,
+                } = init
+                else {
+                    return Err(Error::Unsupported {
+                        what: "initial state: this scheme starts from counts and temperatures",
+                    });
+                };
+                if temperatures.len() != counts.len() {
+                    return Err(Error::BufferLength {
+                        name: "temperatures (one per size of the counts)",
+                        expected: counts.len(),
+                        got: temperatures.len(),
+                    });
+                }
+                check_within_limit(counts, opts.size_limit())?;
+                let kernel = Temperatures::new(m, temperatures)?;
+                let s = $scheme::<TemperatureModel>::new_with_memory_budget(
+                    kernel,
+                    counts,
+                    volume,
+                    opts.memory_budget(),
+                )?
+                .with_size_limit(opts.size_limit());
+                Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+            }
+
+            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
+                counts_memory(init)
+            }
+
+            fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
+                Blank::Temperatures
+            }
+        }
+    };
+}
+
+temperature_entry!(
+    TemperatureEntry,
+    "temperature",
+    "temperature-dependent low-rank Monte Carlo on per-size trees",
+    TemperatureMc,
+    tag::TEMPERATURE
+);
+temperature_entry!(
+    TemperatureRejectionEntry,
+    "temperature-rejection",
+    "temperature-dependent acceptance-rejection (uniform pairs), the paper's baseline",
+    TemperatureRejection,
+    tag::TEMPERATURE_REJECTION
+);
+
+/// An entry of low-rank DSMC (Osinsky 2023 §5) on engine `$scheme`.
+macro_rules! dsmc_entry {
+    ($entry:ident, $name:expr, $summary:expr, $scheme:ident, $tag:expr) => {
+        #[doc = concat!("The registry entry `", $name, "`.")]
+        pub struct $entry;
+
+        impl Register for $entry {
+            const INFO: &'static SchemeInfo = &SchemeInfo {
+                name: $name,
+                paper: "Osinsky 2023, §5",
+                summary: $summary,
+                model: ModelKind::Gas,
+                inits: &[InitKind::Velocities],
+                sizes: Samples::None,
+                fragmentation: false,
+                options: &["directions"],
+                memory: Memory::Growing,
+                tag: $tag,
+                observables: &[
+                    "energy",
+                    "mean-temperature",
+                    "momentum-x",
+                    "momentum-y",
+                    "momentum-z",
+                ],
+                law: Law::Gas,
+            };
+
+            fn build<K, F, G>(
+                model: Model<K, F>,
+                init: &Init<'_>,
+                opts: &Options,
+            ) -> Result<Box<dyn Simulation<K, F, G>>>
+            where
+                K: RegistryKernel,
+                F: RegistryFragmentation,
+                G: Rng + ?Sized + 'static,
+            {
+                let Model::Gas(g) = model else {
+                    return Err(Error::Unsupported {
+                        what: "model: this scheme takes a gas",
+                    });
+                };
+                let &Init::Velocities {
+                    sizes,
+                    velocities,
+                    volume,
+                } = init
+                else {
+                    return Err(Error::Unsupported {
+                        what: "initial state: this scheme starts from particles with velocities",
+                    });
+                };
+                let (vel, rest) = velocities.as_chunks::<3>();
+                if !rest.is_empty() || vel.len() != sizes.len() {
+                    return Err(Error::BufferLength {
+                        name: "velocities (three per particle)",
+                        expected: sizes.len().saturating_mul(3),
+                        got: velocities.len(),
+                    });
+                }
+                let gas = Gas::from_particles(g.restitution(), g.sticking(), sizes, vel)?
+                    .with_directions(opts.directions());
+                let s = $scheme::<StickBelow>::new_gas(gas, volume)?;
+                Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+            }
+
+            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
+                counts_memory(init)
+            }
+
+            fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
+                Blank::Velocities
+            }
+        }
+    };
+}
+
+dsmc_entry!(
+    DsmcEntry,
+    "dsmc",
+    "low-rank direct simulation Monte Carlo of a hard-sphere gas (per-size trees)",
+    LowRankDsmc,
+    tag::DSMC
+);
+dsmc_entry!(
+    DsmcRejectionEntry,
+    "dsmc-rejection",
+    "DSMC by acceptance-rejection (uniform pairs), the paper's baseline",
+    RejectionDsmc,
+    tag::DSMC_REJECTION
+);
+
+count_controls!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>] LowRankMc<K, R, E, Coagulate>, |s| s.counts());
+count_controls!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts(), engine = |s| s.mode());
+
+impl<K: CoagulationKernel, F, const R: usize, const W: usize> Controls<K, F>
+    for LowRankSizes<K, R, W>
+{
+    fn state(&self) -> State<'_> {
+        State::Sizes(self.sizes())
+    }
+    fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
+        LowRankSizes::set_sizes(self, sizes)
+    }
+    fn set_kernel(&mut self, kernel: K) -> Result<()> {
+        LowRankSizes::set_kernel(self, kernel)
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        LowRankSizes::set_time(self, t)
+    }
+}
+
+impl<K, F, TK, E> Controls<K, F> for LowRankMc<Temperatures<TK>, 3, E, Collide>
+where
+    TK: TemperatureKernel + Clone,
+    E: ProposalEngine<3>,
+{
+    fn state(&self) -> State<'_> {
+        State::Counts(self.counts(), self.volume())
+    }
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()> {
+        LowRankMc::for_each_count(self, f);
+        Ok(())
+    }
+    fn max_size(&self) -> Option<u64> {
+        Some(LowRankMc::max_size(self) as u64)
+    }
+    fn size_values(&self, name: &str, f: &mut dyn FnMut(u64, f64)) -> Result<()> {
+        if name != "temperature" {
+            return Err(Error::Unsupported {
+                what: "per-size values: the temperature-dependent schemes keep \"temperature\"",
+            });
+        }
+        LowRankMc::for_each_count(self, &mut |s, _| f(s, self.temperature(s)));
+        Ok(())
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        LowRankMc::set_time(self, t)
+    }
+}
+
+impl<K, F, S, E> Controls<K, F> for LowRankMc<Gas<S>, 3, E, Collisions>
+where
+    S: Sticking + Clone,
+    E: ProposalEngine<3>,
+{
+    fn state(&self) -> State<'_> {
+        State::Counts(self.counts(), self.volume())
+    }
+    fn for_each_count(&self, f: &mut dyn FnMut(u64, u64)) -> Result<()> {
+        LowRankMc::for_each_count(self, f);
+        Ok(())
+    }
+    fn max_size(&self) -> Option<u64> {
+        Some(LowRankMc::max_size(self) as u64)
+    }
+    fn size_values(&self, name: &str, f: &mut dyn FnMut(u64, f64)) -> Result<()> {
+        if name != "temperature" {
+            return Err(Error::Unsupported {
+                what: "per-size values: DSMC keeps \"temperature\" (m <|V|^2>/3 of each size)",
+            });
+        }
+        LowRankMc::for_each_count(self, &mut |s, _| f(s, self.temperature(s)));
+        Ok(())
+    }
+    fn velocities(&self, f: &mut dyn FnMut(u64, &[f64; 3])) -> Result<()> {
+        let mut sizes = alloc::vec::Vec::new();
+        LowRankMc::for_each_count(self, &mut |s, _| sizes.push(s));
+        for s in sizes {
+            for v in self.kernel().velocities(s) {
+                f(s, v);
+            }
+        }
+        Ok(())
+    }
+    fn set_time(&mut self, t: f64) -> Result<()> {
+        LowRankMc::set_time(self, t)
+    }
+}
+
+/// The temperature scheme's named observables.
+pub(super) fn temperature_observable<TK, E>(
+    s: &LowRankMc<Temperatures<TK>, 3, E, Collide>,
+    name: &str,
+) -> Option<f64>
+where
+    TK: TemperatureKernel + Clone,
+    E: ProposalEngine<3>,
+{
+    match name {
+        "mean-temperature" => Some(s.mean_temperature()),
+        "energy" => Some(s.energy()),
+        _ => None,
+    }
+}
+
+/// DSMC's named observables.
+pub(super) fn gas_observable<S, E>(
+    s: &LowRankMc<Gas<S>, 3, E, Collisions>,
+    name: &str,
+) -> Option<f64>
+where
+    S: Sticking + Clone,
+    E: ProposalEngine<3>,
+{
+    let p = || s.momentum();
+    match name {
+        "energy" => Some(s.energy()),
+        "mean-temperature" => Some(s.mean_temperature()),
+        "momentum-x" => Some(p()[0]),
+        "momentum-y" => Some(p()[1]),
+        "momentum-z" => Some(p()[2]),
+        _ => None,
+    }
+}

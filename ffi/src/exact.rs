@@ -1,0 +1,112 @@
+//! Exact solutions as validation targets for hosts (Eibeck & Wagner 2000 eqs.
+//! 6.8-6.11; Lécot et al. 2019 §4).
+
+use crate::status::{COAG_INVALID_ARGUMENT, Fail, fail, guard};
+use crate::util::{non_null, write};
+
+/// The constant kernel `K = 1` (a `COAG_EXACT_*` solution).
+pub const COAG_EXACT_CONSTANT: i32 = 0;
+/// Additive kernel `K = x + y`.
+pub const COAG_EXACT_ADDITIVE: i32 = 1;
+/// Multiplicative kernel, Flory's solution.
+pub const COAG_EXACT_MULTIPLICATIVE: i32 = 2;
+/// Multiplicative kernel, Marcus–Lushnikov limit.
+pub const COAG_EXACT_MARCUS_LUSHNIKOV: i32 = 3;
+/// Lécot's coagulation–fragmentation test (moments only).
+pub const COAG_EXACT_COAG_FRAG: i32 = 4;
+
+fn exact_of(solution: i32) -> Result<coagula_core::exact::Exact, Fail> {
+    use coagula_core::exact::Exact;
+    Ok(match solution {
+        COAG_EXACT_CONSTANT => Exact::constant(1.0)?,
+        COAG_EXACT_ADDITIVE => Exact::additive(),
+        COAG_EXACT_MULTIPLICATIVE => Exact::multiplicative(),
+        COAG_EXACT_MARCUS_LUSHNIKOV => Exact::marcus_lushnikov(),
+        COAG_EXACT_COAG_FRAG => Exact::coagulation_fragmentation(),
+        _ => {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("unknown exact solution {solution}"),
+            );
+        }
+    })
+}
+
+/// Exact moment `M_m(t)` (m = 0..3) of a `COAG_EXACT_*` solution from `n_1(0) = 1`.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one `double`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_exact_moment(solution: i32, m: u32, t: f64, out: *mut f64) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        let v = exact_of(solution)?.moment(m, t)?;
+        // SAFETY: checked non-null; writable by the caller's contract.
+        unsafe { write(out, v) };
+        Ok(())
+    })
+}
+
+/// Exact concentration `n_k(t)` of a `COAG_EXACT_*` solution.
+///
+/// # Safety
+/// `out` must be NULL or valid for writing one `double`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_exact_density(solution: i32, k: u64, t: f64, out: *mut f64) -> i32 {
+    guard(|| {
+        non_null(out, "out")?;
+        let v = exact_of(solution)?.number_density(k, t)?;
+        // SAFETY: checked non-null; writable by the caller's contract.
+        unsafe { write(out, v) };
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::status::coag_last_error_message;
+    use crate::status::*;
+    use std::ffi::c_char;
+
+    #[test]
+    fn errors_and_messages() {
+        let mut out = -1.0;
+        assert_eq!(
+            unsafe { coag_exact_moment(COAG_EXACT_CONSTANT, 2, 3.0, &mut out) },
+            COAG_OK
+        );
+        assert_eq!(out, 4.0);
+        assert_eq!(
+            unsafe { coag_exact_moment(COAG_EXACT_CONSTANT, 2, -3.0, &mut out) },
+            COAG_INVALID_ARGUMENT
+        );
+        assert_eq!(out, 4.0, "outputs untouched on error");
+        let mut buf = [0 as c_char; 8];
+        let mut len = 0usize;
+        assert_eq!(
+            unsafe { coag_last_error_message(buf.as_mut_ptr(), buf.len(), &mut len) },
+            COAG_BUFFER_TOO_SMALL
+        );
+        assert!(len > 8);
+        let mut big = vec![0 as c_char; len + 1];
+        assert_eq!(
+            unsafe { coag_last_error_message(big.as_mut_ptr(), big.len(), std::ptr::null_mut()) },
+            COAG_OK
+        );
+        let msg = unsafe { std::ffi::CStr::from_ptr(big.as_ptr()) }
+            .to_str()
+            .unwrap();
+        assert!(msg.contains("t = -3"), "{msg}");
+        assert_eq!(
+            unsafe { coag_exact_moment(99, 2, 1.0, &mut out) },
+            COAG_INVALID_ARGUMENT
+        );
+        assert_eq!(
+            unsafe { coag_exact_moment(0, 2, 1.0, std::ptr::null_mut()) },
+            COAG_NULL_PARAMETER
+        );
+        let v = unsafe { std::ffi::CStr::from_ptr(coag_version()) };
+        assert_eq!(v.to_str().unwrap(), env!("CARGO_PKG_VERSION"));
+    }
+}
