@@ -10,7 +10,7 @@ use super::{
 };
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use crate::kernel::gas::{StickBelow, Sticking};
+use crate::kernel::gas::{NeverStick, Sticking};
 use crate::kernel::temperature::{TemperatureKernel, TemperatureModel};
 use crate::scheme::facade::{
     Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Register,
@@ -292,15 +292,25 @@ macro_rules! temperature_entry {
                     });
                 }
                 check_within_limit(counts, opts.size_limit())?;
-                let kernel = Temperatures::new(m, temperatures)?;
-                let s = $scheme::<TemperatureModel>::new_with_memory_budget(
-                    kernel,
-                    counts,
-                    volume,
-                    opts.memory_budget(),
-                )?
-                .with_size_limit(opts.size_limit());
-                Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+                // one monomorphisation per model: the kernel is evaluated per proposal,
+                // and a match there cost 5-10 % (docs/results/registry-ab.md)
+                macro_rules! with {
+                    ($k:expr) => {{
+                        let kernel = Temperatures::new($k, temperatures)?;
+                        let s = $scheme::<_>::new_with_memory_budget(
+                            kernel,
+                            counts,
+                            volume,
+                            opts.memory_budget(),
+                        )?
+                        .with_size_limit(opts.size_limit());
+                        Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+                    }};
+                }
+                match m {
+                    TemperatureModel::Ballistic(b) => with!(b),
+                    TemperatureModel::ClosedForm(c) => with!(c),
+                }
             }
 
             fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
@@ -390,10 +400,22 @@ macro_rules! dsmc_entry {
                         got: velocities.len(),
                     });
                 }
-                let gas = Gas::from_particles(g.restitution(), g.sticking(), sizes, vel)?
-                    .with_directions(opts.directions());
-                let s = $scheme::<StickBelow>::new_gas(gas, volume)?;
-                Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+                // a gas that never sticks runs on `NeverStick` (the acceptance-rejection
+                // engine's proposal loop is 30 % faster without the threshold:
+                // docs/results/registry-ab.md)
+                macro_rules! with {
+                    ($stick:expr) => {{
+                        let gas = Gas::from_particles(g.restitution(), $stick, sizes, vel)?
+                            .with_directions(opts.directions());
+                        let s = $scheme::new_gas(gas, volume)?;
+                        Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+                    }};
+                }
+                if g.sticking().speed > 0.0 {
+                    with!(g.sticking())
+                } else {
+                    with!(NeverStick)
+                }
             }
 
             fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
