@@ -30,6 +30,8 @@ mod particle_sizes;
 mod regime_sweep;
 #[path = "regressions.rs"]
 mod regressions;
+#[path = "review_findings.rs"]
+mod review_findings;
 #[path = "temperature.rs"]
 mod temperature;
 #[path = "value_stability.rs"]

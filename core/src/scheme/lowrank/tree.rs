@@ -156,7 +156,12 @@ impl<const R: usize, T: ProposalTree<R>> TreeEngine<R, T> {
     /// Changes `N` at index `idx` by `delta` and updates the tree.
     #[inline]
     fn change(&mut self, idx: usize, delta: i64) {
-        self.counts[idx] = (self.counts[idx] as i64 + delta) as u64;
+        // in u64 (a count may pass 2^63): a removal takes particles the proposal drew
+        // from this size, an addition stays below the total, so this never fails; the
+        // check stays in release builds (the count is what exactness rests on)
+        self.counts[idx] = self.counts[idx]
+            .checked_add_signed(delta)
+            .expect("a size's count stays within [0, total particles]");
         let leaf = if T::NEEDS_LEAF {
             self.leaf_value(idx)
         } else {
