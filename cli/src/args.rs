@@ -3,7 +3,6 @@
 use crate::scenario;
 use clap::{Parser, Subcommand, ValueEnum};
 
-/// A finite, positive number (end times, sizes).
 /// A count: a non-negative integer, written as one (`1000000`) or as a real with no
 /// fractional part (`1e6`); a negative or fractional value is refused with a message
 /// (not clap's tip about `--`).
@@ -11,7 +10,7 @@ pub(crate) fn count_arg(v: &str) -> Result<u64, String> {
     if let Ok(n) = v.parse::<u64>() {
         return Ok(n);
     }
-    match v.parse::<f64>() {
+    match v.trim().parse::<f64>() {
         Ok(x) if x >= 0.0 && x.fract() == 0.0 && x < 18_446_744_073_709_551_616.0 => Ok(x as u64),
         Ok(x) => Err(format!(
             "{x} is not a count (a non-negative integer; 1e6 is one)"
@@ -22,6 +21,19 @@ pub(crate) fn count_arg(v: &str) -> Result<u64, String> {
     }
 }
 
+/// A count ([`count_arg`]) in `[LO, HI]`.
+pub(crate) fn count_in<const LO: u64, const HI: u64>(v: &str) -> Result<u64, String> {
+    let n = count_arg(v)?;
+    if (LO..=HI).contains(&n) {
+        Ok(n)
+    } else if HI == u64::MAX {
+        Err(format!("{n} is below the least allowed, {LO}"))
+    } else {
+        Err(format!("{n} is outside [{LO}, {HI}]"))
+    }
+}
+
+/// A finite, positive number (end times, sizes).
 pub(crate) fn positive_f64(v: &str) -> Result<f64, String> {
     let x: f64 = v.parse().map_err(|e| format!("{e}"))?;
     if x.is_finite() && x > 0.0 {
@@ -96,14 +108,14 @@ pub(crate) enum Command {
         #[arg(long)]
         points: Option<String>,
         /// Independent replicas (run in parallel).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1_000_000))]
+        #[arg(long, value_parser = count_in::<1, 1_000_000>, allow_negative_numbers = true)]
         replicas: Option<u64>,
         /// Seed, 0..=2^63-1 (replica r runs on its substream of the seed policy; replica
         /// 0 on the stream a C-ABI run with this seed uses).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=i64::MAX as u64))]
+        #[arg(long, value_parser = count_in::<0, {i64::MAX as u64}>, allow_negative_numbers = true)]
         seed: Option<u64>,
         /// Worker threads (0 = one per core; results do not depend on it).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(0..=1024))]
+        #[arg(long, value_parser = count_in::<0, 1024>, allow_negative_numbers = true)]
         threads: Option<u64>,
         /// Write every output time as CSV to this file (`-`: standard output).
         #[arg(long)]
@@ -116,7 +128,7 @@ pub(crate) enum Command {
         #[arg(long)]
         plot: Option<String>,
         /// Rows of the terminal table (the CSV and JSON have every time).
-        #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u64).range(1..=100_000))]
+        #[arg(long, default_value_t = 12, value_parser = count_in::<1, 100_000>, allow_negative_numbers = true)]
         rows: u64,
         /// No progress bar.
         #[arg(long)]
@@ -172,7 +184,7 @@ pub(crate) enum Command {
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(7..=24))]
         m_max: u32,
         /// MC seeds averaged per cell (at least 1).
-        #[arg(long, default_value_t = 4, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = 4, value_parser = count_in::<1, {u64::MAX}>, allow_negative_numbers = true)]
         mc_seeds: u64,
         /// RQMC randomisations per N (0 = none; otherwise at least 2, for an interval).
         #[arg(long, default_value_t = 20, value_parser = rqmc_count)]
@@ -203,13 +215,13 @@ pub(crate) enum Command {
         )]
         times: Vec<f64>,
         /// Print n_1 .. n_kmax as well (at most 100000).
-        #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u64).range(0..=100_000))]
+        #[arg(long, default_value_t = 0, value_parser = count_in::<0, 100_000>, allow_negative_numbers = true)]
         kmax: u64,
     },
     /// Print the t-values of the digital sequences (rank test on generating matrices).
     Qmc {
         /// Number of coordinates to analyse (1..=64).
-        #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=64))]
+        #[arg(long, default_value_t = 20, value_parser = count_in::<1, 64>, allow_negative_numbers = true)]
         dims: u64,
         /// Largest m (block size 2^m) for the sequence t-values (1..=62).
         #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..=62))]
@@ -229,7 +241,7 @@ pub(crate) enum Command {
         #[arg(long, default_value_t = 1e9, value_parser = positive_f64)]
         max: f64,
         /// Grid points (at least 2).
-        #[arg(long, default_value_t = 400, value_parser = clap::value_parser!(u64).range(2..=10_000_000))]
+        #[arg(long, default_value_t = 400, value_parser = count_in::<2, 10_000_000>, allow_negative_numbers = true)]
         points: u64,
     },
 }
@@ -261,7 +273,7 @@ pub(crate) enum BenchKind {
     /// absorbing problems and a 3-D ball with friction.
     Langevin {
         /// Trajectories per run (at least 1).
-        #[arg(long, default_value_t = 1 << 20, value_parser = clap::value_parser!(u64).range(1..))]
+        #[arg(long, default_value_t = 1 << 20, value_parser = count_in::<1, {u64::MAX}>, allow_negative_numbers = true)]
         trajectories: u64,
         /// Time step of the 1-D runs (> 0; the run goes to T = 3.2).
         #[arg(long, default_value_t = 0.05, value_parser = positive_f64)]
@@ -275,14 +287,14 @@ pub(crate) enum BenchKind {
     /// by side with the paper's, and collisions per second against the paper's.
     Temperature {
         /// Initial monomers of the full-scale rows (the paper's 1e7).
-        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
+        #[arg(long, default_value_t = 10_000_000, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]
         n0: u64,
         /// Times of the full-scale rows (comma-separated, increasing; the flag without a
         /// value skips them).
         #[arg(long, value_delimiter = ',', num_args = 0.., default_value = "1e3,1e4", value_parser = positive_f64)]
         times: Vec<f64>,
         /// Initial monomers of the scaled rows.
-        #[arg(long, default_value_t = 1 << 18, value_parser = clap::value_parser!(u64).range(2..=1u64 << 32))]
+        #[arg(long, default_value_t = 1 << 18, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]
         scaled_n0: u64,
         /// Times of the scaled rows (comma-separated, increasing; the flag without a
         /// value skips them).
@@ -295,7 +307,7 @@ pub(crate) enum BenchKind {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
         repeat: u32,
         /// Seed of the random streams.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_parser = count_arg, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Time only the low-rank method (the AR columns print "-").
         #[arg(long)]
@@ -305,7 +317,7 @@ pub(crate) enum BenchKind {
     /// 2023, tables 5-6: N_k ~ exp(-a (k-1)), a = 0.1 and 0.01, eps = 0.99).
     Dsmc {
         /// Particles (about; the paper's tables are read as 1e5, the default is 1e6).
-        #[arg(long, default_value_t = 1_000_000, value_parser = clap::value_parser!(u64).range(100..=1u64 << 32))]
+        #[arg(long, default_value_t = 1_000_000, value_parser = count_in::<100, {1u64 << 32}>, allow_negative_numbers = true)]
         particles: u64,
         /// Times (comma-separated, increasing).
         #[arg(long, value_delimiter = ',', default_value = "1,10,100", value_parser = positive_f64)]
@@ -317,13 +329,13 @@ pub(crate) enum BenchKind {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
         repeat: u32,
         /// Seed of the random streams.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_parser = count_arg, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
     },
     /// Low-rank MC vs acceptance-rejection vs inverse, with the paper's figures.
     Lowrank {
         /// Initial number of monomers (the paper uses 1e7).
-        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=u64::from(u32::MAX)))]
+        #[arg(long, default_value_t = 10_000_000, value_parser = count_in::<2, {u32::MAX as u64}>, allow_negative_numbers = true)]
         n0: u64,
         /// Wall-clock budget per baseline run, in seconds (cells beyond it print "-").
         #[arg(long, default_value_t = 600.0)]
@@ -346,7 +358,7 @@ pub(crate) enum BenchKind {
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
         repeat: u32,
         /// Seed of the random streams.
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_parser = count_arg, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
     },
     /// Low-rank only, one kernel to one time (for profiling).
@@ -355,12 +367,12 @@ pub(crate) enum BenchKind {
         #[arg(long, value_enum, default_value = "brownian")]
         kernel: PaperTable,
         /// Initial number of monomers.
-        #[arg(long, default_value_t = 10_000_000, value_parser = clap::value_parser!(u64).range(2..=u64::from(u32::MAX)))]
+        #[arg(long, default_value_t = 10_000_000, value_parser = count_in::<2, {u32::MAX as u64}>, allow_negative_numbers = true)]
         n0: u64,
         /// End time (finite, > 0).
         #[arg(long, default_value_t = 10.0, value_parser = positive_f64)]
         t: f64,
-        #[arg(long, default_value_t = 1)]
+        #[arg(long, value_parser = count_arg, allow_negative_numbers = true, default_value_t = 1)]
         seed: u64,
         /// Use the binary tree layout instead of the 8-ary one.
         #[arg(long)]
@@ -374,7 +386,7 @@ pub(crate) enum BenchKind {
     /// seconds and the mean N/V with its standard error.
     LowrankSmall {
         /// Initial particle numbers, comma-separated.
-        #[arg(long, value_delimiter = ',', default_values_t = [32u64, 128, 256, 1000])]
+        #[arg(long, value_parser = count_in::<2, {u64::MAX}>, value_delimiter = ',', default_values_t = [32u64, 128, 256, 1000])]
         n0: Vec<u64>,
         /// Length of the initial count vector (monomers only; longer = larger M).
         #[arg(long, default_value_t = 1)]
@@ -383,7 +395,7 @@ pub(crate) enum BenchKind {
         #[arg(long, default_value_t = 64.0)]
         t: f64,
         /// Replicas per layout.
-        #[arg(long, default_value_t = 1000)]
+        #[arg(long, value_parser = count_in::<1, {u64::MAX}>, allow_negative_numbers = true, default_value_t = 1000)]
         replicas: u64,
         /// Instead: a host's stepping. The replicas are built once (cells), then all
         /// advanced through this many steps of about one event per cell each (times
@@ -391,7 +403,7 @@ pub(crate) enum BenchKind {
         /// layouts (per-size tree, bucketed, continuous sizes) side by side. Prints
         /// build cost per cell and stepping cost per event; shows the cost's growth
         /// with the largest size M. `--len` and `--t` do not apply.
-        #[arg(long)]
+        #[arg(long, value_parser = count_arg, allow_negative_numbers = true)]
         host_steps: Option<u64>,
     },
     /// Ours next to the figures measured for the peers (PySDM, PyPartMC) and for the
@@ -401,7 +413,7 @@ pub(crate) enum BenchKind {
     /// from 1e7 monomers with the bucketed layout.
     Peers {
         /// Seeds per particle number (RMS errors over them).
-        #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u64).range(2..=10_000))]
+        #[arg(long, default_value_t = 8, value_parser = count_in::<2, 10_000>, allow_negative_numbers = true)]
         seeds: u64,
         /// Largest particle number, as log2 (12..=24).
         #[arg(long, default_value_t = 18, value_parser = clap::value_parser!(u32).range(12..=24))]

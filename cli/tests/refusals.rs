@@ -277,3 +277,69 @@ fn fuzzed_scenarios_never_panic() {
     assert!(count >= 400);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 40: counts accept `1e6`-style input wherever a count is asked for, and refuse
+/// negatives and fractions with a message of ours (not clap's tip about `--`).
+#[test]
+fn counts_accept_exponent_notation() {
+    let out = coagula()
+        .args([
+            "run",
+            "quickstart-constant",
+            "--particles",
+            "2e3",
+            "--quiet",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for (flag, bad, says) in [
+        ("--particles", "-1", "-1 is not a count"),
+        ("--particles", "1.5", "1.5 is not a count"),
+        ("--replicas", "2e9", "outside [1, 1000000]"),
+    ] {
+        let out = coagula()
+            .args(["run", "quickstart-constant", flag, bad])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{flag} {bad} accepted");
+        assert!(err.contains(says), "{flag} {bad}: {err}");
+        assert!(!err.contains("'-- "), "{flag} {bad}: clap's tip: {err}");
+    }
+    // and in a scenario
+    let out = coagula()
+        .args([
+            "run",
+            "quickstart-constant",
+            "--particles",
+            "1e3",
+            "--quiet",
+        ])
+        .args(["--set", "run.replicas=2e0"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = coagula()
+        .args(["run", "quickstart-constant", "--set", "run.replicas=1.5"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("1.5 is not a count"),
+        "{err}"
+    );
+    let out = coagula()
+        .args(["bench", "lowrank-small", "--n0", "1"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success(), "N0 = 1 has no events to time");
+}

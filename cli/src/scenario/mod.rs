@@ -160,16 +160,35 @@ pub struct OutputSpec {
     pub observables: Vec<String>,
 }
 
+/// A count written as an integer or as a real with no fractional part (`1e6`).
+fn count<'de, D: serde::Deserializer<'de>>(d: D) -> Result<u64, D::Error> {
+    #[derive(Deserialize)]
+    #[serde(untagged)]
+    enum Count {
+        Int(u64),
+        Real(f64),
+    }
+    match Count::deserialize(d)? {
+        Count::Int(n) => Ok(n),
+        Count::Real(x) if x >= 0.0 && x.fract() == 0.0 && x < 18_446_744_073_709_551_616.0 => {
+            Ok(x as u64)
+        }
+        Count::Real(x) => Err(serde::de::Error::custom(format!(
+            "{x} is not a count (a non-negative integer; 1e6 is one)"
+        ))),
+    }
+}
+
 /// `[run]`.
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct RunSpec {
     /// Independent replicas (default 1).
-    #[serde(default = "one")]
+    #[serde(default = "one", deserialize_with = "count")]
     pub replicas: u64,
     /// Seed of the seed policy (0..=2^63 − 1): replica r runs on its substream
     /// `Purpose::Replica(r)` of this seed (replica 0 on `generator(seed, 0)`).
-    #[serde(default = "one")]
+    #[serde(default = "one", deserialize_with = "count")]
     pub seed: u64,
     /// Worker threads (0 = one per core). Results do not depend on it.
     #[serde(default)]
