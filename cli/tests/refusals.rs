@@ -343,3 +343,26 @@ fn counts_accept_exponent_notation() {
         .unwrap();
     assert!(!out.status.success(), "N0 = 1 has no events to time");
 }
+
+/// Issue 40: `exact` at large times printed M3 = NaN (inf − inf) and 300-digit
+/// decimals; `--x` on a solution over integer sizes printed nothing and exited 0.
+#[test]
+fn exact_prints_large_values_readably_and_refuses_missing_columns() {
+    let out = coagula()
+        .args(["exact", "--solution", "golovin", "--times", "300,1e300"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!text.contains("NaN"), "{text}");
+    assert!(text.lines().all(|l| l.len() < 120), "{text}");
+    assert!(text.contains("7.546040601859879e260"), "{text}");
+    for args in [
+        ["exact", "--solution", "constant", "--x", "1,2"],
+        ["exact", "--solution", "golovin", "--kmax", "3"],
+    ] {
+        let out = coagula().args(args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} accepted");
+        assert!(String::from_utf8_lossy(&out.stderr).contains("ask for"));
+    }
+}

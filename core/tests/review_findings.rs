@@ -56,3 +56,18 @@ fn counts_past_two_to_the_63_stay_exact() {
         assert!(events < 1_000_000, "{}: {events} events", info.name);
     }
 }
+
+/// Golovin's M3 where `e^{4t}` overflows: infinite, not NaN (`inf − inf`).
+#[test]
+fn golovin_moments_overflow_to_infinity() {
+    use coagula_core::exact::Exact;
+    for e in [Exact::additive(), Exact::additive_exponential()] {
+        let v = e.moment(3, 300.0).unwrap();
+        assert!(v.is_infinite() && v > 0.0, "M3(300) = {v}");
+        assert!(e.moment(2, 300.0).unwrap().is_finite());
+    }
+    // and unchanged where finite: M3(1) of the exponential start is 12e^4 − 6e^3
+    let v = Exact::additive_exponential().moment(3, 1.0).unwrap();
+    let want = 12.0 * 1f64.exp().powi(4) - 6.0 * 1f64.exp().powi(3);
+    assert!((v - want).abs() <= 1e-12 * want, "{v} vs {want}");
+}

@@ -360,7 +360,8 @@ impl Exact {
                 exp(-t),
                 1.0,
                 exp(2.0 * t),
-                3.0 * exp(4.0 * t) - 2.0 * exp(3.0 * t),
+                // e^{3t}(3e^t − 2): no inf − inf (NaN) where e^{4t} overflows
+                exp(3.0 * t) * (3.0 * exp(t) - 2.0),
             ][m as usize],
             Kind::Multiplicative => {
                 if t < 1.0 {
@@ -395,7 +396,7 @@ impl Exact {
                 exp(-t),
                 1.0,
                 2.0 * exp(2.0 * t),
-                12.0 * exp(4.0 * t) - 6.0 * exp(3.0 * t),
+                6.0 * exp(3.0 * t) * (2.0 * exp(t) - 1.0),
             ][m as usize],
         })
     }
