@@ -234,8 +234,9 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
             // a ghost weight left by rounding (see `trees`): thinning rejects it
             return None;
         }
-        if i == j && (self.counts[i] as f64) * open_unit(rng) < 1.0 {
-            // the particle with itself (probability 1/N_i)
+        if i == j && (self.counts[i] as f64) * open_unit(rng) <= 1.0 {
+            // the particle with itself, probability 1/N_i: `u ≤ 1/N_i` for u in (0, 1]
+            // (with `<`, u = 1 accepted a lone particle's pair with itself)
             return None;
         }
         Some(Candidate {
