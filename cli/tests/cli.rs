@@ -595,3 +595,27 @@ fn bench_lowrank_small_steps_cells_like_a_host() {
         assert!((0.3..3.0).contains(&per_call), "{row}");
     }
 }
+
+/// Issue 40: the benches' paper columns printed `NaN` where the paper has no row;
+/// a missing figure is `-`.
+#[test]
+fn bench_tables_print_no_nan() {
+    for args in [
+        &[
+            "bench",
+            "temperature",
+            "--n0",
+            "2000",
+            "--times",
+            "1",
+            "--scaled-times",
+            "--skip-baseline",
+        ][..],
+        &["bench", "dsmc", "--particles", "1000", "--times", "1,2"][..],
+    ] {
+        let out = coagula().args(args).output().unwrap();
+        assert!(out.status.success(), "{args:?}");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(!text.contains("NaN"), "{args:?}:\n{text}");
+    }
+}

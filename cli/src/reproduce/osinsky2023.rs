@@ -368,7 +368,7 @@ pub fn bench(b: &Table4) -> Result<(), String> {
                 _ => (f64::NAN, f64::NAN),
             };
             println!(
-                "{:>9.2e} {:>8.0e} {:>10} | {:>9} {:>9} {:>7} | {:>9} {:>9} {:>7} | {:>10.3e} {:>10.3e} {:>7.2}",
+                "{:>9.2e} {:>8.0e} {:>10} | {:>9} {:>9} {:>7} | {:>9} {:>9} {:>7} | {:>10} {:>10} {:>7}",
                 n as f64,
                 t,
                 best_lr[i].map_or("-".into(), |c| format!("{:.3e}", c.1 as f64)),
@@ -378,9 +378,9 @@ pub fn bench(b: &Table4) -> Result<(), String> {
                 paper.map_or("-".into(), |p| format!("{:.0}", p.1)),
                 paper.map_or("-".into(), |p| format!("{:.0}", p.2)),
                 paper.map_or("-".into(), |p| format!("{:.2}", p.2 / p.1)),
-                cps,
-                paper_cps,
-                cps / paper_cps,
+                or_dash(cps, |x| format!("{x:.3e}")),
+                or_dash(paper_cps, |x| format!("{x:.3e}")),
+                or_dash(cps / paper_cps, |x| format!("{x:.2}")),
             );
         }
     }
@@ -494,7 +494,7 @@ pub fn bench_dsmc(
             };
             let paper_cps = paper.map_or(f64::NAN, |p| p.3 / p.2);
             println!(
-                "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} | {:>8} {:>8} {:>6} | {:>9.3e} {:>9.3e} {:>7.2}",
+                "{:>5} {:>6} {:>10} | {:>8} {:>8} {:>8} {:>6} {:>7} {:>6} | {:>8} {:>8} {:>6} | {:>9} {:>9} {:>7}",
                 a,
                 t,
                 lr.map_or("-".into(), |c| format!("{:.3e}", c.1 as f64)),
@@ -507,9 +507,9 @@ pub fn bench_dsmc(
                 paper.map_or("-".into(), |p| format!("{}", p.2)),
                 paper.map_or("-".into(), |p| format!("{}", p.1)),
                 paper.map_or("-".into(), |p| format!("{:.1}", p.1 / p.2)),
-                cps(lr),
-                paper_cps,
-                cps(lr) / paper_cps,
+                or_dash(cps(lr), |x| format!("{x:.3e}")),
+                or_dash(paper_cps, |x| format!("{x:.3e}")),
+                or_dash(cps(lr) / paper_cps, |x| format!("{x:.2}")),
             );
         }
     }
@@ -586,4 +586,10 @@ pub fn dsmc_cases(quick: bool) -> Result<Vec<Case>, String> {
         ));
     }
     Ok(out)
+}
+
+/// A table cell: `-` where there is no figure (no paper row, a run cut by its budget),
+/// not `NaN`.
+fn or_dash(x: f64, f: impl Fn(f64) -> String) -> String {
+    if x.is_finite() { f(x) } else { "-".into() }
 }
