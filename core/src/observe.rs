@@ -126,7 +126,11 @@ pub fn concentration_of_counts(counts: &[u64], volume: f64, a: f64, b: f64) -> f
         return 0.0;
     }
     let (lo, hi) = (lo as usize, hi as usize);
-    counts[lo - 1..hi].iter().map(|&n| n as f64 / volume).sum()
+    // (folded from +0: an empty `sum()` of floats is −0)
+    counts[lo - 1..hi]
+        .iter()
+        .map(|&n| n as f64 / volume)
+        .fold(0.0, |a, b| a + b)
 }
 
 /// The largest cluster's mass per volume of a size-count state (0 when empty).
@@ -156,7 +160,12 @@ pub fn power(x: f64, m: f64) -> f64 {
 
 /// The moment `Σ_i w_i x_i^m` of a weighted point measure.
 pub fn moment<I: IntoIterator<Item = (f64, f64)>>(points: I, m: f64) -> f64 {
-    points.into_iter().map(|(x, w)| w * power(x, m)).sum()
+    // (folded from +0: an empty `sum()` of floats is −0, and an empty system's moments
+    // are 0)
+    points
+        .into_iter()
+        .map(|(x, w)| w * power(x, m))
+        .fold(0.0, |a, b| a + b)
 }
 
 /// The sum concentration `C(a, b) = Σ_{a ≤ x_i ≤ b} w_i` (Eibeck & Wagner eq. 5.2).
@@ -165,7 +174,7 @@ pub fn sum_concentration<I: IntoIterator<Item = (f64, f64)>>(points: I, a: f64, 
         .into_iter()
         .filter(|&(x, _)| a <= x && x <= b)
         .map(|(_, w)| w)
-        .sum()
+        .fold(0.0, |a, b| a + b)
 }
 
 /// Moment `Σ_{i≥1} i^m N_i / V` of a size-count state, `counts[i − 1] = N_i`.

@@ -71,3 +71,33 @@ fn golovin_moments_overflow_to_infinity() {
     let want = 12.0 * 1f64.exp().powi(4) - 6.0 * 1f64.exp().powi(3);
     assert!((v - want).abs() <= 1e-12 * want, "{v} vs {want}");
 }
+
+/// An empty system is valid on every scheme that starts from counts (a host drains a
+/// cell and refills it), and its moments and concentrations are +0, not −0 (an empty
+/// `sum()` of floats).
+#[test]
+fn an_empty_system_is_valid_and_its_moments_are_plus_zero() {
+    let k = Coagulation::constant(1.0).unwrap();
+    for info in count_schemes() {
+        let id = registry::find(info.name).unwrap();
+        for counts in [&[][..], &[0, 0, 0][..]] {
+            let init = Init::Counts {
+                counts,
+                volume: 1.0,
+            };
+            let mut s: Box<Sim> = registry::build(
+                id,
+                Model::coagulation(k, NoFragmentation),
+                &init,
+                &Options::default(),
+            )
+            .unwrap_or_else(|e| panic!("{}: {e}", info.name));
+            let rep = s.advance_to(1.0, &mut Pcg64Mcg::new(1)).unwrap();
+            assert_eq!(rep.events, 0, "{}", info.name);
+            for m in [0.0, 1.0, 2.0] {
+                let v = s.moment(m);
+                assert_eq!(v.to_bits(), 0, "{}: M{m} = {v:?}", info.name);
+            }
+        }
+    }
+}

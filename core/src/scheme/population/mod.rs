@@ -65,9 +65,9 @@ pub struct Population {
 }
 
 impl Population {
-    /// The population of `counts[i − 1] = N_i` in `volume`, with the default limits;
-    /// errors for no particles, an overflowing total or a volume that is not positive
-    /// and finite.
+    /// The population of `counts[i − 1] = N_i` in `volume`, with the default limits
+    /// (no particle at all is a valid, empty system); errors for an overflowing total
+    /// or a volume that is not positive and finite.
     pub fn new(counts: &[u64], volume: f64) -> Result<Self> {
         crate::error::positive("volume", volume)?;
         let n = check_counts(counts)?;
