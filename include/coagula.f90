@@ -597,6 +597,14 @@ module coagula
        real(c_double), value :: a, b
        real(c_double), intent(out) :: out
      end function
+     integer(c_int32_t) function coag_sim_class_concentrations(sim, edges, n_edges, out) &
+         bind(c, name="coag_sim_class_concentrations")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), intent(in) :: edges(*)
+       integer(c_size_t), value :: n_edges
+       real(c_double), intent(out) :: out(*)   ! n_edges - 1 values
+     end function
      integer(c_int32_t) function coag_sim_gel_mass(sim, out) bind(c, name="coag_sim_gel_mass")
        import
        type(c_ptr), value :: sim

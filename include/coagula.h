@@ -1393,6 +1393,19 @@ int32_t coag_sim_moment(const coag_sim *sim, double m, double *out);
 int32_t coag_sim_concentration(const coag_sim *sim, double a, double b, double *out);
 
 /*
+ The number concentrations of the half-open size classes `[edges[i], edges[i+1])`
+ into `out[i]`, `i < n_edges − 1`: adjacent classes add up to the class they split
+ (the closed `coag_sim_concentration` counts a shared edge in both). `edges` must be
+ strictly increasing and not NaN (±infinity allowed), `n_edges ≥ 2`, and `out` hold
+ `n_edges − 1` doubles; nothing is written on an error.
+
+ # Safety
+ `sim` NULL or live; `edges` valid for `n_edges` doubles; `out` valid for
+ `n_edges − 1` doubles and not overlapping `edges`.
+ */
+int32_t coag_sim_class_concentrations(const coag_sim *sim, const double *edges, size_t n_edges, double *out);
+
+/*
  Gel mass estimate: for the integer-size and direct-simulation schemes the largest
  cluster's mass per volume (Eibeck & Wagner eq. 6.15), for the mass flow algorithm
  the mass past its truncation; 0 for the time-driven mass-flow scheme, whose

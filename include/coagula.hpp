@@ -507,6 +507,12 @@ class Sim {
         check(coag_sim_concentration(s_.get(), a, b, &v));
         return v;
     }
+    /// Number concentrations of the half-open classes [edges[i], edges[i+1]).
+    std::vector<double> class_concentrations(const std::vector<double> &edges) const {
+        std::vector<double> v(edges.size() > 1 ? edges.size() - 1 : 0);
+        check(coag_sim_class_concentrations(s_.get(), edges.data(), edges.size(), v.data()));
+        return v;
+    }
     double gel_mass() const { return real(coag_sim_gel_mass); }
     /// A named observable of the scheme (SchemeInfo::observables).
     double observable(const std::string &name) const {

@@ -52,6 +52,7 @@ pub fn observe(plan: &Plan, sim: &Sim, o: &Observable) -> f64 {
         Observable::Moment(m) => sim.moment(*m) * if d == 1.0 { 1.0 } else { d.powf(*m) },
         Observable::Density(k) => sim.number_density(*k as f64 / d),
         Observable::Concentration(a, b) => sim.concentration(a / d, b / d),
+        Observable::Class(a, b) => sim.class_concentration(a / d, b / d),
         Observable::Gel => sim.gel_mass().unwrap_or(f64::NAN) * d,
         Observable::Particles => sim.particles() as f64,
         Observable::Named(n) => sim.observable(n).unwrap_or(f64::NAN),

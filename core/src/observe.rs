@@ -58,6 +58,30 @@ pub trait Observe {
         self.concentration(x, x)
     }
 
+    /// The number concentration of the half-open size class `[a, b)`: adjacent classes
+    /// `[a, b)`, `[b, c)` add up to `[a, c)` with no size counted twice, which the closed
+    /// `C(a, b)` of Eibeck & Wagner eq. 5.2 does not give (it counts the shared edge in
+    /// both). 0 when `a ≥ b` or a bound is NaN. Sizes are doubles, so `x < b` is
+    /// `x ≤ b⁻`, the largest double below b, and this is `C(a, b⁻)` exactly.
+    ///
+    /// # Example
+    /// ```
+    /// use coagula_core::kernel::Coagulation;
+    /// use coagula_core::observe::Observe;
+    /// use coagula_core::scheme::baseline::Inverse;
+    /// // 6 monomers, 2 dimers and 1 trimer in volume 1
+    /// let s = Inverse::new(Coagulation::constant(1.0).unwrap(), &[6, 2, 1], 1.0).unwrap();
+    /// assert_eq!(s.class_concentration(1.0, 2.0) + s.class_concentration(2.0, 4.0), 9.0);
+    /// assert_eq!(s.concentration(1.0, 2.0) + s.concentration(2.0, 4.0), 11.0);
+    /// ```
+    fn class_concentration(&self, a: f64, b: f64) -> f64 {
+        if a < b {
+            self.concentration(a, b.next_down())
+        } else {
+            0.0
+        }
+    }
+
     /// The gel-mass estimate, where the scheme defines one (size-count schemes: the
     /// largest cluster's mass per volume, Eibeck & Wagner eq. 6.15); `None` otherwise.
     fn gel_mass(&self) -> Option<f64>;

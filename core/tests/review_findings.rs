@@ -101,3 +101,50 @@ fn an_empty_system_is_valid_and_its_moments_are_plus_zero() {
         }
     }
 }
+
+/// Adjacent half-open size classes add up to the class they split, on every scheme,
+/// and the closed `C(a, b)` would count the shared edge twice (the review's
+/// `C(1,2) + C(2,4) − C(1,4) = n2`).
+#[test]
+fn adjacent_half_open_classes_add_up_to_the_whole() {
+    use crate::common::standard;
+    let k = Coagulation::constant(1.0).unwrap();
+    for &info in registry::SCHEMES {
+        let Some(mut s) = standard(info, 256, k) else {
+            continue;
+        };
+        s.advance_to(0.5, &mut Pcg64Mcg::new(7)).unwrap();
+        // edges on integer sizes (where the closed form double counts) and between them
+        let edges = [0.5, 1.0, 2.0, 2.5, 4.0, 7.0, 1e9];
+        let whole = s.class_concentration(edges[0], edges[edges.len() - 1]);
+        assert!(whole > 0.0, "{}", info.name);
+        let parts: f64 = edges
+            .windows(2)
+            .map(|w| s.class_concentration(w[0], w[1]))
+            .sum();
+        assert!(
+            (parts - whole).abs() <= 1e-12 * whole,
+            "{}: classes {parts} vs whole {whole}",
+            info.name
+        );
+        // a class is its closed form minus its upper edge's points
+        let (closed, edge) = (s.concentration(2.0, 4.0), s.concentration(4.0, 4.0));
+        let half = s.class_concentration(2.0, 4.0);
+        assert!(
+            (closed - edge - half).abs() <= 1e-12 * closed.max(1.0),
+            "{}",
+            info.name
+        );
+        // degenerate and NaN classes are empty
+        assert_eq!(s.class_concentration(3.0, 3.0), 0.0);
+        assert_eq!(s.class_concentration(4.0, 3.0), 0.0);
+        assert_eq!(s.class_concentration(f64::NAN, 3.0), 0.0);
+    }
+    // on integer sizes, n2 is in [2, 4) and not in [1, 2)
+    let s =
+        crate::common::build(registry::find("inverse").unwrap(), k, &[5, 3, 2, 1], 1.0).unwrap();
+    assert_eq!(s.class_concentration(1.0, 2.0), 5.0);
+    assert_eq!(s.class_concentration(2.0, 4.0), 5.0);
+    assert_eq!(s.class_concentration(1.0, 4.0), 10.0);
+    assert_eq!(s.concentration(1.0, 2.0) + s.concentration(2.0, 4.0), 14.0);
+}

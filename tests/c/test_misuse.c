@@ -2,6 +2,7 @@
  * parameters, unknown names, wrong scheme, bad checkpoints, and use after a failed
  * call. Every call must return an error code (never crash), leave outputs untouched and
  * the handle usable. Built with -fsanitize=address,undefined. */
+#include <math.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -323,6 +324,23 @@ int main(void) {
     CHECK(d == 42.0, "output untouched on error");
     OK(coag_sim_concentration(s, 1e9, 1e9, &d));
     CHECK(d == 0.0 && !signbit(d), "an empty range is +0: %g", d);
+    {
+        /* half-open size classes (issue 40): adjacent classes add up to the whole */
+        const double edges[4] = {1.0, 2.0, 4.0, INFINITY}, bad[3] = {1.0, 1.0, 2.0};
+        const double nan_edges[2] = {NAN, 1.0};
+        double cls[3] = {-1.0, -1.0, -1.0}, whole;
+        OK(coag_sim_class_concentrations(s, edges, 4, cls));
+        OK(coag_sim_concentration(s, 1.0, 1e300, &whole));
+        CHECK(fabs(cls[0] + cls[1] + cls[2] - whole) <= 1e-12 * whole, "classes add up");
+        EXPECT(coag_sim_class_concentrations(s, bad, 3, cls), COAG_INVALID_ARGUMENT);
+        EXPECT(coag_sim_class_concentrations(s, nan_edges, 2, cls), COAG_INVALID_ARGUMENT);
+        EXPECT(coag_sim_class_concentrations(s, edges, 1, cls), COAG_INVALID_ARGUMENT);
+        EXPECT(coag_sim_class_concentrations(s, NULL, 4, cls), COAG_NULL_PARAMETER);
+        EXPECT(coag_sim_class_concentrations(s, edges, 4, NULL), COAG_NULL_PARAMETER);
+        cls[0] = 42.0;
+        EXPECT(coag_sim_class_concentrations(s, bad, 3, cls), COAG_INVALID_ARGUMENT);
+        CHECK(cls[0] == 42.0, "output untouched on error");
+    }
     EXPECT(coag_sim_moment(s, 1e6, &d), COAG_CAPACITY);
     OK(coag_sim_moment(s, 2.0, &d));
     EXPECT(coag_sim_get_sizes(s, sizes, 4), COAG_UNSUPPORTED); /* not a sim over sizes */

@@ -249,6 +249,12 @@ void test_every_scheme() {
                 d.set_kernel(Kernel::constant(2.0));
                 d.advance_to(1.5);
                 CHECK(d.time() == 1.5 && d.concentration(1.0, 1.0) >= 0 && d.gel_mass() > 0, "%s: observables", name);
+                {
+                    const std::vector<double> c = d.class_concentrations({1.0, 2.0, 1e300});
+                    CHECK(c.size() == 2 && c[0] == d.concentration(1.0, 1.0) &&
+                              std::fabs(c[0] + c[1] - d.moment(0.0)) <= 1e-12 * d.moment(0.0),
+                          "%s: half-open classes", name);
+                }
                 CHECK(code_of([&] { a.sizes(); }) == COAG_UNSUPPORTED, "%s: no sizes", name);
             }
         }, &msg);

@@ -463,6 +463,7 @@ contains
     type(coag_user_kernel) :: uk
     type(c_ptr) :: ku, k2, sa, sb
     real(c_double), target :: k0, vol, d, t
+    real(c_double) :: cls(2)
     integer(c_int64_t), target :: state, calls, np
     integer(c_int64_t), allocatable :: ps(:), pc(:), ca(:), cb(:)
     integer(c_int8_t), allocatable :: ck(:), before(:)
@@ -493,6 +494,10 @@ contains
     call expect(coag_sim_get_pairs(sa, ps, pc, nocc - 1, c_null_ptr, c_null_ptr), COAG_BUFFER_TOO_SMALL, "short pairs")
     call ok(coag_sim_concentration(sa, 1.0_c_double, 1.0_c_double, d))
     call check(abs(d - pc(1) / vol) < 1e-15_c_double .and. ps(1) == 1, "concentration of monomers")
+    ! half-open classes [1, 2), [2, 1e9): monomers alone, then the rest (issue 40)
+    call ok(coag_sim_class_concentrations(sa, [1.0_c_double, 2.0_c_double, 1e9_c_double], 3_c_size_t, cls))
+    call check(abs(cls(1) - pc(1) / vol) < 1e-15_c_double .and. &
+               abs(cls(1) + cls(2) - np / vol) < 1e-12_c_double, "half-open classes")
     call ok(coag_sim_gel_mass(sa, d))
     call check(abs(d - ps(nocc) / vol) < 1e-15_c_double, "gel mass: the largest cluster per volume")
     ! a clone, a checkpoint restored into it and the run itself continue alike

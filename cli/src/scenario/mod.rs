@@ -154,8 +154,9 @@ pub struct OutputSpec {
     /// Linear (default) or log spacing of generated times.
     pub spacing: Option<Spacing>,
     /// Observables: `M<m>` (moment of real order m), `n<k>` (number density of integer
-    /// size k), `C(a,b)` (number concentration of sizes in [a, b]), `gel` (gel-mass
-    /// estimate), `N` (simulation particles), or a named observable of the scheme
+    /// size k), `C(a,b)` (number concentration of sizes in [a, b]), `C[a,b)` (of the
+    /// half-open class [a, b)), `gel` (gel-mass estimate), `N` (simulation particles),
+    /// or a named observable of the scheme
     /// (`mean-temperature`, `energy`, …).
     pub observables: Vec<String>,
 }

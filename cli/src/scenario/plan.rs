@@ -19,8 +19,10 @@ pub enum Observable {
     Moment(f64),
     /// `n_k`, integer size k.
     Density(u64),
-    /// `C(a, b)`.
+    /// `C(a, b)`, sizes in the closed `[a, b]`.
     Concentration(f64, f64),
+    /// `C[a, b)`, sizes in the half-open class `[a, b)` (adjacent classes add up).
+    Class(f64, f64),
     /// The gel-mass estimate.
     Gel,
     /// Number of simulation particles.
@@ -30,7 +32,7 @@ pub enum Observable {
 }
 
 impl Observable {
-    /// Parses `M2`, `M1.5`, `n1`, `C(100,200)`, `gel`, `N`.
+    /// Parses `M2`, `M1.5`, `n1`, `C(100,200)`, `C[100,200)`, `gel`, `N`.
     pub fn parse(s: &str) -> Result<Self, String> {
         let t = s.trim();
         let num = |v: &str| -> Result<f64, String> {
@@ -68,6 +70,15 @@ impl Observable {
                 return Err(format!("observable {s:?}: needs 0 < a ≤ b"));
             }
             Ok(Observable::Concentration(a, b))
+        } else if let Some(r) = t.strip_prefix("C[").and_then(|r| r.strip_suffix(')')) {
+            let (a, b) = r
+                .split_once(',')
+                .ok_or_else(|| format!("observable {s:?}: write C[a,b)"))?;
+            let (a, b) = (num(a)?, num(b)?);
+            if !(a > 0.0 && b > a) {
+                return Err(format!("observable {s:?}: needs 0 < a < b"));
+            }
+            Ok(Observable::Class(a, b))
         } else if !t.is_empty()
             && t.chars()
                 .all(|c| c.is_ascii_lowercase() || c == '-' || c.is_ascii_digit())
@@ -75,7 +86,7 @@ impl Observable {
             Ok(Observable::Named(t.to_string()))
         } else {
             Err(format!(
-                "observable {s:?}: expected M<order>, n<size>, C(a,b), gel, N or a name the scheme has (mean-temperature, …)"
+                "observable {s:?}: expected M<order>, n<size>, C(a,b), C[a,b), gel, N or a name the scheme has (mean-temperature, …)"
             ))
         }
     }
@@ -86,6 +97,7 @@ impl Observable {
             Observable::Moment(m) => format!("M{m}"),
             Observable::Density(k) => format!("n{k}"),
             Observable::Concentration(a, b) => format!("C({a},{b})"),
+            Observable::Class(a, b) => format!("C[{a},{b})"),
             Observable::Gel => "gel".into(),
             Observable::Particles => "N".into(),
             Observable::Named(n) => n.clone(),
@@ -102,8 +114,11 @@ impl Observable {
             Observable::Concentration(a, b) => {
                 format!("number concentration of sizes in [{a}, {b}] (Eibeck & Wagner eq. 5.2)")
             }
+            Observable::Class(a, b) => {
+                format!("number concentration of the size class [{a}, {b}) (half-open: adjacent classes add up)")
+            }
             Observable::Gel => {
-                "gel mass per unit volume (largest cluster, Eibeck & Wagner eq. 6.15)".into()
+                "largest cluster's mass per unit volume (Eibeck & Wagner eq. 6.15): the gel mass past gelation; before it a finite-N value that tends to 0 as N grows (no exact value or error shown)".into()
             }
             Observable::Particles => "number of simulation particles".into(),
             Observable::Named(n) => format!("the scheme's observable {n}"),
@@ -140,15 +155,34 @@ impl ExactRef {
                 if self.mu == 1.0 && !e.is_continuous() && b - a <= 1e5 =>
             {
                 let (lo, hi) = (a.ceil().max(1.0) as u64, b.floor() as u64);
-                let mut s = 0.0;
-                for k in lo..=hi {
-                    s += e.number_density(k, t).ok()?;
-                }
-                Some(self.c0 * s)
+                self.sum_density(lo, hi, t)
             }
-            Observable::Gel => e.gel_mass(t).ok().map(|g| self.c0 * self.mu * g),
+            Observable::Class(a, b) if self.mu == 1.0 && !e.is_continuous() && b - a <= 1e5 => {
+                // the integers in [a, b): ⌈a⌉ ..= ⌈b⌉ − 1
+                let (lo, hi) = (a.ceil().max(1.0) as u64, b.ceil() as u64);
+                if hi <= lo {
+                    return Some(0.0);
+                }
+                self.sum_density(lo, hi - 1, t)
+            }
+            // the estimator (the largest cluster) is the gel mass only past gelation: where
+            // the exact gel mass is 0 the table shows no exact value and no error
+            Observable::Gel => e
+                .gel_mass(t)
+                .ok()
+                .filter(|&g| g > 0.0)
+                .map(|g| self.c0 * self.mu * g),
             _ => None,
         }
+    }
+
+    /// `c0 Σ_{k=lo}^{hi} n_k(t)` of the solution (0 for an empty range).
+    fn sum_density(&self, lo: u64, hi: u64, t: f64) -> Option<f64> {
+        let mut s = 0.0;
+        for k in lo..=hi {
+            s += self.solution.number_density(k, t).ok()?;
+        }
+        Some(self.c0 * s)
     }
 }
 

@@ -12,13 +12,16 @@ fn observables_parse() {
         Observable::parse("C(100,200)"),
         Ok(Observable::Concentration(100.0, 200.0))
     );
+    assert_eq!(Observable::parse("C[1,2)"), Ok(Observable::Class(1.0, 2.0)));
+    assert_eq!(Observable::Class(1.0, 2.5).name(), "C[1,2.5)");
     assert_eq!(Observable::parse("gel"), Ok(Observable::Gel));
     assert_eq!(
         Observable::parse("mean-temperature"),
         Ok(Observable::Named("mean-temperature".into()))
     );
     for bad in [
-        "", "M", "Mx", "n0", "n-1", "C(2,1)", "C(0,1)", "C(1)", "Foo!", "Minf", "M100",
+        "", "M", "Mx", "n0", "n-1", "C(2,1)", "C(0,1)", "C(1)", "C[1,1)", "C[2,1)", "C[1,2]",
+        "Foo!", "Minf", "M100",
     ] {
         assert!(Observable::parse(bad).is_err(), "{bad}");
     }

@@ -114,6 +114,67 @@ pub unsafe extern "C" fn coag_sim_concentration(
     }
 }
 
+/// The number concentrations of the half-open size classes `[edges[i], edges[i+1])`
+/// into `out[i]`, `i < n_edges − 1`: adjacent classes add up to the class they split
+/// (the closed `coag_sim_concentration` counts a shared edge in both). `edges` must be
+/// strictly increasing and not NaN (±infinity allowed), `n_edges ≥ 2`, and `out` hold
+/// `n_edges − 1` doubles; nothing is written on an error.
+///
+/// # Safety
+/// `sim` NULL or live; `edges` valid for `n_edges` doubles; `out` valid for
+/// `n_edges − 1` doubles and not overlapping `edges`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_class_concentrations(
+    sim: *const coag_sim,
+    edges: *const f64,
+    n_edges: usize,
+    out: *mut f64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        if n_edges < 2 {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("size classes: {n_edges} edges (at least 2 make one class)"),
+            );
+        }
+        // SAFETY: NULL and length checked; readable by contract.
+        let e = unsafe { crate::util::slice(edges, n_edges, "edges") }?;
+        if let Some(i) = e.iter().position(|x| x.is_nan()) {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!("size classes: edges[{i}] is NaN"),
+            );
+        }
+        if let Some(i) = e.windows(2).position(|w| w[0] >= w[1]) {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!(
+                    "size classes: edges[{i}] = {} ≥ edges[{}] = {} (edges must increase)",
+                    coagula_core::error::Short(e[i]),
+                    i + 1,
+                    coagula_core::error::Short(e[i + 1])
+                ),
+            );
+        }
+        let values = e
+            .windows(2)
+            .map(|w| {
+                // + 0.0 turns an empty sum's −0.0 into 0
+                finite_result(s.sim.class_concentration(w[0], w[1]) + 0.0, || {
+                    "size class concentration (counts over a tiny volume)".into()
+                })
+            })
+            .collect::<Result<Vec<f64>, Fail>>()?;
+        // SAFETY: NULL and length checked; writable by contract.
+        let o = unsafe { slice_mut(out, n_edges - 1, "out") }?;
+        disjoint(e, o, "edges and out")?;
+        o.copy_from_slice(&values);
+        Ok(())
+    })
+}
+
 /// Gel mass estimate: for the integer-size and direct-simulation schemes the largest
 /// cluster's mass per volume (Eibeck & Wagner eq. 6.15), for the mass flow algorithm
 /// the mass past its truncation; 0 for the time-driven mass-flow scheme, whose
