@@ -79,7 +79,7 @@ pub(crate) struct Cli {
 pub(crate) enum Command {
     /// Run a scenario (a TOML file, or the name of a built-in example: see `coagula
     /// examples`). With none: Lécot et al.'s coagulation-fragmentation test (mass flow,
-    /// QMC, N = 2^14, P = 400 steps to T = 1) against the exact moments. Options
+    /// QMC, N = 2^14, P = 800 steps to T = 1) against the exact moments. Options
     /// override the scenario's values.
     Run {
         /// The scenario file or example name.
@@ -173,7 +173,8 @@ pub(crate) enum Command {
         #[arg(value_enum)]
         which: Experiment,
         /// eibeck2000: the figures to run (fig1, fig3, fig5, fig7, kappa, or all);
-        /// maftei2016: the parts (ladder, choices, kernel, or all).
+        /// maftei2016: the parts (ladder, choices, kernel, or all); lecot2019: grid
+        /// (Figures 1-2), dt-ladder (deterministic QMC as Δt shrinks), or all.
         #[arg(long, value_delimiter = ',', default_value = "all")]
         figures: Vec<String>,
         /// eibeck2000: a tenth of the particles or replicas; maftei2016: 1/128 of the

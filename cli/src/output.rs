@@ -3,6 +3,7 @@
 
 use crate::runner::Outcome;
 use crate::scenario::Plan;
+use coagula_core::scheme::facade::Law;
 use serde::Serialize;
 use std::io::Write;
 
@@ -227,6 +228,17 @@ pub fn table(
     }
     if with_exact {
         writeln!(w, "  exact: the analytical solution; error: ours − exact")?;
+    }
+    if plan.scheme.law == Law::TimeStepped {
+        writeln!(
+            w,
+            "  time step: the error includes the scheme's O(dt) time-step bias (an Euler step, Lécot et al. 2019 §2), which {}: halve scheme.dt to see its size (`coagula validate` measures it against the Euler reference)",
+            if with_ci {
+                "±95% does not cover (it is the spread over replicas only)"
+            } else {
+                "one replica cannot tell from chance"
+            }
+        )?;
     }
     let t = &out.totals;
     writeln!(

@@ -3,5 +3,6 @@
 
 pub mod eibeck2000;
 pub mod lecot2019;
+pub mod lecot2019_dt;
 pub mod maftei2016;
 pub mod osinsky2023;
