@@ -25,6 +25,7 @@ use rayon::prelude::*;
 use std::time::Instant;
 
 mod cases;
+mod fits;
 pub use cases::{cases, first_hits_scenario, is_first_hits};
 
 /// The experiments, in the order `all` runs them.
@@ -208,36 +209,6 @@ fn kernel_on_threads<const D: usize, Dr: Drift<D> + Sync>(
         }))
 }
 
-/// Weighted least squares of `y = a + b x + c x²` (weights 1/se²): `(a, se(a))`.
-fn quadratic_limit(x: &[f64], y: &[f64], se: &[f64]) -> (f64, f64) {
-    // normal equations, 3×3, solved by Cramer's rule
-    let mut m = [[0.0; 3]; 3];
-    let mut v = [0.0; 3];
-    for k in 0..x.len() {
-        let w = 1.0 / (se[k] * se[k]);
-        let p = [1.0, x[k], x[k] * x[k]];
-        for i in 0..3 {
-            v[i] += w * p[i] * y[k];
-            for j in 0..3 {
-                m[i][j] += w * p[i] * p[j];
-            }
-        }
-    }
-    let det = |m: &[[f64; 3]; 3]| {
-        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
-            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
-            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
-    };
-    let d = det(&m);
-    let mut ma = m;
-    for i in 0..3 {
-        ma[i][0] = v[i];
-    }
-    // variance of a: the (0,0) cofactor over the determinant
-    let c00 = m[1][1] * m[2][2] - m[1][2] * m[2][1];
-    (det(&ma) / d, (c00 / d).sqrt())
-}
-
 /// Least-squares slope of `ln |b|` on `ln h` over the points where `|b| > 3 se`.
 fn order(h: &[f64], b: &[f64], se: &[f64]) -> Option<(f64, usize)> {
     let pts: Vec<(f64, f64)> = h
@@ -313,16 +284,31 @@ fn ladder(n: u64, plot: Option<&str>) -> Result<(), String> {
         // the asymptotic regime: dt ≤ T/16 (the coarsest steps are not, as the paper
         // notes of its own curve's start)
         let fit = h.iter().position(|&d| d <= FIT_DT).unwrap_or(0);
-        let (limit, limit_se) = quadratic_limit(&h[fit..], &y[fit..], &se[fit..]);
+        let all_fits = fits::fits(&h, &y, &se, FIT_DT);
+        let Some(chosen) = fits::central(&all_fits) else {
+            return Err("the ladder has too few steps for a fit".into());
+        };
+        let (limit, limit_se) = (chosen.limit, chosen.se);
+        let (lo, hi) = fits::spread(&all_fits);
         println!(
             "\n## {wall:?} wall, {n} trajectories per step, {:.2e} trajectory-steps in {secs:.1} s ({:.1} M/s)",
             steps as f64,
             steps as f64 / secs / 1e6
         );
         println!(
-            "extrapolated limit (weighted fit a + C dt + C2 dt^2 over dt <= {FIT_DT}): {limit:.4} ± {limit_se:.4}; the paper's reference {reference} differs by {:.4}",
+            "extrapolated limit (weighted fit of degree {} over the {} steps dt <= {}, the widest whose chi2 holds): {limit:.4} ± {limit_se:.4} (statistical) ± {:.4} (fit model: half the range {lo:.4} .. {hi:.4} of the fits below); the paper's reference {reference} differs by {:.4}",
+            chosen.degree,
+            chosen.points,
+            chosen.max_dt,
+            (hi - lo) / 2.0,
             limit - reference
         );
+        for f in &all_fits {
+            println!(
+                "  fit of degree {} over the {} steps dt <= {}: {:.4} ± {:.4}, chi2 = {:.1} on {} degrees of freedom",
+                f.degree, f.points, f.max_dt, f.limit, f.se, f.chi2, f.dof
+            );
+        }
         println!(
             "{:>9} {:>18} {:>10} {:>18} {:>18} {:>9} {:>9}",
             "dt", "E f ± SE", "bias", "RR(dt,dt/2) ± SE", "RR bias", "hits", "absorbed"
