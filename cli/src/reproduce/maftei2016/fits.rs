@@ -33,10 +33,10 @@ fn polyfit(x: &[f64], y: &[f64], se: &[f64], degree: usize) -> Option<(Vec<f64>,
     let mut b = vec![0.0; p];
     for k in 0..x.len() {
         let w = 1.0 / (se[k] * se[k]);
-        for i in 0..p {
-            b[i] += w * x[k].powi(i as i32) * y[k];
-            for j in 0..p {
-                a[i][j] += w * x[k].powi((i + j) as i32);
+        for (i, (row, bi)) in a.iter_mut().zip(b.iter_mut()).enumerate() {
+            *bi += w * x[k].powi(i as i32) * y[k];
+            for (j, v) in row.iter_mut().take(p).enumerate() {
+                *v += w * x[k].powi((i + j) as i32);
             }
         }
     }
