@@ -96,6 +96,9 @@ module coagula
      real(c_double) :: friction_rate
      type(c_funptr) :: drift_fn
      type(c_ptr) :: drift_user_data
+     integer(c_int64_t) :: work_limit          ! uint64_t, trajectory steps (0: none)
+     type(c_funptr) :: cancel
+     type(c_ptr) :: cancel_user_data
   end type coag_first_hits
 
   ! a registry scheme's capabilities (strings: static const char *, see coag_string)

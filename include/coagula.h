@@ -577,6 +577,22 @@ typedef struct {
    `COAG_DRIFT_CALLBACK`: passed to `drift_fn`.
    */
   void *drift_user_data;
+  /*
+   At most this many trajectory steps (a trajectory to `to` is `⌈to / dt⌉` of
+   them, charged per chunk of trajectories before it runs); 0: no limit. Past it the
+   call returns `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the
+   struct: a caller compiled against version 1 gets no limit.)
+   */
+  uint64_t work_limit;
+  /*
+   Polled between chunks of trajectories: non-zero stops the call with
+   `COAG_INTERRUPTED` (NULL: none).
+   */
+  coag_cancel_callback cancel;
+  /*
+   Passed to `cancel`.
+   */
+  void *cancel_user_data;
 } coag_first_hits;
 
 /*
@@ -1310,7 +1326,13 @@ int32_t coag_sim_set_cancel_callback(coag_sim *sim, coag_cancel_callback cancel,
  call) instead of its own stream; `next` NULL switches back to the own stream, which
  resumes where it stopped. Randomness drawn from a callback is not part of a
  checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
- to undo the call if the stream turns out stuck.
+ to undo the call if the stream turns out stuck: once the callback has returned the
+ same word 8 times in a row, the call stops at its next cancellation poll (every
+ mass-flow step, every 16384 proposals of the event-driven schemes: some 10^5
+ callback calls at most) and returns `COAG_RNG_FAILURE` with the sim as before it.
+ The time-driven mass flow with QMC or RQMC points draws nothing from the stream
+ (its points are the sequence, its randomisations keyed by the seed, see
+ `coag_sim_reseed`), so it never calls `next`; with Monte Carlo points it does.
 
  # Safety
  `sim` NULL or live; `next` and `user_data` valid while installed.

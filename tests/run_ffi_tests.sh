@@ -18,7 +18,7 @@ san="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells; do
+for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review; do
     gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
         "tests/c/$t.c" "$lib" $libs -o "$out/$t"
     "$out/$t"
@@ -43,7 +43,7 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 # checks, smaller work limits and fewer crafted checkpoints in test_hostile: the same
 # code paths). Two at a time (COAG_VALGRIND_JOBS): memcheck runs one thread per program.
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells"
+    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review"
     for t in $vg_tests; do
         gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"

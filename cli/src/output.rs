@@ -125,10 +125,10 @@ pub fn describe(plan: &Plan) -> String {
         d.push_str(", binary uniform fragmentation");
     }
     d.push_str(&format!(
-        "\nreplicas: {}, seed {} (replica r on its substream of the seed policy); about {:.0} MiB at start",
+        "\nreplicas: {}, seed {} (replica r on its substream of the seed policy); the sims hold about {} at start (the tables of the size-count schemes grow with the largest size)",
         plan.replicas,
         plan.seed,
-        plan.memory as f64 / (1u64 << 20) as f64
+        bytes(plan.memory)
     ));
     match &plan.exact {
         Some(e) => d.push_str(&format!("\nexact solution: {}", e.name)),
@@ -495,4 +495,20 @@ pub fn json_sweep(runs: &[SweepRun<'_>], w: &mut dyn Write) -> Result<(), String
     serde_json::to_writer_pretty(&mut *w, &serde_json::json!({ "sweep": points }))
         .map_err(|e| e.to_string())?;
     writeln!(w).map_err(|e| e.to_string())
+}
+
+/// A byte count in B, KiB, MiB or GiB (three significant digits at most).
+fn bytes(b: u64) -> String {
+    let units = ["B", "KiB", "MiB", "GiB", "TiB"];
+    let mut v = b as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{b} B")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
 }

@@ -126,7 +126,11 @@ fn bad_scenarios_name_the_key_and_line() {
             ":10: run.replicas",
         ),
         ("[output]", "[outptu]\nx = 1\n[output]", "outptu"),
-        ("particles = 1000", "particles = 1000000000000", "memory"),
+        (
+            "particles = 1000",
+            "particles = 1000000000000",
+            "initial particle number",
+        ),
     ];
     for (i, (from, to, want)) in cases.iter().enumerate() {
         assert!(good.contains(from), "{from}");
@@ -365,4 +369,97 @@ fn exact_prints_large_values_readably_and_refuses_missing_columns() {
         assert!(!out.status.success(), "{args:?} accepted");
         assert!(String::from_utf8_lossy(&out.stderr).contains("ask for"));
     }
+}
+
+/// The review's inputs that failed only after the run had started (issue 40) are
+/// refused or warned about before any work: a Golovin run whose size tables would pass
+/// the memory budget (t-end = 50, 1e300), a write to a full device names its target,
+/// and a run far past the gel point is warned about.
+#[test]
+fn growth_and_outputs_are_checked_before_the_run() {
+    for t in ["50", "1e300"] {
+        let out = coagula()
+            .args(["run", "quickstart-golovin", "--check", "--set"])
+            .arg(format!("output.t-end={t}"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "t-end {t} accepted");
+        assert!(
+            err.contains("output.t-end") && err.contains("memory budget"),
+            "t-end {t}: {err}"
+        );
+    }
+    // a reachable end passes the check
+    let out = coagula()
+        .args([
+            "run",
+            "quickstart-golovin",
+            "--check",
+            "--set",
+            "output.t-end=2",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    if std::path::Path::new("/dev/full").exists() {
+        for flag in ["--csv", "--json"] {
+            let out = coagula()
+                .args([
+                    "run",
+                    "--m",
+                    "8",
+                    "--steps",
+                    "100",
+                    "--quiet",
+                    flag,
+                    "/dev/full",
+                ])
+                .output()
+                .unwrap();
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!out.status.success());
+            assert!(err.contains(&format!("{flag} /dev/full:")), "{err}");
+        }
+    }
+    let out = coagula()
+        .args([
+            "run",
+            "multiplicative-gelation",
+            "--check",
+            "--set",
+            "output.times=[0.5, 13.0]",
+        ])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(
+        text.contains("warning: the run goes past the gel point t = 1"),
+        "{text}"
+    );
+    let out = coagula()
+        .args(["run", "multiplicative-gelation", "--check"])
+        .output()
+        .unwrap();
+    assert!(!String::from_utf8_lossy(&out.stdout).contains("warning"));
+}
+
+/// The default run (Lécot et al. 2019 §4 at P = 800) clips no probability, and a
+/// mass-flow table says that its error holds the time-step bias.
+#[test]
+fn the_default_run_does_not_clip() {
+    let out = coagula().args(["run", "--quiet"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(text.contains("(0 rejected), 0 clipped"), "{text}");
+    assert!(text.contains("O(dt) time-step bias"), "{text}");
 }

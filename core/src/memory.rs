@@ -61,7 +61,7 @@ pub(crate) fn within_budget(bytes: Option<usize>, budget: usize) -> Result<()> {
     match bytes {
         Some(b) if b <= budget => Ok(()),
         _ => Err(Error::Capacity {
-            name: "memory budget in bytes (raise it with with_memory_budget)",
+            name: "memory budget in bytes (raise the option memory-budget)",
             capacity: budget,
         }),
     }

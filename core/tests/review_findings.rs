@@ -148,3 +148,66 @@ fn adjacent_half_open_classes_add_up_to_the_whole() {
     assert_eq!(s.class_concentration(1.0, 4.0), 10.0);
     assert_eq!(s.concentration(1.0, 2.0) + s.concentration(2.0, 4.0), 14.0);
 }
+
+/// `set_pairs({1: 5000, 1000: 3, 2^30: 1})` took 8.4 GB and 10 s on the bucketed low
+/// rank and then every advance failed: a largest size whose dense counts would take
+/// more than half the memory budget is refused up front, the state unchanged.
+#[test]
+fn set_pairs_without_room_to_grow_is_refused_up_front() {
+    use coagula_core::scheme::facade::Options;
+    let k = Coagulation::constant(1.0).unwrap();
+    for name in ["lowrank", "inverse", "dsa-counts"] {
+        let id = registry::find(name).unwrap();
+        // a budget of 64 MiB: 2^23 sizes of dense counts would take all of it
+        let opts = Options::default().with_memory_budget(64 << 20);
+        let init = Init::Counts {
+            counts: &[100],
+            volume: 1.0,
+        };
+        let mut s: Box<Sim> =
+            registry::build(id, Model::coagulation(k, NoFragmentation), &init, &opts).unwrap();
+        let e = s
+            .set_pairs(&[1, 1000, 1 << 23], &[5000, 3, 1], 1.0)
+            .unwrap_err();
+        assert!(
+            matches!(e, coagula_core::Error::Capacity { .. }),
+            "{name}: {e}"
+        );
+        assert_eq!(s.particles(), 100, "{name}: state unchanged");
+        // below the half it is taken
+        s.set_pairs(&[1, 1000, 1 << 20], &[5000, 3, 1], 1.0)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!(s.particles(), 5004);
+    }
+}
+
+/// A first-hit kernel estimate of 2^50 trajectories never returned: within a work
+/// budget it stops (no estimate), and an unlimited small one is as before.
+#[test]
+fn first_hit_kernel_honours_a_work_budget() {
+    use coagula_core::langevin::Field;
+    use coagula_core::langevin::kernel::{FirstHits, first_hit_kernel, first_hit_kernel_within};
+    use coagula_core::scheme::Budget;
+    let p = FirstHits {
+        radius: 0.5,
+        outer: 10.0,
+        from: 0.4,
+        to: 1.0,
+        dt: 0.1,
+        sigma: 0.0,
+        velocity_sd: 1.0,
+        trajectories: 1 << 50,
+    };
+    let zero = Field(|_, _: &[f64; 3], _: &[f64; 3]| [0.0; 3]);
+    let r = first_hit_kernel_within::<3, _>(&p, &zero, 5, 0, &mut Budget::work(1_000_000));
+    assert!(r.unwrap().is_none());
+    let small = FirstHits {
+        trajectories: 2000,
+        ..p
+    };
+    let a = first_hit_kernel::<3, _>(&small, &zero, 5, 0).unwrap();
+    let b = first_hit_kernel_within::<3, _>(&small, &zero, 5, 0, &mut Budget::work(2000 * 10))
+        .unwrap()
+        .expect("exactly enough units");
+    assert_eq!(a.estimate.mean.to_bits(), b.estimate.mean.to_bits());
+}

@@ -4,12 +4,18 @@
  * bit for bit, caller memory, checkpoints, and refusals that leave the batch unchanged.
  * Statistical checks use 4.89 standard errors (a two-sided 1e-6 false alarm each with
  * thousands of trajectories). */
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
 #include "check.h"
 
 #define Z 4.89
+
+static int cancel_now(void *ud) {
+    (void)ud;
+    return 1;
+}
 
 static int friction_cb(double t, const double *x, const double *u, size_t dim, double *out, void *ud) {
     (void)t;
@@ -226,6 +232,23 @@ int main(void) {
     CHECK(fabs(m - exact) < Z * se, "free-flight kernel %g +- %g, exact %g", m, se, exact);
     CHECK(hits > 100, "hits %llu", (unsigned long long)hits);
     p.outer = 0.4;
+    EXPECT(coag_first_hit_kernel(&p, 7, 0, &m, &se, &hits), COAG_INVALID_ARGUMENT);
+    /* issue 40: 2^50 trajectories never returned; a work limit or a cancel callback
+     * stops them (no estimate), and a caller of the version-1 struct gets no limit */
+    p.outer = 10.0;
+    p.trajectories = 1ULL << 50;
+    p.work_limit = 1000000;
+    m = -1.0;
+    EXPECT(coag_first_hit_kernel(&p, 7, 0, &m, &se, &hits), COAG_INTERRUPTED);
+    CHECK(m == -1.0, "no estimate written when interrupted");
+    p.work_limit = 0;
+    p.cancel = cancel_now;
+    EXPECT(coag_first_hit_kernel(&p, 7, 0, &m, &se, &hits), COAG_INTERRUPTED);
+    p.cancel = NULL;
+    p.trajectories = 1000;
+    p.struct_size = offsetof(coag_first_hits, work_limit);
+    OK(coag_first_hit_kernel(&p, 7, 0, &m, &se, &hits));
+    p.struct_size = offsetof(coag_first_hits, work_limit) - 1;
     EXPECT(coag_first_hit_kernel(&p, 7, 0, &m, &se, &hits), COAG_INVALID_ARGUMENT);
 
     return finish("test_langevin");

@@ -162,13 +162,11 @@ contains
     call check(status == want, what // ": got " // coag_string(coag_status_name(status)) // ", expected " // &
          coag_string(coag_status_name(want)))
   end subroutine expect
-
   ! bitwise equality of reals (bit-for-bit checks, exact values)
   elemental logical function same(a, b)
     real(c_double), intent(in) :: a, b
     same = transfer(a, 0_c_int64_t) == transfer(b, 0_c_int64_t)
   end function same
-
   ! whether a sim's checkpoint (state, own stream, settings) is `bytes`
   logical function sim_is(sim, bytes)
     type(c_ptr), intent(in) :: sim
@@ -178,14 +176,12 @@ contains
     sim_is = size(x) == size(bytes)
     if (sim_is) sim_is = all(x == bytes)
   end function sim_is
-
   ! a NUL-terminated copy of s
   function cs(s)
     character(len=*), intent(in) :: s
     character(kind=c_char, len=len(s) + 1) :: cs
     cs = s // c_null_char
   end function cs
-
   ! the replicas' mean within tol32 standard errors of `exact`
   subroutine check_mean(x, exact, what)
     real(c_double), intent(in) :: x(:), exact
@@ -494,10 +490,8 @@ contains
     call expect(coag_sim_get_pairs(sa, ps, pc, nocc - 1, c_null_ptr, c_null_ptr), COAG_BUFFER_TOO_SMALL, "short pairs")
     call ok(coag_sim_concentration(sa, 1.0_c_double, 1.0_c_double, d))
     call check(abs(d - pc(1) / vol) < 1e-15_c_double .and. ps(1) == 1, "concentration of monomers")
-    ! half-open classes [1, 2), [2, 1e9): monomers alone, then the rest (issue 40)
     call ok(coag_sim_class_concentrations(sa, [1.0_c_double, 2.0_c_double, 1e9_c_double], 3_c_size_t, cls))
-    call check(abs(cls(1) - pc(1) / vol) < 1e-15_c_double .and. &
-               abs(cls(1) + cls(2) - np / vol) < 1e-12_c_double, "half-open classes")
+    call check(abs(cls(1) - pc(1) / vol) + abs(cls(1) + cls(2) - np / vol) < 1e-12_c_double, "classes [1,2), [2,1e9)")
     call ok(coag_sim_gel_mass(sa, d))
     call check(abs(d - ps(nocc) / vol) < 1e-15_c_double, "gel mass: the largest cluster per volume")
     ! a clone, a checkpoint restored into it and the run itself continue alike
@@ -707,7 +701,7 @@ contains
     integer(c_size_t) :: lnck, lwb
     call ok(coag_langevin_default_config(lgc, c_sizeof(lgc)))
     call check(lgc%dim == 1 .and. same(lgc%dt, 0.01_c_double) .and. same(lgc%sigma, 1.0_c_double) .and. &
-         lgc%drift == COAG_DRIFT_ZERO .and. lgc%struct_size == 96 .and. c_sizeof(fh) == 112, "defaults, sizes")
+         lgc%drift == COAG_DRIFT_ZERO .and. lgc%struct_size == 96 .and. c_sizeof(fh) == 136, "defaults, sizes")
     lgc%dim = 3
     lgc%radius = 1
     lgc%dt = 0.02_c_double
@@ -792,7 +786,8 @@ contains
     call coag_langevin_free(lw)
     ! the free-flight kernel from first hits: pi R^2 <|v|> = pi R^2 sqrt(8/pi)
     fh = coag_first_hits(c_sizeof(fh), 3, 0.5_c_double, 10.0_c_double, 0.4_c_double, 1.0_c_double, 0.1_c_double, &
-         0.0_c_double, 1.0_c_double, 100000_c_int64_t, COAG_DRIFT_ZERO, 0.0_c_double, c_null_funptr, c_null_ptr)
+         0.0_c_double, 1.0_c_double, 100000_c_int64_t, COAG_DRIFT_ZERO, 0.0_c_double, c_null_funptr, c_null_ptr, &
+         0_c_int64_t, c_null_funptr, c_null_ptr)
     call ok(coag_first_hit_kernel(fh, 7_c_int64_t, 0_c_int64_t, mean, se, c_loc(hits)))
     radius = acos(-1.0_c_double) * 0.25_c_double * sqrt(8 / acos(-1.0_c_double))
     call check(abs(mean - radius) < zl * se .and. hits > 100, "free-flight kernel")

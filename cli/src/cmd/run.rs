@@ -166,9 +166,17 @@ pub fn run(
                     plan.times.len(),
                     plan.observables.len()
                 );
+                for w in &plan.warnings {
+                    println!("warning: {w}");
+                }
             }
         }
         return Ok(());
+    }
+    if root {
+        for w in points.iter().flat_map(|(_, p)| &p.warnings) {
+            eprintln!("warning: {w}");
+        }
     }
     let to_stdout =
         csv.as_ref().is_some_and(Sink::is_stdout) || json.as_ref().is_some_and(Sink::is_stdout);
@@ -208,22 +216,29 @@ pub fn run(
         .zip(&done.outcomes)
         .map(|((set, plan), o)| (&set[..], plan, o))
         .collect();
+    // a failed write names its destination (`--csv /dev/full: No space left on device`)
+    let named = |flag: &str, sink: &Sink, e: String| match sink {
+        Sink::File(p, _) => format!("{flag} {p}: {e}"),
+        Sink::Stdout => format!("{flag} -: {e}"),
+    };
     if let Some(sink) = csv.as_mut() {
-        if sweep {
-            output::csv_sweep(&runs, &mut *sink.writer())?;
+        let r = if sweep {
+            output::csv_sweep(&runs, &mut *sink.writer())
         } else {
-            output::csv(&plans[0], &done.outcomes[0], &mut *sink.writer())?;
-        }
+            output::csv(&plans[0], &done.outcomes[0], &mut *sink.writer())
+        };
+        r.map_err(|e| named("--csv", sink, e))?;
         if let Sink::File(p, _) = sink {
             writeln!(table, "wrote {p}").map_err(io)?;
         }
     }
     if let Some(sink) = json.as_mut() {
-        if sweep {
-            output::json_sweep(&runs, &mut *sink.writer())?;
+        let r = if sweep {
+            output::json_sweep(&runs, &mut *sink.writer())
         } else {
-            output::json(&plans[0], &done.outcomes[0], &mut *sink.writer())?;
-        }
+            output::json(&plans[0], &done.outcomes[0], &mut *sink.writer())
+        };
+        r.map_err(|e| named("--json", sink, e))?;
         if let Sink::File(p, _) = sink {
             writeln!(table, "wrote {p}").map_err(io)?;
         }

@@ -563,6 +563,7 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         threads: r.threads,
         exact: None,
         memory: 0,
+        warnings: Vec::new(),
         scenario: s,
     };
     if scheme.law == Law::TimeStepped && !plan.randomised() && plan.replicas > 1 {
@@ -578,8 +579,11 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
     };
     let concurrent = threads.min(plan.replicas as usize).max(1) as u64;
     let budget = coagula_core::scheme::population::machine_memory_budget() as u64;
-    // a first bound before anything is allocated: 64 bytes a particle
-    if particles.saturating_mul(64).saturating_mul(concurrent) > budget {
+    // a first bound before a start over particle sizes is built: its sizes (8 bytes a
+    // particle) and the sims' particles (at least 48 bytes each)
+    if !scheme.inits.contains(&Takes::Counts)
+        && particles.saturating_mul(56).saturating_mul(concurrent) > budget
+    {
         return Err(src.at(
             "initial.particles",
             format!(
@@ -638,5 +642,50 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         ),
         _ => None,
     };
+    growth(&mut plan, concurrent, budget).map_err(|m| src.at("output.t-end", m))?;
     Ok(plan)
+}
+
+/// What the exact solution says of the run's growth, before any work: a size-count
+/// scheme's tables run up to the largest size, about `(M2/M1) ln N` at the last output
+/// time (the mass-weighted mean size times the log of the particle number, the largest
+/// of N draws from an exponential-like tail) at 8 bytes a size at least: past the
+/// memory budget the run could not finish, and is refused. A run past four times a gel
+/// time (the multiplicative kernel) gets a warning: its cost per unit of time grows about
+/// e-fold, most proposals being the gel's and rejected (issue 40: 148 M proposals by
+/// t = 13, 99.99 % rejected).
+fn growth(plan: &mut Plan, concurrent: u64, budget: u64) -> Result<(), String> {
+    let Some(e) = plan.exact else {
+        return Ok(());
+    };
+    let Some(&t) = plan.times.last() else {
+        return Ok(());
+    };
+    if plan.scheme.inits.contains(&Takes::Counts) && plan.scheme.model == ModelKind::Coagulation {
+        let m = |k: f64| e.value(&Observable::Moment(k), t);
+        if let (Some(m1), Some(m2)) = (m(1.0), m(2.0)) {
+            let mass_size = m2 / m1 / plan.size_unit;
+            let largest = mass_size * (plan.particles.max(2) as f64).ln();
+            let bytes = largest * 8.0 * concurrent as f64;
+            if bytes.is_nan() || bytes > budget as f64 {
+                return Err(format!(
+                    "at t = {} the clusters reach about {largest:.3e} size units ((M2/M1) ln N from the exact solution): {concurrent} replicas' size tables would need more than {:.3e} bytes, past this machine's memory budget of {:.1} GiB: end earlier, or use a coarser resolution",
+                    coagula_core::error::Short(t),
+                    bytes,
+                    budget as f64 / (1u64 << 30) as f64
+                ));
+            }
+        }
+    }
+    if let Some(tg) = e.solution.gel_time()
+        && t > 4.0 * tg
+        && plan.scheme.model == ModelKind::Coagulation
+    {
+        plan.warnings.push(format!(
+            "the run goes past the gel point t = {} to t = {}: there the gel's collisions dominate and the cost grows about e-fold per unit of time (most proposals are the gel's, and rejected); end near the gel point for a run that finishes",
+            coagula_core::error::Short(tg),
+            coagula_core::error::Short(t)
+        ));
+    }
+    Ok(())
 }

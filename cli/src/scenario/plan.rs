@@ -228,8 +228,10 @@ pub struct Plan {
     pub threads: usize,
     /// The exact solution, where one is known.
     pub exact: Option<ExactRef>,
-    /// Estimated peak memory of the run in bytes.
+    /// What the sims hold at start, in bytes.
     pub memory: u64,
+    /// Warnings about the run, printed before it starts (a run past a gel point).
+    pub warnings: Vec<String>,
 }
 
 /// The facade as the CLI instantiates it.

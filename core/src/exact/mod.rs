@@ -272,7 +272,7 @@ impl Exact {
             }
             _ => {
                 return Err(Error::Unsupported {
-                    what: "c(x, t) of a solution of integer sizes (use number_density)",
+                    what: "c(x, t) of a solution of integer sizes (use the number density n_k)",
                 });
             }
         })
@@ -330,7 +330,7 @@ impl Exact {
             }
             Kind::ConstantExponential { .. } | Kind::AdditiveExponential => {
                 return Err(Error::Unsupported {
-                    what: "n_k(t) of a continuous-size solution (use density)",
+                    what: "n_k(t) of a continuous-size solution (use the density c(x, t))",
                 });
             }
         })

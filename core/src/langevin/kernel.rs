@@ -31,6 +31,7 @@ use super::{Batch, Config, Drift, Estimate, Wall};
 use crate::error::{Error, Result, finite};
 use crate::observe::Replicas;
 use crate::random::{NormalZiggurat, Purpose, substream};
+use crate::scheme::Budget;
 use core::f64::consts::PI;
 use rand_core::Rng;
 
@@ -150,7 +151,25 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
     key: u64,
     first_id: u64,
 ) -> Result<KernelEstimate> {
+    first_hit_kernel_within::<D, Dr>(p, drift, key, first_id, &mut Budget::unlimited())
+        .map(|k| k.expect("an unlimited budget is never spent"))
+}
+
+/// [`first_hit_kernel`] within `budget`, counted in trajectory steps (a chunk of m
+/// trajectories to `to` takes `m ⌈to / dt⌉` units, charged before it runs; the
+/// cancellation callback is polled between chunks): `None` when the budget is spent
+/// or the callback cancels before the last chunk (no estimate: a partial one would be
+/// from fewer trajectories than asked).
+pub fn first_hit_kernel_within<const D: usize, Dr: Drift<D>>(
+    p: &FirstHits,
+    drift: &Dr,
+    key: u64,
+    first_id: u64,
+    budget: &mut Budget<'_>,
+) -> Result<Option<KernelEstimate>> {
     p.check()?;
+    // (a float-to-integer cast saturates; the batch refuses t / dt past 2^52)
+    let steps = libm::ceil(p.to / p.dt) as u64;
     let cfg = Config::<D>::ball(p.radius, p.dt, p.sigma, Wall::Absorbing)?;
     first_id
         .checked_add(p.trajectories - 1)
@@ -172,6 +191,9 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
     let mut done = 0u64;
     while done < p.trajectories {
         let m = chunk.min((p.trajectories - done) as usize);
+        if !(budget.take((m as u64).saturating_mul(steps.max(1))) && budget.poll()) {
+            return Ok(None);
+        }
         let id0 = first_id + done;
         let mut b = Batch::with_starts_in(
             cfg,
@@ -198,11 +220,11 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
         }
         done += m as u64;
     }
-    Ok(KernelEstimate {
+    Ok(Some(KernelEstimate {
         estimate: Estimate::of(&rep),
         hits,
         replicas: rep,
-    })
+    }))
 }
 
 /// Smoluchowski's kernel averaged over `[from, to)`: the mean of

@@ -137,7 +137,7 @@ impl<const D: usize> Config<D> {
     pub fn half_line(dt: f64, sigma: f64, wall: Wall) -> Result<Self> {
         if D != 1 {
             return Err(Error::Unsupported {
-                what: "a half-line in more than one dimension (use Config::ball)",
+                what: "a half-line in more than one dimension (use a ball: dimension 2 or 3)",
             });
         }
         check_dt_sigma(dt, sigma)?;
@@ -170,7 +170,7 @@ impl<const D: usize> Config<D> {
     pub fn ball(radius: f64, dt: f64, sigma: f64, wall: Wall) -> Result<Self> {
         if D < 2 {
             return Err(Error::Unsupported {
-                what: "a ball in one dimension (use Config::line)",
+                what: "a ball in one dimension (use a line: dimension 1)",
             });
         }
         if D > 3 {

@@ -5,9 +5,10 @@ use super::{
     COAG_DRIFT_MAFTEI2016, COAG_DRIFT_ZERO, bad, coag_drift_fn, coag_langevin_config,
     default_langevin, drift_of,
 };
-use crate::status::guard;
+use crate::status::{COAG_INTERRUPTED, fail, guard};
 use crate::util::{non_null, read_config, write};
-use coagula_core::langevin::kernel::{FirstHits, first_hit_kernel};
+use coagula_core::langevin::kernel::{FirstHits, first_hit_kernel_within};
+use coagula_core::scheme::Budget;
 use std::ffi::c_void;
 
 /// A first-hit kernel estimation (see `coag_first_hit_kernel`).
@@ -42,9 +43,20 @@ pub struct coag_first_hits {
     pub drift_fn: coag_drift_fn,
     /// `COAG_DRIFT_CALLBACK`: passed to `drift_fn`.
     pub drift_user_data: *mut c_void,
+    /// At most this many trajectory steps (a trajectory to `to` is `⌈to / dt⌉` of
+    /// them, charged per chunk of trajectories before it runs); 0: no limit. Past it the
+    /// call returns `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the
+    /// struct: a caller compiled against version 1 gets no limit.)
+    pub work_limit: u64,
+    /// Polled between chunks of trajectories: non-zero stops the call with
+    /// `COAG_INTERRUPTED` (NULL: none).
+    pub cancel: crate::sim::coag_cancel_callback,
+    /// Passed to `cancel`.
+    pub cancel_user_data: *mut c_void,
 }
 
-const FIRST_HITS_V1: usize = std::mem::size_of::<coag_first_hits>();
+/// The struct before `work_limit` and `cancel` (the smallest size accepted).
+const FIRST_HITS_V1: usize = std::mem::offset_of!(coag_first_hits, work_limit);
 
 /// The collision kernel of the relative motion, averaged over `[from, to)`, from the
 /// first hits of the sphere |x| = R by pairs starting uniformly in R < |x| < L with
@@ -78,6 +90,9 @@ pub unsafe extern "C" fn coag_first_hit_kernel(
             friction_rate: 0.0,
             drift_fn: None,
             drift_user_data: std::ptr::null_mut(),
+            work_limit: 0,
+            cancel: None,
+            cancel_user_data: std::ptr::null_mut(),
         };
         // SAFETY: NULL checked; valid otherwise (contract).
         let c = unsafe { read_config(p, "p", FIRST_HITS_V1, zero) }?;
@@ -103,10 +118,43 @@ pub unsafe extern "C" fn coag_first_hit_kernel(
             velocity_sd: c.velocity_sd,
             trajectories: c.trajectories,
         };
+        let mut cancel = || {
+            c.cancel.is_some_and(|f| {
+                // SAFETY: the host passed the callback and user_data for this call.
+                unsafe { f(c.cancel_user_data) != 0 }
+            })
+        };
+        let units = if c.work_limit == 0 {
+            u64::MAX
+        } else {
+            c.work_limit
+        };
+        let mut budget = Budget::work(units).with_cancel(&mut cancel);
         let k = match c.dim {
-            2 => first_hit_kernel::<2, _>(&fh, &drift_of::<2>(&lc)?, seed, first_id)?,
-            3 => first_hit_kernel::<3, _>(&fh, &drift_of::<3>(&lc)?, seed, first_id)?,
+            2 => first_hit_kernel_within::<2, _>(
+                &fh,
+                &drift_of::<2>(&lc)?,
+                seed,
+                first_id,
+                &mut budget,
+            )?,
+            3 => first_hit_kernel_within::<3, _>(
+                &fh,
+                &drift_of::<3>(&lc)?,
+                seed,
+                first_id,
+                &mut budget,
+            )?,
             d => return Err(bad(format!("dim {d} (2 or 3)"))),
+        };
+        let Some(k) = k else {
+            return fail(
+                COAG_INTERRUPTED,
+                format!(
+                    "first-hit kernel: the work limit of {} trajectory steps or the cancel callback stopped it before its {} trajectories (no estimate)",
+                    c.work_limit, c.trajectories
+                ),
+            );
         };
         // SAFETY: checked non-null; writable (contract).
         unsafe {

@@ -334,7 +334,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
         Err(Error::Unsupported {
-            what: "mass: direct simulation's mass is its sizes over its volume (use set_sizes)",
+            what: "mass: direct simulation's mass is its sizes over its volume (set its sizes instead)",
         })
     }
 }

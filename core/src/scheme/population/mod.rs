@@ -31,21 +31,18 @@ pub(crate) fn check_within_limit(counts: &[u64], limit: u64) -> Result<()> {
 }
 
 /// The bytes an integer-size scheme holds after a build from counts: its per-size
-/// arrays and trees (64 bytes a size) and its particle lists (up to 64 bytes a
-/// particle, for at most 2^24 of them).
+/// arrays and trees (64 bytes a size, whatever the particle number: the size-count
+/// schemes keep no per-particle list) and, for a gas, its particles (64 bytes each:
+/// size, velocity, cell). A run grows from there as the largest size grows.
 pub(crate) fn counts_memory(init: &crate::scheme::facade::Init<'_>) -> u64 {
     use crate::scheme::facade::Init;
-    let (len, n) = match *init {
-        Init::Counts { counts, .. } | Init::Temperatures { counts, .. } => (
-            counts.len() as u64,
-            counts.iter().fold(0u64, |a, &c| a.saturating_add(c)),
-        ),
-        Init::Velocities { sizes, .. } => {
-            (sizes.iter().copied().max().unwrap_or(0), sizes.len() as u64)
+    match *init {
+        Init::Counts { counts, .. } | Init::Temperatures { counts, .. } => {
+            (counts.len() as u64).saturating_mul(64)
         }
-        Init::Sizes { sizes, .. } => (0, sizes.len() as u64),
-    };
-    len.saturating_mul(64).saturating_add(64 * n.min(1 << 24))
+        Init::Velocities { sizes, .. } => (sizes.len() as u64).saturating_mul(64),
+        Init::Sizes { .. } => 0,
+    }
 }
 
 /// N, N0, V and the limits of a size-count population (the counts themselves live in
@@ -167,7 +164,11 @@ pub(crate) fn check_pairs(sizes: &[u64], counts: &[u64], size_limit: u64) -> Res
 }
 
 /// The dense count vector of `(size, count)` pairs (for the schemes whose own tables
-/// run up to the largest size), within the memory budget.
+/// run up to the largest size), refused up front when it would take more than half
+/// the memory budget: the tables built from it, and their first growth when a merge
+/// passes the largest size, would then pass the budget, so the state could be set but
+/// not run (issue 40: `{1: 5000, 1000: 3, 2^30: 1}` took 8.4 GB and 10 s, then every
+/// advance failed).
 pub(crate) fn dense_from_pairs(
     sizes: &[u64],
     counts: &[u64],
@@ -176,7 +177,7 @@ pub(crate) fn dense_from_pairs(
 ) -> Result<Vec<u64>> {
     let largest = check_pairs(sizes, counts, size_limit)?;
     let len = usize::try_from(largest).unwrap_or(usize::MAX);
-    within_budget(len.checked_mul(core::mem::size_of::<u64>()), budget)?;
+    within_budget(len.checked_mul(2 * core::mem::size_of::<u64>()), budget)?;
     let mut dense = Vec::new();
     try_resize(&mut dense, len, 0u64)?;
     for (&s, &c) in sizes.iter().zip(counts) {
