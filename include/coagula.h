@@ -969,7 +969,9 @@ int32_t coag_langevin_state(const coag_langevin *h, double *x, double *u, uint64
 /*
  Mean and standard error of `f(X, U)` over the trajectories (absorbed ones at their
  hit); `f` NULL means the hits per trajectory. `absorbed` (may be NULL) gets the
- number of absorbed trajectories.
+ number of absorbed trajectories. A batch of one trajectory has no standard error
+ (`COAG_INVALID_ARGUMENT`); an `f` whose mean or standard error is not finite is
+ `COAG_INVALID_RATE`; nothing is written on an error.
 
  # Safety
  `h` a live handle; `f` NULL or a valid callback; out pointers NULL or writable
@@ -1369,7 +1371,9 @@ int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_
 /*
  Restores a checkpoint into a sim of the same scheme, settings and physics (the seed,
  the stream, the memory budget and the capacity may differ; the sim takes the
- checkpoint's random stream). A checkpoint that is corrupted (checksum), truncated,
+ checkpoint's random stream — except the time-driven mass flow on randomised QMC
+ points, whose scrambling is keyed by the seed and stream: there they must match, or
+ the restore is `COAG_BAD_CHECKPOINT`). A checkpoint that is corrupted (checksum), truncated,
  of another format, scheme, setting or kernel, or whose state fails the checks its
  scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
  unchanged.

@@ -14,6 +14,83 @@ static uint64_t period2(void *ud) {
     return (period++ & 1) ? 0x9e3779b97f4a7c15ULL : 0x0123456789abcdefULL;
 }
 
+static double rate1(double x, void *ud) {
+    (void)x;
+    (void)ud;
+    return 1.0;
+}
+static double rate5(double x, void *ud) {
+    (void)x;
+    (void)ud;
+    return 5.0;
+}
+static double twice(double x, double u, void *ud) {
+    (void)u;
+    (void)ud;
+    return 2.0 * x;
+}
+static double half(double x, double u, void *ud) {
+    (void)u;
+    (void)ud;
+    return 0.5 * x;
+}
+static double infinite(const double *x, const double *u, size_t dim, void *ud) {
+    (void)x;
+    (void)u;
+    (void)dim;
+    (void)ud;
+    return INFINITY;
+}
+
+/* Wrong or silent statuses of the review: a fragment larger than its particle, a
+ * fragmentation rate above its declared supremum, a Langevin mean of one trajectory
+ * or of an infinite observable. */
+static void statuses(const coag_kernel *k1, const double *ones) {
+    coag_options *o = NULL;
+    OK(coag_options_new(&o));
+    OK(coag_options_set_real(o, "dt", 0.01));
+    coag_user_fragmentation uf;
+    memset(&uf, 0, sizeof uf);
+    uf.rate = rate1;
+    uf.inverse_piece = twice;
+    uf.sup_rate = 1.0;
+    coag_fragmentation *big = NULL, *fast = NULL;
+    OK(coag_fragmentation_new_user(&uf, &big));
+    uf.rate = rate5;
+    uf.inverse_piece = half;
+    OK(coag_fragmentation_new_user(&uf, &fast));
+    const char *breaking[3] = {"massflow", "mfa", "dsa"};
+    for (int i = 0; i < 3; i++) {
+        const coag_fragmentation *fr[2] = {big, fast};
+        for (int j = 0; j < 2; j++) {
+            coag_sim *s = NULL;
+            int st = coag_sim_new_sizes(breaking[i], k1, fr[j], i == 0 ? o : NULL, ones, 8, 1.0, &s);
+            if (st == COAG_OK) st = coag_sim_advance_to(s, 1.0, NULL);
+            CHECK(st == COAG_INVALID_RATE, "%s, %s: %s", breaking[i], j ? "rate above sup" : "piece > x",
+                  coag_status_name(st));
+            coag_sim_free(s);
+        }
+    }
+    coag_fragmentation_free(big);
+    coag_fragmentation_free(fast);
+    coag_options_free(o);
+    coag_langevin_config c;
+    OK(coag_langevin_default_config(&c, sizeof c));
+    coag_langevin *one = NULL, *two = NULL;
+    double x0[2] = {0.5, 0.25}, u0[2] = {0.0, 0.0}, m = -1.0, se = -1.0;
+    OK(coag_langevin_new(&c, 1, x0, u0, 1, 0, &one));
+    OK(coag_langevin_new(&c, 2, x0, u0, 1, 0, &two));
+    OK(coag_langevin_advance_to(one, 0.1, NULL));
+    OK(coag_langevin_advance_to(two, 0.1, NULL));
+    EXPECT(coag_langevin_mean(one, NULL, NULL, &m, &se, NULL), COAG_INVALID_ARGUMENT);
+    CHECK(m == -1.0 && se == -1.0, "nothing written");
+    EXPECT(coag_langevin_mean(two, infinite, NULL, &m, &se, NULL), COAG_INVALID_RATE);
+    OK(coag_langevin_mean(two, NULL, NULL, &m, &se, NULL));
+    CHECK(isfinite(m) && isfinite(se), "two trajectories: %g ± %g", m, se);
+    coag_langevin_free(one);
+    coag_langevin_free(two);
+}
+
 static coag_kernel *kernel(const char *name, const double *p, size_t n) {
     coag_kernel *k = NULL;
     OK(coag_kernel_new(name, p, n, &k));
@@ -95,6 +172,7 @@ int main(void) {
     OK(coag_sim_new_maxwellian("dsmc", kg, NULL, n1000, temp, 1, 10000.0, &s));
     returns(s, 1e300, "dsmc to 1e300");
 
+    statuses(k1, ones);
     coag_kernel_free(k1);
     coag_kernel_free(kxy);
     coag_kernel_free(kbr);

@@ -6,7 +6,30 @@
 //! `F̃(x, y) = (y / x) F(x − y, y)`, at total rate `Ḟ(x) = ∫₀ˣ F̃(x, y) dy`, and the
 //! piece is drawn as `y = F̂_x⁻¹(u)` with `F̂_x(y) = ∫₀ʸ F̃(x, z) dz / Ḟ(x)`.
 
-use crate::error::{Result, positive};
+use crate::error::{Error, Result, positive};
+
+/// `Ḟ(x)` checked: finite, `≥ 0` and, where the kernel declares `sup Ḟ`
+/// ([`FragmentationKernel::sup_rate`]), at most that (a declared bound that does not
+/// hold is an error, as a coagulation kernel above its bound is:
+/// [`Error::BoundExceeded`]).
+#[inline]
+pub fn checked_break_rate<F: FragmentationKernel + ?Sized>(f: &F, x: f64) -> Result<f64> {
+    let r = f.total_rate(x);
+    if !(r >= 0.0 && r.is_finite()) {
+        return Err(Error::InvalidRate {
+            name: "fragmentation rate",
+            value: r,
+        });
+    }
+    match f.sup_rate() {
+        Some(sup) if r > sup * (1.0 + 4.0 * f64::EPSILON) => Err(Error::BoundExceeded {
+            name: "fragmentation supremum (sup_rate)",
+            rate: r,
+            bound: sup,
+        }),
+        _ => Ok(r),
+    }
+}
 
 /// A fragmentation kernel given by its total mass-flow rate and piece distribution.
 pub trait FragmentationKernel {

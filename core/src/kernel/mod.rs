@@ -41,6 +41,7 @@ pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
 pub use coagulation::{BOLTZMANN, Coagulation};
 pub use fragmentation::{
     BinaryUniform, Fragmentation, FragmentationKernel, NoFragmentation, UserFragmentation,
+    checked_break_rate,
 };
 
 use crate::error::{Error, Result};

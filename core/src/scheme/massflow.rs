@@ -360,17 +360,15 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let mut one = |k: usize, l: usize, u3: f64| -> Result<()> {
             let (xk, xl) = (x[k], x[l]);
             let kt = kernel.rate(xk, xl);
-            let fd = frag.total_rate(xk);
+            let fd = if frag.is_none() {
+                0.0
+            } else {
+                crate::kernel::checked_break_rate(frag, xk)?
+            };
             if !(kt >= 0.0 && kt.is_finite()) {
                 return Err(Error::InvalidRate {
                     name: "coagulation kernel",
                     value: kt,
-                });
-            }
-            if !(fd >= 0.0 && fd.is_finite()) {
-                return Err(Error::InvalidRate {
-                    name: "fragmentation rate",
-                    value: fd,
                 });
             }
             let pc = h * mass * kt / xl;
@@ -384,9 +382,11 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             } else if pf > 0.0 && u3 >= 1.0 - pf {
                 rep.events += 1;
                 let piece = frag.inverse_piece(xk, ((1.0 - u3) / pf).min(1.0));
-                if !(piece > 0.0 && piece.is_finite()) {
+                // (a followed piece larger than its particle would create mass, as MFA
+                // and DSA refuse too)
+                if !(piece > 0.0 && piece <= xk) {
                     return Err(Error::InvalidRate {
-                        name: "fragment size",
+                        name: "fragment size (must lie in (0, x])",
                         value: piece,
                     });
                 }

@@ -1,7 +1,7 @@
 //! Reading a batch (time, state, means) and its checkpoint (core's envelope).
 
 use super::{Inner, bad, coag_langevin, coag_observable_fn, disjoint};
-use crate::status::{COAG_BUFFER_TOO_SMALL, fail, guard};
+use crate::status::{COAG_BUFFER_TOO_SMALL, COAG_INVALID_ARGUMENT, COAG_INVALID_RATE, fail, guard};
 use crate::util::{handle, handle_mut, non_null, slice, slice_mut, write};
 use coagula_core::checkpoint::Writer;
 use coagula_core::observe::Replicas;
@@ -125,7 +125,9 @@ pub unsafe extern "C" fn coag_langevin_state(
 
 /// Mean and standard error of `f(X, U)` over the trajectories (absorbed ones at their
 /// hit); `f` NULL means the hits per trajectory. `absorbed` (may be NULL) gets the
-/// number of absorbed trajectories.
+/// number of absorbed trajectories. A batch of one trajectory has no standard error
+/// (`COAG_INVALID_ARGUMENT`); an `f` whose mean or standard error is not finite is
+/// `COAG_INVALID_RATE`; nothing is written on an error.
 ///
 /// # Safety
 /// `h` a live handle; `f` NULL or a valid callback; out pointers NULL or writable
@@ -153,10 +155,28 @@ pub unsafe extern "C" fn coag_langevin_mean(
             };
             (r, b.absorbed())
         });
+        if r.count() < 2 {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                format!(
+                    "a mean and its standard error need at least 2 trajectories (the batch has {})",
+                    r.count()
+                ),
+            );
+        }
+        let (m, se) = (r.mean(), r.std_error());
+        if !(m.is_finite() && se.is_finite()) {
+            return fail(
+                COAG_INVALID_RATE,
+                format!(
+                    "the observable's mean over the trajectories is {m} ± {se}: f must return finite values"
+                ),
+            );
+        }
         // SAFETY: checked non-null; writable (contract).
         unsafe {
-            write(mean, r.mean());
-            write(std_error, r.std_error());
+            write(mean, m);
+            write(std_error, se);
             if !absorbed.is_null() {
                 write(absorbed, a as u64);
             }

@@ -71,7 +71,9 @@ pub unsafe extern "C" fn coag_sim_checkpoint(
 
 /// Restores a checkpoint into a sim of the same scheme, settings and physics (the seed,
 /// the stream, the memory budget and the capacity may differ; the sim takes the
-/// checkpoint's random stream). A checkpoint that is corrupted (checksum), truncated,
+/// checkpoint's random stream — except the time-driven mass flow on randomised QMC
+/// points, whose scrambling is keyed by the seed and stream: there they must match, or
+/// the restore is `COAG_BAD_CHECKPOINT`). A checkpoint that is corrupted (checksum), truncated,
 /// of another format, scheme, setting or kernel, or whose state fails the checks its
 /// scheme's constructor makes is `COAG_BAD_CHECKPOINT`; on any error the sim is
 /// unchanged.

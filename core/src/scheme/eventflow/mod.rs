@@ -455,21 +455,14 @@ pub(crate) fn majorant<K: crate::kernel::CoagulationKernel>(k: &K, x: f64) -> Re
     }
 }
 
-/// `Ḟ(x)`, validated (0 without fragmentation).
+/// `Ḟ(x)`, validated (0 without fragmentation; see
+/// [`crate::kernel::checked_break_rate`]).
 #[inline]
 pub(crate) fn break_rate<F: crate::kernel::FragmentationKernel>(f: &F, x: f64) -> Result<f64> {
     if f.is_none() {
         return Ok(0.0);
     }
-    let r = f.total_rate(x);
-    if r >= 0.0 && r.is_finite() {
-        Ok(r)
-    } else {
-        Err(Error::InvalidRate {
-            name: "fragmentation rate",
-            value: r,
-        })
-    }
+    crate::kernel::checked_break_rate(f, x)
 }
 
 /// The acceptance of a proposal of kernel value `k` under majorant `hh`: `Ok(true)` with
