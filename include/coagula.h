@@ -18,7 +18,6 @@
  *  - user_data is stored, never dereferenced; it and the callbacks must stay valid
  *    while any handle using them (including sims made from a user kernel) is alive.
  */
-
 #ifndef COAGULA_H
 #define COAGULA_H
 
@@ -26,6 +25,9 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#ifdef __cplusplus
+extern "C" {
+#endif /* __cplusplus */
 
 /*
  The constant kernel `K = 1` (a `COAG_EXACT_*` solution).
@@ -757,12 +759,15 @@ typedef struct {
  */
 typedef uint64_t (*coag_rng_callback)(void *user_data);
 
-#ifdef __cplusplus
-extern "C" {
-#endif // __cplusplus
-
 /*
  Exact moment `M_m(t)` (m = 0..3) of a `COAG_EXACT_*` solution from `n_1(0) = 1`.
+
+ The solutions are those of coefficient 1 from monomers of concentration 1. For a
+ kernel `b K` (constant, additive or multiplicative) from monomers of concentration
+ `c0`, the solution is `c0 · M_m(b c0 t)`: evaluate at the scaled time `b c0 t` and
+ multiply by `c0` (the same holds for `coag_exact_density`). Lécot's
+ coagulation–fragmentation test has no such scaling (its break-up rate fixes the
+ time unit). Orders above 3 have no closed form here: `COAG_UNSUPPORTED`.
 
  # Safety
  `out` must be NULL or valid for writing one `double`.
@@ -770,7 +775,9 @@ extern "C" {
 int32_t coag_exact_moment(int32_t solution, uint32_t m, double t, double *out);
 
 /*
- Exact concentration `n_k(t)` of a `COAG_EXACT_*` solution.
+ Exact concentration `n_k(t)` of a `COAG_EXACT_*` solution from `n_1(0) = 1`
+ (scaled to a coefficient b and concentration c0 as `coag_exact_moment` says;
+ `COAG_EXACT_COAG_FRAG` has moments only: `COAG_UNSUPPORTED`).
 
  # Safety
  `out` must be NULL or valid for writing one `double`.
@@ -1650,7 +1657,7 @@ const char *coag_status_name(int32_t status);
 int32_t coag_last_error_message(char *buf, size_t buf_len, size_t *out_len);
 
 #ifdef __cplusplus
-}  // extern "C"
-#endif  // __cplusplus
+} /* extern "C" */
+#endif /* __cplusplus */
 
-#endif  /* COAGULA_H */
+#endif /* COAGULA_H */

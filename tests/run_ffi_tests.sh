@@ -18,6 +18,11 @@ san="-fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
+# the header alone under C89 and C++ (no `//` comments, extern "C" guards), twice
+printf '#include "coagula.h"\n#include "coagula.h"\nint main(void) { return 0; }\n' > "$out/header.c"
+gcc -std=c89 -pedantic -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/header89.o"
+g++ -x c++ -std=c++11 -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/headerxx.o"
+
 for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review; do
     gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
         "tests/c/$t.c" "$lib" $libs -o "$out/$t"

@@ -34,6 +34,13 @@ fn exact_of(solution: i32) -> Result<coagula_core::exact::Exact, Fail> {
 
 /// Exact moment `M_m(t)` (m = 0..3) of a `COAG_EXACT_*` solution from `n_1(0) = 1`.
 ///
+/// The solutions are those of coefficient 1 from monomers of concentration 1. For a
+/// kernel `b K` (constant, additive or multiplicative) from monomers of concentration
+/// `c0`, the solution is `c0 · M_m(b c0 t)`: evaluate at the scaled time `b c0 t` and
+/// multiply by `c0` (the same holds for `coag_exact_density`). Lécot's
+/// coagulation–fragmentation test has no such scaling (its break-up rate fixes the
+/// time unit). Orders above 3 have no closed form here: `COAG_UNSUPPORTED`.
+///
 /// # Safety
 /// `out` must be NULL or valid for writing one `double`.
 #[unsafe(no_mangle)]
@@ -47,7 +54,9 @@ pub unsafe extern "C" fn coag_exact_moment(solution: i32, m: u32, t: f64, out: *
     })
 }
 
-/// Exact concentration `n_k(t)` of a `COAG_EXACT_*` solution.
+/// Exact concentration `n_k(t)` of a `COAG_EXACT_*` solution from `n_1(0) = 1`
+/// (scaled to a coefficient b and concentration c0 as `coag_exact_moment` says;
+/// `COAG_EXACT_COAG_FRAG` has moments only: `COAG_UNSUPPORTED`).
 ///
 /// # Safety
 /// `out` must be NULL or valid for writing one `double`.
@@ -77,6 +86,22 @@ mod tests {
             COAG_OK
         );
         assert_eq!(out, 4.0);
+        // the documented scaling: K = b from monomers of concentration c0 is
+        // c0 M_m(b c0 t); M0 = c0 / (1 + b c0 t / 2)
+        let (b, c0, t) = (3.0, 0.5, 0.7);
+        unsafe { coag_exact_moment(COAG_EXACT_CONSTANT, 0, b * c0 * t, &mut out) };
+        assert!((c0 * out - c0 / (1.0 + b * c0 * t / 2.0)).abs() < 1e-15);
+        for m in [4, 7] {
+            assert_eq!(
+                unsafe { coag_exact_moment(COAG_EXACT_CONSTANT, m, 1.0, &mut out) },
+                COAG_UNSUPPORTED
+            );
+        }
+        assert_eq!(
+            unsafe { coag_exact_density(COAG_EXACT_COAG_FRAG, 1, 1.0, &mut out) },
+            COAG_UNSUPPORTED
+        );
+        out = 4.0;
         assert_eq!(
             unsafe { coag_exact_moment(COAG_EXACT_CONSTANT, 2, -3.0, &mut out) },
             COAG_INVALID_ARGUMENT

@@ -86,7 +86,7 @@ const MIN_SIZE: Param = Param {
     name: "min-size",
     default: Some(0.0),
     unit: "",
-    doc: "smallest size the bounds must hold for (>= 0; 0: every x > 0, 1: integer sizes, tighter)",
+    doc: "smallest particle size the low-rank bound must hold for (>= 0): 0, the default, for every size x > 0; 1 for integer sizes >= 1 only (the integer-size schemes), a tighter bound and fewer rejections",
 };
 
 /// Every built-in kernel.
