@@ -312,10 +312,7 @@ fn load(path: &Path, fp: u64, point: usize, b: u64, plan: &Plan) -> Result<Optio
 fn shaped(block: &Block, plan: &Plan, b: u64) -> bool {
     block.events.len() == runner::block_replicas(plan.replicas, b).count()
         && block.stats.len() == plan.times.len()
-        && block
-            .stats
-            .iter()
-            .all(|r| r.len() == plan.observables.len())
+        && block.stats.iter().all(|r| r.len() == plan.columns())
 }
 
 /// A rank's message to rank 0: status 0, the number of blocks it resumed from
@@ -497,7 +494,7 @@ pub fn run(
     let mut outcomes = Vec::with_capacity(points.len());
     let mut count = 0;
     for (plan, blocks) in points.iter().zip(slots) {
-        let mut stats = vec![vec![Replicas::new(); plan.observables.len()]; plan.times.len()];
+        let mut stats = vec![vec![Replicas::new(); plan.columns()]; plan.times.len()];
         let mut totals = StepReport::default();
         let mut events = Vec::with_capacity(plan.replicas as usize);
         for (b, block) in blocks.into_iter().enumerate() {

@@ -3,7 +3,7 @@
 
 use crate::output::rows;
 use crate::runner::Outcome;
-use crate::scenario::Plan;
+use crate::scenario::{Observable, Plan};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -92,11 +92,198 @@ pub fn run(path: &str, plan: &Plan, out: &Outcome) -> Result<(), String> {
     let n = plan.observables.len() as u32;
     let cols = n.clamp(1, 4);
     let blocks = n.div_ceil(4).max(1);
+    let sizes = u32::from(plan.classes.len() > 1);
     let size = (
-        520 * cols + 40,
-        blocks * if with_exact { 780 } else { 440 } + 40,
+        (520 * cols + 40).max(760),
+        blocks * if with_exact { 780 } else { 440 } + sizes * 460 + 40,
     );
-    render(path, size, |root| draw_run(root, plan, out, with_exact))
+    render(path, size, |root| {
+        root.fill(&WHITE).map_err(err)?;
+        let root = root.titled(&plan.title, ("sans-serif", 22)).map_err(err)?;
+        let (top, bottom) = if sizes == 1 {
+            let h = root.dim_in_pixel().1;
+            let (a, b) = root.split_vertically(h.saturating_sub(460));
+            (a, Some(b))
+        } else {
+            (root, None)
+        };
+        draw_run(&top, plan, out, with_exact)?;
+        if let Some(b) = &bottom {
+            draw_sizes(b, plan, out)?;
+        }
+        // (the SVG document is closed once, after every panel)
+        top.present().map_err(err)
+    })
+}
+
+/// The time axis' label: its units.
+fn time_label(plan: &Plan) -> String {
+    if plan.units.is_empty() {
+        "t (units of 1/(K c0))".into()
+    } else {
+        "t [s]".into()
+    }
+}
+
+/// An observable's axis label with its units (per unit volume, sizes in the
+/// scenario's units; with physical units, per m³ and sizes in monomers).
+fn value_label(plan: &Plan, o: &Observable) -> String {
+    let phys = !plan.units.is_empty();
+    match o {
+        Observable::Moment(m) if phys && *m == 0.0 => "M0 [m^-3]".into(),
+        Observable::Moment(m) if phys => format!("M{m} [monomers^{m} m^-3]"),
+        Observable::Moment(m) if *m == 0.0 => "M0 [per volume]".into(),
+        Observable::Moment(m) if *m == 1.0 => "M1 [size per volume]".into(),
+        Observable::Moment(m) => format!("M{m} [size^{m} per volume]"),
+        Observable::Density(_) | Observable::Concentration(..) | Observable::Class(..) => {
+            if phys {
+                format!("{} [m^-3]", o.name())
+            } else {
+                format!("{} [per volume]", o.name())
+            }
+        }
+        Observable::Gel if phys => "gel [monomers m^-3]".into(),
+        Observable::Gel => "gel [size per volume]".into(),
+        Observable::Particles => "N [simulation particles]".into(),
+        Observable::Named(n) => n.clone(),
+    }
+}
+
+/// A coordinate on a linear or a log10 axis (`None`: not drawable on a log axis).
+fn on_axis(log: bool, v: f64) -> Option<f64> {
+    if !v.is_finite() {
+        None
+    } else if log {
+        (v > 0.0).then(|| v.log10())
+    } else {
+        Some(v)
+    }
+}
+
+/// Tick labels of a log10 axis: the value 10^v at whole decades, none between.
+fn log_tick(v: f64) -> String {
+    if (v - v.round()).abs() > 1e-9 {
+        return String::new();
+    }
+    let x = 10f64.powf(v.round());
+    if (1e-3..1e4).contains(&x) {
+        format!("{}", (x * 1e3).round() / 1e3)
+    } else {
+        format!("{x:.0e}")
+    }
+}
+
+/// The size distribution `dN/dlog10 x = C[a, b) / log10(b/a)` on the plan's classes at
+/// up to four output times (the first, the last and two between), against the exact
+/// solution where it gives the classes; log size axis.
+fn draw_sizes<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    plan: &Plan,
+    out: &Outcome,
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    let e = &plan.classes;
+    let nobs = plan.observables.len();
+    let nt = plan.times.len();
+    let mut picks: Vec<usize> = [0, nt / 3, 2 * nt / 3, nt - 1].to_vec();
+    picks.dedup();
+    let x_of = |k: usize| (e[k] * e[k + 1]).sqrt().log10();
+    let width = |k: usize| (e[k + 1] / e[k]).log10();
+    let curve = |i: usize| -> Vec<(f64, f64)> {
+        (0..e.len() - 1)
+            .filter_map(|k| {
+                let v = out.stats[i][nobs + k].mean() / width(k);
+                on_axis(plan.log_axes, v).map(|y| (x_of(k), y))
+            })
+            .collect()
+    };
+    let exact = |i: usize| -> Vec<(f64, f64)> {
+        let t = plan.times[i];
+        (0..e.len() - 1)
+            .filter_map(|k| {
+                let o = Observable::Class(e[k], e[k + 1]);
+                let v = plan.exact.and_then(|x| x.value(&o, t))? / width(k);
+                on_axis(plan.log_axes, v).map(|y| (x_of(k), y))
+            })
+            .collect()
+    };
+    let all: Vec<(f64, f64)> = picks.iter().flat_map(|&i| curve(i)).collect();
+    let values: Vec<f64> = all
+        .iter()
+        .map(|p| p.1)
+        .chain(picks.iter().flat_map(|&i| exact(i)).map(|p| p.1))
+        .filter(|v| v.is_finite())
+        .collect();
+    let top = values.iter().fold(f64::MIN, |a, &v| a.max(v));
+    let (ylo, yhi) = if plan.log_axes {
+        // six decades below the largest value, not the exact solution's far tail
+        span(values.iter().copied().filter(|&v| v >= top - 6.0))
+    } else {
+        span(values.iter().copied())
+    };
+    let exact =
+        |i: usize| -> Vec<(f64, f64)> { exact(i).into_iter().filter(|p| p.1 >= ylo).collect() };
+    let (xlo, xhi) = (e[0].log10(), e[e.len() - 1].log10());
+    let unit = if plan.units.is_empty() {
+        "per volume"
+    } else {
+        "m^-3"
+    };
+    let mut chart = ChartBuilder::on(root)
+        .caption(
+            "size distribution dN/dlog10 x on the classes [e_i, e_i+1) (mean of the replicas; exact dashed where known)",
+            ("sans-serif", 18),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(80)
+        .build_cartesian_2d(xlo..xhi, ylo..yhi)
+        .map_err(err)?;
+    let log_y = plan.log_axes;
+    chart
+        .configure_mesh()
+        .x_desc(if plan.units.is_empty() {
+            "size x"
+        } else {
+            "size x [monomers]"
+        })
+        .y_desc(format!("dN/dlog10 x [{unit}]"))
+        .x_label_formatter(&|v| log_tick(*v))
+        .y_label_formatter(&|v| {
+            if log_y {
+                log_tick(*v)
+            } else {
+                tick(*v, yhi - ylo)
+            }
+        })
+        .draw()
+        .map_err(err)?;
+    for (c, &i) in picks.iter().enumerate() {
+        let color = COLORS[c % COLORS.len()];
+        chart
+            .draw_series(LineSeries::new(curve(i), color.stroke_width(2)))
+            .map_err(err)?
+            .label(format!("t = {}", tick(plan.times[i], plan.times[nt - 1])))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
+            });
+        let ex = exact(i);
+        if !ex.is_empty() {
+            chart
+                .draw_series(DashedLineSeries::new(ex, 6, 4, color.stroke_width(1)))
+                .map_err(err)?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .position(SeriesLabelPosition::UpperRight)
+        .draw()
+        .map_err(err)?;
+    Ok(())
 }
 
 const COLORS: [RGBColor; 4] = [
@@ -137,7 +324,7 @@ fn span(values: impl Iterator<Item = f64>) -> (f64, f64) {
 }
 
 fn draw_run<DB: DrawingBackend>(
-    root: DrawingArea<DB, Shift>,
+    root: &DrawingArea<DB, Shift>,
     plan: &Plan,
     out: &Outcome,
     with_exact: bool,
@@ -145,18 +332,34 @@ fn draw_run<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    root.fill(&WHITE).map_err(err)?;
-    let root = root.titled(&plan.title, ("sans-serif", 22)).map_err(err)?;
     let data = rows(plan, out);
+    // log time axis where asked for (and every time is > 0)
+    let log_t = plan.log_axes && plan.times.first().is_some_and(|&t| t > 0.0);
+    let tx = |t: f64| if log_t { t.log10() } else { t };
     let n = plan.observables.len();
     let cols = n.clamp(1, 4);
     let per = if with_exact { 2 } else { 1 };
     let grid = root.split_evenly((per * n.div_ceil(4).max(1), cols));
     let t_max = *plan.times.last().expect("times");
-    let t_min = if plan.times.len() > 1 {
+    let t_min = if log_t {
+        plan.times[0]
+    } else if plan.times.len() > 1 {
         0.0
     } else {
         t_max * 0.5
+    };
+    let (x_min, x_max) = if t_min < t_max {
+        (tx(t_min), tx(t_max))
+    } else {
+        (tx(t_max) - 0.5, tx(t_max) + 0.5)
+    };
+    let x_label = time_label(plan);
+    let x_tick = |v: &f64| {
+        if log_t {
+            log_tick(*v)
+        } else {
+            tick(*v, x_max - x_min)
+        }
     };
     for (j, o) in plan.observables.iter().enumerate() {
         // observable j: block j / 4 of `per` panel rows, column j % 4
@@ -169,38 +372,85 @@ where
             .map(|r| (r.t, r.cells[j].0, r.cells[j].1, r.cells[j].2))
             .collect();
         let has_band = pts.iter().any(|p| p.2.is_finite());
+        let raw = pts.clone();
         // exact curve on a fine grid where known
         let exact_at = |t: f64| plan.exact.and_then(|e| e.value(o, t));
         let fine: Vec<(f64, f64)> = (0..=300)
-            .map(|i| t_min + (t_max - t_min) * f64::from(i) / 300.0)
+            .map(|i| {
+                let f = f64::from(i) / 300.0;
+                if log_t {
+                    t_min * (t_max / t_min).powf(f)
+                } else {
+                    t_min + (t_max - t_min) * f
+                }
+            })
             .filter_map(|t| exact_at(t).filter(|v| v.is_finite()).map(|v| (t, v)))
             .collect();
+        // a log value axis where asked for and the values are > 0 and span decades
+        let positive = pts.iter().all(|p| p.1 > 0.0) && fine.iter().all(|p| p.1 > 0.0);
+        let (vlo, vhi) = pts
+            .iter()
+            .map(|p| p.1)
+            .chain(fine.iter().map(|p| p.1))
+            .fold((f64::MAX, f64::MIN), |a, v| (a.0.min(v), a.1.max(v)));
+        let log_y = plan.log_axes && positive && vhi > 100.0 * vlo;
+        let ty = |v: f64| if log_y { v.log10() } else { v };
+        let pts: Vec<(f64, f64, f64, f64)> = pts
+            .iter()
+            .map(|p| {
+                if log_y {
+                    // the band as log10 of the interval's ends (its lower end kept > 0)
+                    let lo = (p.1 - p.2).max(p.1 * 1e-3);
+                    (
+                        tx(p.0),
+                        p.1.log10(),
+                        (p.1 + p.2).log10() - p.1.log10(),
+                        lo.log10() - p.1.log10(),
+                    )
+                } else {
+                    (tx(p.0), p.1, p.2, -p.2)
+                }
+            })
+            .collect();
+        let fine: Vec<(f64, f64)> = fine.iter().map(|p| (tx(p.0), ty(p.1))).collect();
         let (ylo, yhi) = span(
             pts.iter()
                 .flat_map(|p| {
-                    let h = if p.2.is_finite() { p.2 } else { 0.0 };
-                    [p.1 - h, p.1 + h]
+                    let (up, down) = if p.2.is_finite() {
+                        (p.2, p.3)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    [p.1 + down, p.1 + up]
                 })
                 .chain(fine.iter().map(|p| p.1)),
         );
         let mut chart = ChartBuilder::on(&grid[value_panel])
             .caption(format!("{name}(t)"), ("sans-serif", 18))
             .margin(12)
-            .x_label_area_size(35)
-            .y_label_area_size(70)
-            .build_cartesian_2d(t_min..t_max, ylo..yhi)
+            .x_label_area_size(40)
+            .y_label_area_size(80)
+            .build_cartesian_2d(x_min..x_max, ylo..yhi)
             .map_err(err)?;
         chart
             .configure_mesh()
-            .x_desc("t")
-            .y_label_formatter(&|v| tick(*v, yhi - ylo))
+            .x_desc(x_label.as_str())
+            .y_desc(value_label(plan, o))
+            .x_label_formatter(&x_tick)
+            .y_label_formatter(&|v| {
+                if log_y {
+                    log_tick(*v)
+                } else {
+                    tick(*v, yhi - ylo)
+                }
+            })
             .draw()
             .map_err(err)?;
         if has_band {
             let band: Vec<(f64, f64)> = pts
                 .iter()
                 .map(|p| (p.0, p.1 + p.2))
-                .chain(pts.iter().rev().map(|p| (p.0, p.1 - p.2)))
+                .chain(pts.iter().rev().map(|p| (p.0, p.1 + p.3)))
                 .collect();
             chart
                 .draw_series(std::iter::once(Polygon::new(
@@ -249,10 +499,10 @@ where
 
         if with_exact {
             // relative errors, so that growing and decaying observables read alike
-            let errs: Vec<(f64, f64, f64)> = pts
+            let errs: Vec<(f64, f64, f64)> = raw
                 .iter()
                 .filter(|p| p.3.is_finite() && p.3 != 0.0)
-                .map(|p| (p.0, (p.1 - p.3) / p.3.abs(), p.2 / p.3.abs()))
+                .map(|p| (tx(p.0), (p.1 - p.3) / p.3.abs(), p.2 / p.3.abs()))
                 .collect();
             let (elo, ehi) = span(
                 errs.iter()
@@ -268,13 +518,15 @@ where
                     ("sans-serif", 18),
                 )
                 .margin(12)
-                .x_label_area_size(35)
-                .y_label_area_size(70)
-                .build_cartesian_2d(t_min..t_max, elo..ehi)
+                .x_label_area_size(40)
+                .y_label_area_size(80)
+                .build_cartesian_2d(x_min..x_max, elo..ehi)
                 .map_err(err)?;
             chart
                 .configure_mesh()
-                .x_desc("t")
+                .x_desc(x_label.as_str())
+                .y_desc("relative error")
+                .x_label_formatter(&x_tick)
                 .y_label_formatter(&|v| tick(*v, ehi - elo))
                 .draw()
                 .map_err(err)?;
@@ -299,12 +551,11 @@ where
                 .map_err(err)?;
             chart
                 .draw_series(LineSeries::new(
-                    [(t_min, 0.0), (t_max, 0.0)],
+                    [(x_min, 0.0), (x_max, 0.0)],
                     BLACK.stroke_width(1),
                 ))
                 .map_err(err)?;
         }
     }
-    root.present().map_err(err)?;
     Ok(())
 }

@@ -59,6 +59,14 @@ pub fn observe(plan: &Plan, sim: &Sim, o: &Observable) -> f64 {
     }
 }
 
+/// The concentrations of the plan's size classes (none when it has none).
+fn classes<'a>(plan: &'a Plan, sim: &'a Sim) -> impl Iterator<Item = f64> + 'a {
+    let d = plan.size_unit;
+    plan.classes
+        .windows(2)
+        .map(move |w| sim.class_concentration(w[0] / d, w[1] / d))
+}
+
 /// One replica's observables (`[time][observable]`) and its totals.
 type ReplicaRows = (Vec<Vec<f64>>, StepReport);
 
@@ -78,6 +86,7 @@ fn replica(
             plan.observables
                 .iter()
                 .map(|o| observe(plan, &*sim, o))
+                .chain(classes(plan, &*sim))
                 .collect(),
         );
         tick();
@@ -154,7 +163,7 @@ pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
     });
     progress.finish();
     let (values, totals, events) = collect(results)?;
-    let stats = statistics(&values, plan.times.len(), plan.observables.len());
+    let stats = statistics(&values, plan.times.len(), plan.columns());
     Ok(Outcome {
         values,
         stats,
@@ -249,7 +258,7 @@ pub fn run_block(plan: &Plan, b: u64, tick: &(dyn Fn() + Sync)) -> Result<Block,
         .collect();
     let (values, totals, events) = collect(results)?;
     Ok(Block {
-        stats: pushed(&values, plan.times.len(), plan.observables.len()),
+        stats: pushed(&values, plan.times.len(), plan.columns()),
         totals,
         events,
     })

@@ -289,8 +289,45 @@ fn plots_in_both_formats() {
             let text = String::from_utf8(bytes).unwrap();
             assert!(text.contains("n1: (ours − exact) / exact"), "error panel");
             assert!(text.contains("95% CI of the mean"), "band");
+            // axes with units, and the size-distribution panel (issue 40)
+            assert!(text.contains("t (units of 1/(K c0))"), "time axis");
+            assert!(text.contains("M0 [per volume]"), "value axis");
+            assert!(text.contains("size distribution dN/dlog10 x"), "size panel");
+            assert!(text.contains("dN/dlog10 x [per volume]"), "size axis");
         }
     }
+    // log-spaced output times give a log time axis: ticks at decades only
+    let path = dir.join("log.svg");
+    let out = coagula()
+        .args([
+            "run",
+            "quickstart-constant",
+            "--particles",
+            "2000",
+            "--replicas",
+            "3",
+        ])
+        .args([
+            "--set",
+            "output.spacing=\"log\"",
+            "--set",
+            "output.t-start=0.01",
+        ])
+        .arg("--plot")
+        .arg(&path)
+        .arg("--quiet")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&path).unwrap();
+    for decade in [">\n0.01\n<", ">\n0.1\n<", ">\n1\n<", ">\n10\n<"] {
+        assert!(text.contains(decade), "log time axis: {decade:?}");
+    }
+    assert!(!text.contains(">\n0.032\n<"), "no ticks between decades");
     std::fs::remove_dir_all(&dir).ok();
 }
 

@@ -463,3 +463,35 @@ fn the_default_run_does_not_clip() {
     assert!(text.contains("(0 rejected), 0 clipped"), "{text}");
     assert!(text.contains("O(dt) time-step bias"), "{text}");
 }
+
+/// Size classes that are not strictly increasing sizes > 0 are refused by name.
+#[test]
+fn bad_size_classes_are_refused() {
+    for bad in ["[2.0, 1.0]", "[1.0]", "[0.0, 1.0]", "[1.0, 1.0, 2.0]"] {
+        let out = coagula()
+            .args(["run", "quickstart-constant", "--check", "--set"])
+            .arg(format!("output.classes={bad}"))
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains("output.classes"),
+            "{bad}: {err}"
+        );
+    }
+    let out = coagula()
+        .args([
+            "run",
+            "quickstart-constant",
+            "--check",
+            "--set",
+            "output.classes=[0.5, 1.5, 10.5]",
+        ])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

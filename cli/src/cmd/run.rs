@@ -118,7 +118,13 @@ pub fn run(
         }
         return crate::reproduce::maftei2016::first_hits_scenario(&name, &text, out.json.is_some());
     }
-    let points = points(scenario, overrides, steps)?;
+    let mut points = points(scenario, overrides, steps)?;
+    // the size classes are recorded for the size-distribution panel of a plot only
+    if out.plot.is_none() {
+        for (_, p) in points.iter_mut() {
+            p.classes.clear();
+        }
+    }
     let sweep = points.len() > 1 || !points[0].0.is_empty();
     // what every rank finds alike is checked before MPI starts
     if out.csv.as_deref() == Some("-") && out.json.as_deref() == Some("-") {

@@ -564,6 +564,8 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         exact: None,
         memory: 0,
         warnings: Vec::new(),
+        classes: Vec::new(),
+        log_axes: false,
         scenario: s,
     };
     if scheme.law == Law::TimeStepped && !plan.randomised() && plan.replicas > 1 {
@@ -643,7 +645,66 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         _ => None,
     };
     growth(&mut plan, concurrent, budget).map_err(|m| src.at("output.t-end", m))?;
+    plan.log_axes = plan.scenario.output.log_axes.unwrap_or(
+        plan.scenario.output.spacing == Some(Spacing::Log) && plan.scenario.output.times.is_none(),
+    );
+    plan.classes = match plan.scenario.output.classes.clone() {
+        Some(e) => {
+            if !(2..=201).contains(&e.len())
+                || e.iter().any(|x| !(x.is_finite() && *x > 0.0))
+                || e.windows(2).any(|w| w[0] >= w[1])
+            {
+                return Err(src.at(
+                    "output.classes",
+                    "class edges: 2 to 201 finite sizes > 0, strictly increasing",
+                ));
+            }
+            e
+        }
+        None => default_classes(&plan),
+    };
     Ok(plan)
+}
+
+/// Log-spaced class edges, 5 a decade (at most 60 classes): from half the smallest
+/// size unit (integer sizes: size 1 is in the first class) or a thousandth of the
+/// start's mean (continuous sizes), to 30 times the mass-weighted mean size `M2/M1` at
+/// the last output time where the exact solution gives it, else 10^4 times the start's.
+fn default_classes(plan: &Plan) -> Vec<f64> {
+    let mean = plan.dist.mean();
+    let mean = if mean.is_finite() && mean > 0.0 {
+        mean
+    } else {
+        1.0
+    };
+    let integer = plan.scheme.inits.contains(&Takes::Counts);
+    let lo = if integer {
+        0.5 * plan.size_unit
+    } else {
+        mean / 1000.0
+    };
+    let t = plan.times.last().copied().unwrap_or(0.0);
+    let m = |k: f64| plan.exact.and_then(|e| e.value(&Observable::Moment(k), t));
+    let hi = match (m(1.0), m(2.0)) {
+        (Some(m1), Some(m2)) if m1 > 0.0 && (m2 / m1).is_finite() => 30.0 * m2 / m1,
+        _ => 1e4 * mean,
+    };
+    if !(lo > 0.0 && hi > lo && hi.is_finite()) {
+        return Vec::new();
+    }
+    let classes = ((hi / lo).log10() * 5.0).ceil().clamp(1.0, 60.0) as usize;
+    let mut edges: Vec<f64> = (0..=classes)
+        .map(|i| lo * (hi / lo).powf(i as f64 / classes as f64))
+        .collect();
+    if integer {
+        // on a size grid, edges at half cells: every class holds whole grid sizes
+        let d = plan.size_unit;
+        for x in edges.iter_mut() {
+            *x = ((*x / d - 0.5).round().max(0.0) + 0.5) * d;
+        }
+        edges.dedup();
+    }
+    edges
 }
 
 /// What the exact solution says of the run's growth, before any work: a size-count

@@ -159,6 +159,13 @@ pub struct OutputSpec {
     /// or a named observable of the scheme
     /// (`mean-temperature`, `energy`, …).
     pub observables: Vec<String>,
+    /// Edges of the size classes `[e_i, e_{i+1})` of the size-distribution panel of
+    /// `--plot` (ascending, > 0, 2 to 201 of them); by default log-spaced, 5 a decade,
+    /// from the smallest size to past the exact solution's large sizes at the end.
+    pub classes: Option<Vec<f64>>,
+    /// Log axes in `--plot` (time, and values that span decades); by default on for
+    /// log-spaced output times.
+    pub log_axes: Option<bool>,
 }
 
 /// A count written as an integer or as a real with no fractional part (`1e6`).

@@ -232,12 +232,22 @@ pub struct Plan {
     pub memory: u64,
     /// Warnings about the run, printed before it starts (a run past a gel point).
     pub warnings: Vec<String>,
+    /// Edges of the size classes recorded for the size-distribution plot (scenario
+    /// units; empty: none). Their concentrations follow the observables in each row.
+    pub classes: Vec<f64>,
+    /// Log axes in plots.
+    pub log_axes: bool,
 }
 
 /// The facade as the CLI instantiates it.
 pub type Sim = dyn Simulation<Coagulation, Fragmentation, Generator>;
 
 impl Plan {
+    /// Values recorded per output time: the observables, then the size classes.
+    pub fn columns(&self) -> usize {
+        self.observables.len() + self.classes.len().saturating_sub(1)
+    }
+
     /// Replica r's start: the quantile lattice shifted by `shift` (1/2: centred), or
     /// counts at temperatures (a gas's velocities drawn from the velocity stream of the
     /// seed and the replica).

@@ -63,6 +63,8 @@ const KEYS: &[&str] = &[
     "output.count",
     "output.spacing",
     "output.observables",
+    "output.classes",
+    "output.log-axes",
     "run.replicas",
     "run.seed",
     "run.threads",
