@@ -262,19 +262,22 @@ proptest! {
         let small = counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)).is_some_and(|n| n <= 1000);
         let mut rng = Pcg64Mcg::new(3);
         let t = if t.is_finite() { t.clamp(-1.0, 1e-3) } else { t };
-        if let Ok(mut s) = LowRank::<_, 1>::new(k, &counts, volume) && small {
+        // (64 MiB budgets: a step in a tiny volume grows the tables to the budget, and
+        // the machine's default would let one case take gigabytes)
+        const B: usize = 64 << 20;
+        if let Ok(mut s) = LowRank::<_, 1>::new_with_memory_budget(k, &counts, volume, B) && small {
             let _ = short(&mut s, t, &mut rng);
         }
-        if let Ok(mut s) = Bucketed::<_, 1, 2>::new(k, &counts, volume) && small {
+        if let Ok(mut s) = Bucketed::<_, 1, 2>::new_with_memory_budget(k, &counts, volume, B) && small {
             let _ = short(&mut s, t, &mut rng);
         }
-        if let Ok(mut s) = Inverse::new(k, &counts, volume) && small {
+        if let Ok(mut s) = Inverse::new_with_memory_budget(k, &counts, volume, B) && small {
             let _ = short(&mut s, t, &mut rng);
         }
-        if small && let Ok(mut s) = AcceptanceRejection::new(k, &counts, volume) {
+        if small && let Ok(mut s) = AcceptanceRejection::new_with_memory_budget(k, &counts, volume, B) {
             let _ = short(&mut s, t, &mut rng);
         }
-        if let Ok(mut s) = DsaCounts::new(k, &counts, volume) && small {
+        if let Ok(mut s) = DsaCounts::new_with_memory_budget(k, &counts, volume, B) && small {
             let _ = short(&mut s, t, &mut rng);
         }
     }
@@ -296,8 +299,15 @@ proptest! {
         let k = Coagulation::constant(1.0).unwrap();
         let small = counts.iter().try_fold(0u64, |a, &c| a.checked_add(c)).is_some_and(|n| n <= 1000);
         let mut rng = Pcg64Mcg::new(6);
-        let mut lr = LowRank::<_, 1>::monodisperse(k, 40).unwrap().with_size_limit(limit);
-        let mut inv = Inverse::monodisperse(k, 40).unwrap().with_size_limit(limit);
+        // (64 MiB budgets, as above)
+        let mut lr = LowRank::<_, 1>::monodisperse(k, 40)
+            .unwrap()
+            .with_size_limit(limit)
+            .with_memory_budget(64 << 20);
+        let mut inv = Inverse::monodisperse(k, 40)
+            .unwrap()
+            .with_size_limit(limit)
+            .with_memory_budget(64 << 20);
         // (a 1 MiB budget: a particle list of 2^28 sizes would take seconds to fill)
         let mut ar = AcceptanceRejection::new_with_memory_budget(k, &[40], 40.0, 1 << 20)
             .unwrap()
