@@ -495,3 +495,52 @@ fn bad_size_classes_are_refused() {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// A file with several mistakes is told of each at once (issue 40: only the first was).
+#[test]
+fn every_independent_error_of_a_file_is_reported() {
+    let dir = std::env::temp_dir().join(format!("coagula-errs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("bad.toml");
+    std::fs::write(
+        &f,
+        "[kernel]\nkind = \"product\"\na = 1.5\n\n[initial]\nkind = \"monodisperse\"\nparticles = 1000\n\n\
+         [scheme]\nname = \"lowrank\"\n\n[output]\ntimes = [1.0, 0.5]\nobservables = [\"M0\", \"Q7\"]\n\n\
+         [run]\nreplicas = 0\n",
+    )
+    .unwrap();
+    let out = coagula().args(["run", "--check"]).arg(&f).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(err.contains("4 errors"), "{err}");
+    for (line, key) in [
+        (3, "kernel.a"),
+        (13, "output.times"),
+        (14, "output.observables"),
+        (17, "run.replicas"),
+    ] {
+        assert!(
+            err.contains(&format!("bad.toml:{line}: {key}:")),
+            "{key}: {err}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// `reproduce lecot2019 --quick` is refused (it has no quick form), not ignored, and a
+/// part it does not have is named.
+#[test]
+fn lecot2019_refuses_quick_and_unknown_parts() {
+    let out = coagula()
+        .args(["reproduce", "lecot2019", "--quick"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--quick"));
+    let out = coagula()
+        .args(["reproduce", "lecot2019", "--figures", "fig9"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("dt-ladder"));
+}

@@ -261,8 +261,52 @@ fn distribution_of(s: &Scenario, src: &Source<'_>) -> Result<Distribution, Scena
     Ok(d)
 }
 
+/// The errors of the checks that need no other part of the scenario (kernel, output
+/// times, observables, initial condition, options, run), all of them: a file with
+/// several mistakes is told of each at once, not one per attempt.
+fn independent_errors(s: &Scenario, src: &Source<'_>) -> Vec<ScenarioError> {
+    let mut errors = Vec::new();
+    let mut keep = |r: Result<(), ScenarioError>| {
+        if let Err(e) = r {
+            errors.push(e);
+        }
+    };
+    keep(kernel_of(s, src).map(drop));
+    keep(options_of(s, src).map(drop));
+    keep(times_of(s, src).map(drop));
+    keep(distribution_of(s, src).map(drop));
+    for n in &s.output.observables {
+        keep(
+            Observable::parse(n)
+                .map(drop)
+                .map_err(|m| src.at("output.observables", m)),
+        );
+    }
+    if s.run.replicas == 0 || s.run.replicas > 1_000_000 {
+        keep(Err(src.at(
+            "run.replicas",
+            format!("{} must be in 1..=1000000", s.run.replicas),
+        )));
+    }
+    errors
+}
+
 /// Checks every value and builds the plan.
 pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError> {
+    let errors = independent_errors(&s, src);
+    if errors.len() > 1 {
+        return Err(ScenarioError {
+            message: format!(
+                "{} errors:\n{}",
+                errors.len(),
+                errors
+                    .iter()
+                    .map(|e| format!("  {}", e.message))
+                    .collect::<Vec<_>>()
+                    .join("\n")
+            ),
+        });
+    }
     let name = match s.scheme.get("name") {
         Some(toml::Value::String(n)) => n.clone(),
         Some(_) => return Err(src.at("scheme.name", "must be a name")),
