@@ -160,6 +160,11 @@ fn on_axis(log: bool, v: f64) -> Option<f64> {
     }
 }
 
+/// A tick label of a log10 (`log`) or linear axis spanning `range`.
+fn axis_tick(log: bool, v: f64, range: f64) -> String {
+    if log { log_tick(v) } else { tick(v, range) }
+}
+
 /// Tick labels of a log10 axis: the value 10^v at whole decades, none between.
 fn log_tick(v: f64) -> String {
     if (v - v.round()).abs() > 1e-9 {
@@ -251,13 +256,7 @@ where
         })
         .y_desc(format!("dN/dlog10 x [{unit}]"))
         .x_label_formatter(&|v| log_tick(*v))
-        .y_label_formatter(&|v| {
-            if log_y {
-                log_tick(*v)
-            } else {
-                tick(*v, yhi - ylo)
-            }
-        })
+        .y_label_formatter(&|v| axis_tick(log_y, *v, yhi - ylo))
         .draw()
         .map_err(err)?;
     for (c, &i) in picks.iter().enumerate() {
@@ -437,13 +436,7 @@ where
             .x_desc(x_label.as_str())
             .y_desc(value_label(plan, o))
             .x_label_formatter(&x_tick)
-            .y_label_formatter(&|v| {
-                if log_y {
-                    log_tick(*v)
-                } else {
-                    tick(*v, yhi - ylo)
-                }
-            })
+            .y_label_formatter(&|v| axis_tick(log_y, *v, yhi - ylo))
             .draw()
             .map_err(err)?;
         if has_band {
