@@ -388,7 +388,9 @@ typedef struct {
    */
   coag_piece_fn inverse_piece;
   /*
-   `sup Ḟ` if known, or a negative value if not.
+   `sup Ḟ` if known, or a negative value if not. A declared supremum is checked:
+   a rate above it stops the call with `COAG_INVALID_RATE` — so a zero-initialised
+   struct, which declares 0 (no break-up at all), must set this field.
    */
   double sup_rate;
   /*
@@ -581,14 +583,16 @@ typedef struct {
   void *drift_user_data;
   /*
    At most this many trajectory steps (a trajectory to `to` is `⌈to / dt⌉` of
-   them, charged per chunk of trajectories before it runs); 0: no limit. Past it the
-   call returns `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the
-   struct: a caller compiled against version 1 gets no limit.)
+   them; trajectories run in chunks, each only when the limit still covers it);
+   0: no limit. When the limit cannot cover the next trajectory the call returns
+   `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the struct: a caller
+   compiled against version 1 gets no limit. Zero the whole struct before setting
+   its fields, so that fields added later read as their defaults.)
    */
   uint64_t work_limit;
   /*
-   Polled between chunks of trajectories: non-zero stops the call with
-   `COAG_INTERRUPTED` (NULL: none).
+   Polled between chunks of at most 4096 trajectories: non-zero stops the call
+   with `COAG_INTERRUPTED` (NULL: none).
    */
   coag_cancel_callback cancel;
   /*
@@ -1336,9 +1340,10 @@ int32_t coag_sim_set_cancel_callback(coag_sim *sim, coag_cancel_callback cancel,
  resumes where it stopped. Randomness drawn from a callback is not part of a
  checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
  to undo the call if the stream turns out stuck: once the callback has returned the
- same word 8 times in a row, the call stops at its next cancellation poll (every
- mass-flow step, every 16384 proposals of the event-driven schemes: some 10^5
- callback calls at most) and returns `COAG_RNG_FAILURE` with the sim as before it.
+ same word 8 times in a row, the call stops at its next cancellation poll (after
+ the current mass-flow step — 2N words with Monte Carlo points — or within 16384
+ proposals of the event-driven schemes) and returns `COAG_RNG_FAILURE` with the
+ sim as before it.
  The time-driven mass flow with QMC or RQMC points draws nothing from the stream
  (its points are the sequence, its randomisations keyed by the seed, see
  `coag_sim_reseed`), so it never calls `next`; with Monte Carlo points it does.

@@ -51,11 +51,22 @@ pub fn observe(plan: &Plan, sim: &Sim, o: &Observable) -> f64 {
     match o {
         Observable::Moment(m) => sim.moment(*m) * if d == 1.0 { 1.0 } else { d.powf(*m) },
         Observable::Density(k) => sim.number_density(*k as f64 / d),
-        Observable::Concentration(a, b) => sim.concentration(a / d, b / d),
-        Observable::Class(a, b) => sim.class_concentration(a / d, b / d),
+        Observable::Concentration(a, b) => sim.concentration(on_grid(a / d), on_grid(b / d)),
+        Observable::Class(a, b) => sim.class_concentration(on_grid(a / d), on_grid(b / d)),
         Observable::Gel => sim.gel_mass().unwrap_or(f64::NAN) * d,
         Observable::Particles => sim.particles() as f64,
         Observable::Named(n) => sim.observable(n).unwrap_or(f64::NAN),
+    }
+}
+
+/// A size in grid units, snapped to the nearest integer when within rounding of it
+/// (`1.1 / 0.1` is `11.000000000000002`: the edge is size 11, not past it).
+fn on_grid(x: f64) -> f64 {
+    let r = x.round();
+    if (x - r).abs() <= 1e-9 * r.abs().max(1.0) {
+        r
+    } else {
+        x
     }
 }
 
@@ -64,7 +75,7 @@ fn classes<'a>(plan: &'a Plan, sim: &'a Sim) -> impl Iterator<Item = f64> + 'a {
     let d = plan.size_unit;
     plan.classes
         .windows(2)
-        .map(move |w| sim.class_concentration(w[0] / d, w[1] / d))
+        .map(move |w| sim.class_concentration(on_grid(w[0] / d), on_grid(w[1] / d)))
 }
 
 /// One replica's observables (`[time][observable]`) and its totals.

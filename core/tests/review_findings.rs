@@ -210,4 +210,28 @@ fn first_hit_kernel_honours_a_work_budget() {
         .unwrap()
         .expect("exactly enough units");
     assert_eq!(a.estimate.mean.to_bits(), b.estimate.mean.to_bits());
+    // one chunk's worth of trajectories with one unit too few: stopped, not run whole
+    // (a chunk was charged after the fact before: any chunk ran on one unit left)
+    let mut short = Budget::work(2000 * 10 - 1);
+    let r = first_hit_kernel_within::<3, _>(&small, &zero, 5, 0, &mut short).unwrap();
+    assert!(r.is_none());
+    assert!(
+        short.left() < 10,
+        "the covered trajectories ran: {}",
+        short.left()
+    );
+    // one trajectory longer than the budget: nothing runs
+    let long = FirstHits {
+        trajectories: 1,
+        to: 1e6,
+        dt: 1e-6,
+        ..p
+    };
+    let mut one = Budget::work(1000);
+    assert!(
+        first_hit_kernel_within::<3, _>(&long, &zero, 5, 0, &mut one)
+            .unwrap()
+            .is_none()
+    );
+    assert_eq!(one.left(), 1000);
 }

@@ -55,7 +55,9 @@ pub struct coag_user_fragmentation {
     pub rate: coag_unary_fn,
     /// Inverse of the size-biased piece distribution, `u ∈ (0, 1]`. Required.
     pub inverse_piece: coag_piece_fn,
-    /// `sup Ḟ` if known, or a negative value if not.
+    /// `sup Ḟ` if known, or a negative value if not. A declared supremum is checked:
+    /// a rate above it stops the call with `COAG_INVALID_RATE` — so a zero-initialised
+    /// struct, which declares 0 (no break-up at all), must set this field.
     pub sup_rate: f64,
     /// Passed to every callback.
     pub user_data: *mut c_void,

@@ -340,6 +340,11 @@ int main(void) {
         cls[0] = 42.0;
         EXPECT(coag_sim_class_concentrations(s, bad, 3, cls), COAG_INVALID_ARGUMENT);
         CHECK(cls[0] == 42.0, "output untouched on error");
+        {
+            double both[5] = {1.0, 2.0, 4.0, 8.0, 0.0};
+            EXPECT(coag_sim_class_concentrations(s, both, 4, both + 1), COAG_INVALID_ARGUMENT);
+            CHECK(both[1] == 2.0, "overlapping output untouched");
+        }
     }
     EXPECT(coag_sim_moment(s, 1e6, &d), COAG_CAPACITY);
     OK(coag_sim_moment(s, 2.0, &d));

@@ -125,6 +125,21 @@ pub fn run(
             p.classes.clear();
         }
     }
+    // (the scenario check bounds replicas x times x observables; the classes add columns)
+    for (_, p) in &points {
+        let kept = p
+            .replicas
+            .saturating_mul(p.times.len() as u64)
+            .saturating_mul(p.columns() as u64);
+        if kept > 1 << 25 {
+            return Err(format!(
+                "--plot: {} replicas x {} times x {} values (observables and size classes): more than 2^25 values to keep; give fewer output.classes, times or replicas",
+                p.replicas,
+                p.times.len(),
+                p.columns()
+            ));
+        }
+    }
     let sweep = points.len() > 1 || !points[0].0.is_empty();
     // what every rank finds alike is checked before MPI starts
     if out.csv.as_deref() == Some("-") && out.json.as_deref() == Some("-") {

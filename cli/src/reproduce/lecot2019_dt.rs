@@ -2,8 +2,8 @@
 //! (Lécot et al. 2019, §3) at fixed N as the time step shrinks, with the paper's
 //! deterministic QMC points (Niederreiter, and Sobol' as a second sequence), RQMC
 //! (Owen's scrambling, re-randomised every block) and MC on the same step code. Only the
-//! point source differs between the columns; `docs/design/massflow-qmc-order.md` says
-//! what the ladder shows and when deterministic QMC should not be used.
+//! point source differs between the columns; `docs/results/lecot2019-dt-ladder.md`
+//! says what the ladder shows and when deterministic QMC should not be used.
 
 use coagula_core::exact::{ClosedMoments, Exact};
 use coagula_core::initial::{Distribution, lattice_shift};

@@ -768,9 +768,12 @@ fn growth(plan: &mut Plan, concurrent: u64, budget: u64) -> Result<(), String> {
     };
     if plan.scheme.inits.contains(&Takes::Counts) && plan.scheme.model == ModelKind::Coagulation {
         let m = |k: f64| e.value(&Observable::Moment(k), t);
-        if let (Some(m1), Some(m2)) = (m(1.0), m(2.0)) {
+        if let (Some(m0), Some(m1), Some(m2)) = (m(0.0), m(1.0), m(2.0)) {
             let mass_size = m2 / m1 / plan.size_unit;
-            let largest = mass_size * (plan.particles.max(2) as f64).ln();
+            // (never past all the simulated mass in one cluster: at a gel time M2 is
+            // infinite, the finite system's largest cluster is not)
+            let all = plan.particles as f64 * m1 / m0 / plan.size_unit;
+            let largest = (mass_size * (plan.particles.max(2) as f64).ln()).min(all);
             let bytes = largest * 8.0 * concurrent as f64;
             if bytes.is_nan() || bytes > budget as f64 {
                 return Err(format!(

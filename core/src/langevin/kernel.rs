@@ -155,11 +155,13 @@ pub fn first_hit_kernel<const D: usize, Dr: Drift<D>>(
         .map(|k| k.expect("an unlimited budget is never spent"))
 }
 
-/// [`first_hit_kernel`] within `budget`, counted in trajectory steps (a chunk of m
-/// trajectories to `to` takes `m ⌈to / dt⌉` units, charged before it runs; the
-/// cancellation callback is polled between chunks): `None` when the budget is spent
-/// or the callback cancels before the last chunk (no estimate: a partial one would be
-/// from fewer trajectories than asked).
+/// [`first_hit_kernel`] within `budget`, counted in trajectory steps (a trajectory to
+/// `to` takes `⌈to / dt⌉`; a chunk of trajectories runs only if the budget covers all of
+/// it, cut to the trajectories it covers, so the work never passes the budget; the
+/// cancellation callback is polled between chunks of at most 4096 trajectories):
+/// `None` when the budget cannot cover the next trajectory or the callback cancels
+/// (no estimate: a partial one would be from fewer trajectories than asked). The
+/// chunking does not change the estimate's bits.
 pub fn first_hit_kernel_within<const D: usize, Dr: Drift<D>>(
     p: &FirstHits,
     drift: &Dr,
@@ -190,10 +192,17 @@ pub fn first_hit_kernel_within<const D: usize, Dr: Drift<D>>(
     let width = p.to - p.from;
     let mut done = 0u64;
     while done < p.trajectories {
-        let m = chunk.min((p.trajectories - done) as usize);
-        if !(budget.take((m as u64).saturating_mul(steps.max(1))) && budget.poll()) {
+        // a chunk runs whole: it is cut to the trajectories the budget still covers
+        // (none: stop), so the work never passes the budget
+        if !budget.poll() {
             return Ok(None);
         }
+        let fit = usize::try_from(budget.left() / steps.max(1)).unwrap_or(usize::MAX);
+        let m = chunk.min((p.trajectories - done) as usize).min(fit);
+        if m == 0 {
+            return Ok(None);
+        }
+        budget.take((m as u64).saturating_mul(steps.max(1)));
         let id0 = first_id + done;
         let mut b = Batch::with_starts_in(
             cfg,

@@ -44,12 +44,14 @@ pub struct coag_first_hits {
     /// `COAG_DRIFT_CALLBACK`: passed to `drift_fn`.
     pub drift_user_data: *mut c_void,
     /// At most this many trajectory steps (a trajectory to `to` is `⌈to / dt⌉` of
-    /// them, charged per chunk of trajectories before it runs); 0: no limit. Past it the
-    /// call returns `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the
-    /// struct: a caller compiled against version 1 gets no limit.)
+    /// them; trajectories run in chunks, each only when the limit still covers it);
+    /// 0: no limit. When the limit cannot cover the next trajectory the call returns
+    /// `COAG_INTERRUPTED` and no estimate. (Added in version 2 of the struct: a caller
+    /// compiled against version 1 gets no limit. Zero the whole struct before setting
+    /// its fields, so that fields added later read as their defaults.)
     pub work_limit: u64,
-    /// Polled between chunks of trajectories: non-zero stops the call with
-    /// `COAG_INTERRUPTED` (NULL: none).
+    /// Polled between chunks of at most 4096 trajectories: non-zero stops the call
+    /// with `COAG_INTERRUPTED` (NULL: none).
     pub cancel: crate::sim::coag_cancel_callback,
     /// Passed to `cancel`.
     pub cancel_user_data: *mut c_void,

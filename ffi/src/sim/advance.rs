@@ -158,9 +158,10 @@ pub unsafe extern "C" fn coag_sim_set_cancel_callback(
 /// resumes where it stopped. Randomness drawn from a callback is not part of a
 /// checkpoint. Each call that draws from a callback first snapshots the sim (O(state)),
 /// to undo the call if the stream turns out stuck: once the callback has returned the
-/// same word 8 times in a row, the call stops at its next cancellation poll (every
-/// mass-flow step, every 16384 proposals of the event-driven schemes: some 10^5
-/// callback calls at most) and returns `COAG_RNG_FAILURE` with the sim as before it.
+/// same word 8 times in a row, the call stops at its next cancellation poll (after
+/// the current mass-flow step — 2N words with Monte Carlo points — or within 16384
+/// proposals of the event-driven schemes) and returns `COAG_RNG_FAILURE` with the
+/// sim as before it.
 /// The time-driven mass flow with QMC or RQMC points draws nothing from the stream
 /// (its points are the sequence, its randomisations keyed by the seed, see
 /// `coag_sim_reseed`), so it never calls `next`; with Monte Carlo points it does.

@@ -167,9 +167,15 @@ pub unsafe extern "C" fn coag_sim_class_concentrations(
                 })
             })
             .collect::<Result<Vec<f64>, Fail>>()?;
-        // SAFETY: NULL and length checked; writable by contract.
+        // (overlap is checked on the addresses, before a `&mut` to `out` exists)
+        non_null(out, "out")?;
+        let (e0, o0) = (edges as usize, out as usize);
+        let (le, lo) = (n_edges * 8, (n_edges - 1) * 8);
+        if e0 < o0.saturating_add(lo) && o0 < e0.saturating_add(le) {
+            return fail(COAG_INVALID_ARGUMENT, "edges and out overlap");
+        }
+        // SAFETY: NULL and length checked, disjoint from `edges`; writable by contract.
         let o = unsafe { slice_mut(out, n_edges - 1, "out") }?;
-        disjoint(e, o, "edges and out")?;
         o.copy_from_slice(&values);
         Ok(())
     })
