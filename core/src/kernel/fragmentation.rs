@@ -14,20 +14,46 @@ use crate::error::{Error, Result, positive};
 /// [`Error::BoundExceeded`]).
 #[inline]
 pub fn checked_break_rate<F: FragmentationKernel + ?Sized>(f: &F, x: f64) -> Result<f64> {
+    checked_break_rate_within(f, x, break_rate_bound(f))
+}
+
+/// The largest `Ḟ(x)` [`checked_break_rate_within`] accepts: the declared supremum
+/// (with a few ulps for rounding), or the largest double (a loop computes it once; a
+/// finite bound makes one range test also refuse NaN and infinity).
+pub fn break_rate_bound<F: FragmentationKernel + ?Sized>(f: &F) -> f64 {
+    f.sup_rate().map_or(f64::MAX, |sup| {
+        (sup * (1.0 + 4.0 * f64::EPSILON)).min(f64::MAX)
+    })
+}
+
+/// [`checked_break_rate`] against a bound from [`break_rate_bound`].
+#[inline]
+pub fn checked_break_rate_within<F: FragmentationKernel + ?Sized>(
+    f: &F,
+    x: f64,
+    bound: f64,
+) -> Result<f64> {
     let r = f.total_rate(x);
-    if !(r >= 0.0 && r.is_finite()) {
-        return Err(Error::InvalidRate {
-            name: "fragmentation rate",
-            value: r,
-        });
+    // (`bound` is finite: the range test refuses NaN and ±infinity too)
+    if (0.0..=bound).contains(&r) {
+        Ok(r)
+    } else {
+        Err(break_rate_error(f, r))
     }
+}
+
+#[cold]
+fn break_rate_error<F: FragmentationKernel + ?Sized>(f: &F, r: f64) -> Error {
     match f.sup_rate() {
-        Some(sup) if r > sup * (1.0 + 4.0 * f64::EPSILON) => Err(Error::BoundExceeded {
+        Some(sup) if r.is_finite() && r > 0.0 => Error::BoundExceeded {
             name: "fragmentation supremum (sup_rate)",
             rate: r,
             bound: sup,
-        }),
-        _ => Ok(r),
+        },
+        _ => Error::InvalidRate {
+            name: "fragmentation rate",
+            value: r,
+        },
     }
 }
 

@@ -41,7 +41,7 @@ pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
 pub use coagulation::{BOLTZMANN, Coagulation};
 pub use fragmentation::{
     BinaryUniform, Fragmentation, FragmentationKernel, NoFragmentation, UserFragmentation,
-    checked_break_rate,
+    break_rate_bound, checked_break_rate, checked_break_rate_within,
 };
 
 use crate::error::{Error, Result};

@@ -356,15 +356,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let mut rep = StepReport::default();
         let (x, next, pts, _) = split(self.ws.as_mut(), n, self.cur);
         let (kernel, frag, mass) = (&self.kernel, &self.frag, self.mass);
+        let bound = crate::kernel::break_rate_bound(frag);
         // particle k's move with partner l and uniform u3 (next[k] from the old sizes)
         let mut one = |k: usize, l: usize, u3: f64| -> Result<()> {
             let (xk, xl) = (x[k], x[l]);
             let kt = kernel.rate(xk, xl);
-            let fd = if frag.is_none() {
-                0.0
-            } else {
-                crate::kernel::checked_break_rate(frag, xk)?
-            };
+            let fd = crate::kernel::checked_break_rate_within(frag, xk, bound)?;
             if !(kt >= 0.0 && kt.is_finite()) {
                 return Err(Error::InvalidRate {
                     name: "coagulation kernel",
