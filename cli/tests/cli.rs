@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{coagula, examples, json_of};
+use common::{coagula, examples, json_of, succeeded};
 
 /// `coagula run` writes the documented CSV, and its moments are those of the exact
 /// solution to QMC accuracy (N = 2^10, P = 100: errors ~1e-3, far below a factor-2 bug).
@@ -19,11 +19,7 @@ fn run_writes_csv_close_to_exact() {
         .arg(&svg)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = std::fs::read_to_string(&csv).unwrap();
     let mut lines = text.lines();
     assert_eq!(lines.next().unwrap(), "t,M2,M2_exact,M3,M3_exact");
@@ -73,11 +69,7 @@ fn run_csv_to_standard_output() {
         .args(["run", "--m", "6", "--steps", "100", "--csv", "-"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = String::from_utf8_lossy(&out.stdout);
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("t,M2,M2_exact,M3,M3_exact"));
@@ -245,11 +237,7 @@ fn bench_scenario_compares_schemes() {
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     assert!(text.lines().any(|l| l.starts_with("lowrank ")), "{text}");
     assert!(text.lines().any(|l| l.starts_with("rejection ")), "{text}");
     assert!(text.contains("note: N0"), "{text}");
@@ -277,11 +265,7 @@ fn plots_in_both_formats() {
             .arg("--quiet")
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        succeeded(&out);
         let bytes = std::fs::read(&path).unwrap();
         if ext == "png" {
             assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
@@ -318,26 +302,13 @@ fn plots_in_both_formats() {
         .arg("--quiet")
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let text = std::fs::read_to_string(&path).unwrap();
     for decade in [">\n0.01\n<", ">\n0.1\n<", ">\n1\n<", ">\n10\n<"] {
         assert!(text.contains(decade), "log time axis: {decade:?}");
     }
     assert!(!text.contains(">\n0.032\n<"), "no ticks between decades");
     std::fs::remove_dir_all(&dir).ok();
-}
-
-/// Asserts a run succeeded, showing its standard error if not.
-fn succeeded(out: &std::process::Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
 }
 
 /// A run killed part-way resumes from its checkpoint directory and gives the same
@@ -522,11 +493,7 @@ fn a_size_list_starts_direct_schemes_from_its_particles() {
                 ])
                 .output()
                 .unwrap();
-            assert!(
-                out.status.success(),
-                "{}",
-                String::from_utf8_lossy(&out.stderr)
-            );
+            succeeded(&out);
             let text = String::from_utf8(out.stdout).unwrap();
             let row = text.lines().last().unwrap();
             let v: Vec<f64> = row.split(',').map(|x| x.parse().unwrap()).collect();

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::coagula;
+use common::{coagula, succeeded};
 use std::path::Path;
 
 /// The shell command of the block before `prints`, and the output block after it:
@@ -59,11 +59,7 @@ fn the_readme_sample_is_what_the_quickstart_prints() {
     let mut run: Vec<String> = args.iter().map(|s| s.to_string()).collect();
     run[plot_at + 1] = scratch.display().to_string();
     let out = coagula().args(&run).arg("--quiet").output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     std::fs::remove_file(&scratch).ok();
     let fresh: Vec<String> = String::from_utf8_lossy(&out.stdout)
         .lines()

@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::{coagula, examples};
+use common::{coagula, examples, succeeded};
 
 #[test]
 fn bad_arguments_fail_with_a_message() {
@@ -296,11 +296,7 @@ fn counts_accept_exponent_notation() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     for (flag, bad, says) in [
         ("--particles", "-1", "-1 is not a count"),
         ("--particles", "1.5", "1.5 is not a count"),
@@ -327,11 +323,7 @@ fn counts_accept_exponent_notation() {
         .args(["--set", "run.replicas=2e0"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     let out = coagula()
         .args(["run", "quickstart-constant", "--set", "run.replicas=1.5"])
         .output()
@@ -401,11 +393,7 @@ fn growth_and_outputs_are_checked_before_the_run() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     if std::path::Path::new("/dev/full").exists() {
         for flag in ["--csv", "--json"] {
             let out = coagula()
@@ -455,11 +443,7 @@ fn growth_and_outputs_are_checked_before_the_run() {
 fn the_default_run_does_not_clip() {
     let out = coagula().args(["run", "--quiet"]).output().unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
     assert!(text.contains("(0 rejected), 0 clipped"), "{text}");
     assert!(text.contains("O(dt) time-step bias"), "{text}");
 }
@@ -489,11 +473,7 @@ fn bad_size_classes_are_refused() {
         ])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    succeeded(&out);
 }
 
 /// A file with several mistakes is told of each at once (issue 40: only the first was).
