@@ -460,6 +460,7 @@ pub fn run(
         return Err("no sweep point to run".into());
     }
     let start = Instant::now();
+    let before = runner::resident_memory();
     let prints: Vec<u64> = points.iter().map(fingerprint).collect();
     let mine = message(run_share(points, &prints, world, checkpoint, quiet));
     let Some(all) = world.gather(mine) else {
@@ -491,6 +492,11 @@ pub fn run(
         }
     }
     let seconds = start.elapsed().as_secs_f64();
+    // what this process held: the run's when it ran alone (one rank, one point)
+    let resident = before
+        .zip(runner::resident_memory())
+        .map(|((now, _), (_, peak))| (now, peak))
+        .filter(|_| all.len() == 1 && points.len() == 1);
     let mut outcomes = Vec::with_capacity(points.len());
     let mut count = 0;
     for (plan, blocks) in points.iter().zip(slots) {
@@ -510,6 +516,7 @@ pub fn run(
             totals,
             events,
             seconds,
+            resident,
         });
     }
     Ok(Some(Ensemble {

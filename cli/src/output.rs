@@ -125,10 +125,11 @@ pub fn describe(plan: &Plan) -> String {
         d.push_str(", binary uniform fragmentation");
     }
     d.push_str(&format!(
-        "\nreplicas: {}, seed {} (replica r on its substream of the seed policy); the sims hold about {} at start (the tables of the size-count schemes grow with the largest size)",
+        "\nreplicas: {}, seed {} (replica r on its substream of the seed policy); the sims will hold about {} ({})",
         plan.replicas,
         plan.seed,
-        bytes(plan.memory)
+        bytes(plan.memory),
+        plan.memory_basis
     ));
     match &plan.exact {
         Some(e) => d.push_str(&format!("\nexact solution: {}", e.name)),
@@ -243,8 +244,21 @@ pub fn table(
     let t = &out.totals;
     writeln!(
         w,
-        "\ntotals over {} replicas: {} events, {} proposals ({} rejected), {} clipped, {} particle doublings; {:.2} s",
-        plan.replicas, t.events, t.proposals, t.rejections, t.clipped, t.doublings, out.seconds
+        "\ntotals over {} replicas: {} events, {} proposals ({} rejected), {} clipped, {} particle doublings; {:.2} s{}",
+        plan.replicas,
+        t.events,
+        t.proposals,
+        t.rejections,
+        t.clipped,
+        t.doublings,
+        out.seconds,
+        match out.resident {
+            Some((before, peak)) => format!(
+                ", {} held at the peak (resident memory)",
+                bytes(peak.saturating_sub(before))
+            ),
+            None => String::new(),
+        }
     )?;
     writeln!(
         w,
@@ -420,6 +434,13 @@ struct Report<'a> {
     clipped: u64,
     doublings: u64,
     seconds: f64,
+    /// What the sims were estimated to hold at most, and on what basis.
+    memory_estimate: u64,
+    memory_basis: &'a str,
+    /// The process's resident memory before the run and at its peak (null where the
+    /// system does not say): what the run held is the difference.
+    resident_before: Option<u64>,
+    resident_peak: Option<u64>,
     scenario: &'a crate::scenario::Scenario,
 }
 
@@ -475,6 +496,10 @@ fn report<'a>(plan: &'a Plan, out: &Outcome) -> Report<'a> {
         clipped: t.clipped,
         doublings: t.doublings,
         seconds: out.seconds,
+        memory_estimate: plan.memory,
+        memory_basis: &plan.memory_basis,
+        resident_before: out.resident.map(|r| r.0),
+        resident_peak: out.resident.map(|r| r.1),
         scenario: &plan.scenario,
     }
 }

@@ -29,6 +29,26 @@ pub struct Outcome {
     pub events: Vec<u64>,
     /// Wall-clock seconds.
     pub seconds: f64,
+    /// The process's resident memory before the run and at its peak, in bytes (Linux;
+    /// `None` elsewhere): what the run held is the difference.
+    pub resident: Option<(u64, u64)>,
+}
+
+/// The process's resident memory now and at its peak (`VmRSS`, `VmHWM` of
+/// `/proc/self/status`), in bytes; `None` where the kernel does not say.
+pub fn resident_memory() -> Option<(u64, u64)> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = status.lines().find(|l| l.starts_with(name))?;
+        let kb: u64 = line[name.len()..]
+            .trim()
+            .strip_suffix("kB")?
+            .trim()
+            .parse()
+            .ok()?;
+        Some(kb * 1024)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
 }
 
 /// The generator of replica r: the core's seed policy (`Purpose::Replica`; replica 0
@@ -156,6 +176,7 @@ impl Progress {
 /// Runs every replica of a plan on `plan.threads` threads (0 = all cores).
 pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
     let start = Instant::now();
+    let before = resident_memory();
     let progress = Progress::new(
         plan.replicas * plan.times.len() as u64,
         &format!("{} x {}", plan.replicas, plan.scheme.name),
@@ -181,6 +202,9 @@ pub fn run(plan: &Plan, quiet: bool) -> Result<Outcome, String> {
         totals,
         events,
         seconds: start.elapsed().as_secs_f64(),
+        resident: before
+            .zip(resident_memory())
+            .map(|((now, _), (_, peak))| (now, peak)),
     })
 }
 

@@ -26,10 +26,10 @@ fn sample(readme: &str) -> (String, usize, usize) {
     (cmd, open, close)
 }
 
-/// A line with its wall-clock figure blanked.
+/// A line with its wall-clock and memory figures blanked.
 fn untimed(l: &str) -> String {
-    match l.rfind("; ") {
-        Some(i) if l.starts_with("totals over") && l.ends_with(" s") => l[..i].to_string(),
+    match l.find(" particle doublings; ") {
+        Some(i) if l.starts_with("totals over") => l[..i].to_string(),
         _ => l.to_string(),
     }
 }

@@ -607,6 +607,7 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         threads: r.threads,
         exact: None,
         memory: 0,
+        memory_basis: String::new(),
         warnings: Vec::new(),
         classes: Vec::new(),
         log_axes: false,
@@ -639,19 +640,6 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         ));
     }
     let start = plan.start(0.5, 0).map_err(|m| src.at("initial", m))?;
-    let fragments = plan.model.fragments();
-    let per = registry::memory_estimate(scheme, &start.init(), &plan.options, fragments);
-    plan.memory = per.saturating_mul(concurrent);
-    if plan.memory > budget {
-        return Err(src.at(
-            "initial.particles",
-            format!(
-                "the run needs about {:.1} GiB ({concurrent} replicas at once), above this machine's budget of {:.1} GiB: fewer particles, replicas or threads",
-                plan.memory as f64 / (1u64 << 30) as f64,
-                budget as f64 / (1u64 << 30) as f64
-            ),
-        ));
-    }
     // the values kept: replicas x times x observables
     let kept = plan
         .replicas
@@ -688,7 +676,9 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         ),
         _ => None,
     };
-    growth(&mut plan, concurrent, budget).map_err(|m| src.at("output.t-end", m))?;
+    super::memory::estimate(&mut plan, &start, concurrent, budget)
+        .map_err(|(key, m)| src.at(key, m))?;
+    super::memory::gel_warning(&mut plan);
     plan.log_axes = plan.scenario.output.log_axes.unwrap_or(
         plan.scenario.output.spacing == Some(Spacing::Log) && plan.scenario.output.times.is_none(),
     );
@@ -749,51 +739,4 @@ fn default_classes(plan: &Plan) -> Vec<f64> {
         edges.dedup();
     }
     edges
-}
-
-/// What the exact solution says of the run's growth, before any work: a size-count
-/// scheme's tables run up to the largest size, about `(M2/M1) ln N` at the last output
-/// time (the mass-weighted mean size times the log of the particle number, the largest
-/// of N draws from an exponential-like tail) at 8 bytes a size at least: past the
-/// memory budget the run could not finish, and is refused. A run past four times a gel
-/// time (the multiplicative kernel) gets a warning: its cost per unit of time grows about
-/// e-fold, most proposals being the gel's and rejected (issue 40: 148 M proposals by
-/// t = 13, 99.99 % rejected).
-fn growth(plan: &mut Plan, concurrent: u64, budget: u64) -> Result<(), String> {
-    let Some(e) = plan.exact else {
-        return Ok(());
-    };
-    let Some(&t) = plan.times.last() else {
-        return Ok(());
-    };
-    if plan.scheme.inits.contains(&Takes::Counts) && plan.scheme.model == ModelKind::Coagulation {
-        let m = |k: f64| e.value(&Observable::Moment(k), t);
-        if let (Some(m0), Some(m1), Some(m2)) = (m(0.0), m(1.0), m(2.0)) {
-            let mass_size = m2 / m1 / plan.size_unit;
-            // (never past all the simulated mass in one cluster: at a gel time M2 is
-            // infinite, the finite system's largest cluster is not)
-            let all = plan.particles as f64 * m1 / m0 / plan.size_unit;
-            let largest = (mass_size * (plan.particles.max(2) as f64).ln()).min(all);
-            let bytes = largest * 8.0 * concurrent as f64;
-            if bytes.is_nan() || bytes > budget as f64 {
-                return Err(format!(
-                    "at t = {} the clusters reach about {largest:.3e} size units ((M2/M1) ln N from the exact solution): {concurrent} replicas' size tables would need more than {:.3e} bytes, past this machine's memory budget of {:.1} GiB: end earlier, or use a coarser resolution",
-                    coagula_core::error::Short(t),
-                    bytes,
-                    budget as f64 / (1u64 << 30) as f64
-                ));
-            }
-        }
-    }
-    if let Some(tg) = e.solution.gel_time()
-        && t > 4.0 * tg
-        && plan.scheme.model == ModelKind::Coagulation
-    {
-        plan.warnings.push(format!(
-            "the run goes past the gel point t = {} to t = {}: there the gel's collisions dominate and the cost grows about e-fold per unit of time (most proposals are the gel's, and rejected); end near the gel point for a run that finishes",
-            coagula_core::error::Short(tg),
-            coagula_core::error::Short(t)
-        ));
-    }
-    Ok(())
 }

@@ -15,6 +15,7 @@
 //! checks that turn a scenario into a [`Plan`] ([`check`]); the plan ([`plan`]).
 
 mod check;
+mod memory;
 pub mod overrides;
 pub mod plan;
 

@@ -228,8 +228,10 @@ pub struct Plan {
     pub threads: usize,
     /// The exact solution, where one is known.
     pub exact: Option<ExactRef>,
-    /// What the sims hold at start, in bytes.
+    /// What the sims will hold at most, summed over those running at once, in bytes.
     pub memory: u64,
+    /// What `memory` assumes (the start, or the largest size at the end and its source).
+    pub memory_basis: String,
     /// Warnings about the run, printed before it starts (a run past a gel point).
     pub warnings: Vec<String>,
     /// Edges of the size classes recorded for the size-distribution plot (scenario

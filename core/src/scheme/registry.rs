@@ -33,7 +33,8 @@
 use super::baseline::{InverseEntry, RejectionEntry};
 use super::eventflow::{DsaCountsEntry, DsaEntry, MfaEntry};
 use super::facade::{
-    Init, Model, Options, Register, RegistryFragmentation, RegistryKernel, SchemeId, Simulation,
+    Init, Model, Options, Reach, Register, RegistryFragmentation, RegistryKernel, SchemeId,
+    Simulation,
 };
 use super::lowrank::{
     BinaryTreeEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry, TemperatureEntry,
@@ -95,9 +96,9 @@ macro_rules! registry {
             None
         }
 
-        fn dispatch_memory(id: SchemeId, init: &Init<'_>, opts: &Options, fragments: bool) -> u64 {
+        fn dispatch_memory(id: SchemeId, init: &Init<'_>, opts: &Options, fragments: bool, reach: &Reach) -> u64 {
             $(if id.name == <$e as Register>::INFO.name {
-                return <$e as Register>::memory_estimate(init, opts, fragments);
+                return <$e as Register>::memory_estimate(init, opts, fragments, reach);
             })*
             0
         }
@@ -268,8 +269,15 @@ pub fn workspace_len(
     dispatch_workspace_len(id, particles, opts, fragments)
 }
 
-/// Bytes scheme `id` holds right after a build from `init` under `opts` (an estimate;
-/// a front end sums it over the sims it will run at once to refuse what cannot fit).
-pub fn memory_estimate(id: SchemeId, init: &Init<'_>, opts: &Options, fragments: bool) -> u64 {
-    dispatch_memory(id, init, opts, fragments)
+/// Bytes scheme `id` will hold at most in a run from `init` under `opts` that goes as
+/// far as `reach` (an estimate: see [`Register::memory_estimate`]; a front end sums it
+/// over the sims it will run at once to refuse what cannot fit).
+pub fn memory_estimate(
+    id: SchemeId,
+    init: &Init<'_>,
+    opts: &Options,
+    fragments: bool,
+    reach: &Reach,
+) -> u64 {
+    dispatch_memory(id, init, opts, fragments, reach)
 }

@@ -5,10 +5,10 @@ use super::{AcceptanceRejection, Inverse};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::scheme::facade::{
-    Blank, Boxed, Init, InitKind, Law, Memory, Model, ModelKind, Options, Register,
+    Blank, Boxed, Init, InitKind, Law, Memory, Model, ModelKind, Options, Reach, Register,
     RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, count_controls,
 };
-use crate::scheme::population::{check_within_limit, counts_memory};
+use crate::scheme::population::check_within_limit;
 use crate::scheme::tag;
 use alloc::borrow::Cow;
 use alloc::boxed::Box;
@@ -61,8 +61,20 @@ impl Register for InverseEntry {
         Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        counts_memory(init)
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // a u32 slot a size (doubling), six words per occupied size (at most the
+        // particles), and the kernel cache of up to CACHE_DIM² doubles, whose side
+        // doubles with the largest size
+        let first = reach.start.max(1).next_power_of_two();
+        let occupied = reach.largest.min(reach.particles);
+        let dim = reach
+            .table_len(first)
+            .min(reach.particles)
+            .min(super::CACHE_DIM as u64);
+        reach
+            .bytes(first, 4, 0, 0)
+            .saturating_add(occupied.saturating_mul(48))
+            .saturating_add(dim.saturating_mul(dim).saturating_mul(8))
     }
 
     fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
@@ -112,16 +124,9 @@ impl Register for RejectionEntry {
         Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        // one size per particle and the dense count vector of a read
-        match *init {
-            Init::Counts { counts, .. } => {
-                let n = counts.iter().fold(0u64, |a, &c| a.saturating_add(c));
-                n.saturating_mul(16)
-                    .saturating_add(64 * counts.len() as u64)
-            }
-            _ => 0,
-        }
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // one size a particle, room for N0 (and the list's growth slack): nothing a size
+        reach.bytes(0, 0, 12, 0)
     }
 
     fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {

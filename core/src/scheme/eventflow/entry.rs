@@ -5,9 +5,9 @@ use super::{Dsa, DsaCounts, Mfa, workspace_len};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::scheme::facade::{
-    Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Register,
-    RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State, count_controls,
-    number_volume,
+    Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Reach,
+    Register, RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State,
+    count_controls, number_volume,
 };
 use crate::scheme::tag;
 use alloc::boxed::Box;
@@ -104,11 +104,9 @@ impl Register for MfaEntry {
         workspace_len(particles)
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        match init {
-            Init::Sizes { sizes, .. } => 8 * 7 * sizes.len() as u64,
-            _ => 0,
-        }
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // seven doubles a particle, which never grow
+        reach.bytes(0, 0, 56, 0)
     }
 
     fn blank(init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
@@ -203,13 +201,10 @@ impl Register for DsaEntry {
         workspace_len(dsa_capacity(particles, fragments, opts))
     }
 
-    fn memory_estimate(init: &Init<'_>, opts: &Options, fragments: bool) -> u64 {
-        match init {
-            Init::Sizes { sizes, .. } => {
-                8 * 7 * dsa_capacity(sizes.len(), fragments, opts).max(sizes.len()) as u64
-            }
-            _ => 0,
-        }
+    fn memory_estimate(_init: &Init<'_>, opts: &Options, fragments: bool, reach: &Reach) -> u64 {
+        // seven doubles a particle of the capacity (room for fragments)
+        let n = usize::try_from(reach.particles).unwrap_or(usize::MAX);
+        8 * 7 * dsa_capacity(n, fragments, opts).max(n) as u64
     }
 
     fn blank(init: &Init<'_>, opts: &Options, fragments: bool) -> Blank {
@@ -278,8 +273,12 @@ impl Register for DsaCountsEntry {
         Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        crate::scheme::population::counts_memory(init)
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // a doubling table of counts, rates, majorants and 2R cached factors a size
+        // (`DsaCounts::grow`); no particle doubling: the system shrinks as it grows
+        let reach = reach.without_doubling();
+        let first = reach.start.max(1).next_power_of_two();
+        reach.bytes(first, 32 + 16 * reach.rank as u64, 0, 0)
     }
 
     fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {

@@ -18,6 +18,7 @@ mod adapter;
 mod envelope;
 mod model;
 mod options;
+mod reach;
 mod start;
 
 pub(crate) use adapter::count_controls;
@@ -29,6 +30,7 @@ pub use options::{
     BucketMode, Directions, GENERAL, KEY_NAMES, KEYS, Key, Kind, Options, Points, Sampler, Sorting,
     Value, key_index,
 };
+pub use reach::{Reach, SPARSE_COUNT};
 pub use start::Start;
 
 use super::{Budget, StepReport};
@@ -175,10 +177,12 @@ pub trait Register {
         None
     }
 
-    /// Bytes the scheme holds right after a build from `init`: what a front end sums
-    /// to refuse a run that cannot fit (an estimate within a factor 2 of the peak of a
-    /// scheme that does not grow).
-    fn memory_estimate(init: &Init<'_>, opts: &Options, fragments: bool) -> u64;
+    /// Bytes the scheme will hold at most in a run from `init` that goes as far as
+    /// `reach` says (its largest size, particles and sparsely held particles; the
+    /// start itself with [`Reach::at_start`]): what a front end sums over the sims it
+    /// runs at once to refuse a run that cannot fit. An estimate, within a factor 2 of
+    /// the peak when `reach` is right (`docs/results/memory-estimate.md`).
+    fn memory_estimate(init: &Init<'_>, opts: &Options, fragments: bool, reach: &Reach) -> u64;
 
     /// The smallest initial state of the same shape as `init` (what a clone is built
     /// from before the original's checkpoint is restored into it).

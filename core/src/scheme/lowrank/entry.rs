@@ -6,18 +6,19 @@
 use super::dsmc::{Collisions, Gas, LowRankDsmc, RejectionDsmc};
 use super::temperature::{Collide, TemperatureMc, TemperatureRejection, Temperatures};
 use super::{
-    AutoBucketed, BinaryTree, Coagulate, LowRank, LowRankMc, LowRankSizes, ProposalEngine,
+    AutoBucketed, BinaryTree, BucketMode, COUNTED_UP_TO, Coagulate, LowRank, LowRankMc,
+    LowRankSizes, ProposalEngine,
 };
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::kernel::gas::{NeverStick, Sticking};
 use crate::kernel::temperature::{TemperatureKernel, TemperatureModel};
 use crate::scheme::facade::{
-    Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Register,
-    RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State, count_controls,
-    number_volume,
+    Blank, Boxed, Controls, Init, InitKind, Law, Memory, Model, ModelKind, Options, Reach,
+    Register, RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State,
+    count_controls, number_volume,
 };
-use crate::scheme::population::{check_within_limit, counts_memory};
+use crate::scheme::population::check_within_limit;
 use crate::scheme::tag;
 use alloc::boxed::Box;
 use alloc::vec;
@@ -68,9 +69,43 @@ fn counts_of<'a>(init: &Init<'a>, opts: &Options) -> Result<(&'a [u64], f64)> {
 
 const COUNT_OPTIONS: &[&str] = &["size-limit", "memory-budget", "batched-clock"];
 
+/// The bucketed layout at `reach`: a `u32` count a size in a table that doubles from
+/// 64 sizes, and a `u32` list entry (6 bytes with the lists' growth slack) per sparse
+/// particle; up to [`COUNTED_UP_TO`] particles (or pinned) the counted engine, with a
+/// dense `u64` a size and a list entry per particle.
+fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
+    let first = reach.start.max(1).next_power_of_two().max(64);
+    let counted = match opts.engine() {
+        Some(mode) => mode == BucketMode::Counted,
+        None => reach.particles <= COUNTED_UP_TO,
+    };
+    if counted {
+        reach.bytes(first, 8, 6, 0)
+    } else {
+        reach.bytes(first, 4, 0, 6)
+    }
+}
+
+/// Per-size segment trees, 8-ary: a count and 2R factors a size, the tree's 2R
+/// weights a leaf with a seventh more for the levels above (18R bytes a size), and
+/// while the tables double the old tree beside the new one (9R more; `TreeEngine::grow`
+/// counts it against the budget too).
+fn tree_memory(_opts: &Options, reach: &Reach) -> u64 {
+    let first = reach.start.max(1).next_power_of_two().max(8);
+    reach.bytes(first, 8 + 43 * reach.rank as u64, 0, 0)
+}
+
+/// The paper's binary segment trees: a count and 2R factors a size, 2R weights in each
+/// of the 2M nodes, and the old tree beside the new one while they double.
+fn binary_tree_memory(_opts: &Options, reach: &Reach) -> u64 {
+    let first = reach.start.max(1).next_power_of_two();
+    reach.bytes(first, 8 + 64 * reach.rank as u64, 0, 0)
+}
+
 /// An entry of low-rank MC over counts: the layouts differ only in their engine.
 macro_rules! counts_entry {
     ($entry:ident, $name:expr, $paper:expr, $summary:expr, $tag:expr, $options:expr,
+     memory: $memory:path,
      |$k:ident, $counts:ident, $volume:ident, $opts:ident| $make:expr) => {
         #[doc = concat!("The registry entry `", $name, "`.")]
         pub struct $entry;
@@ -111,8 +146,13 @@ macro_rules! counts_entry {
                 })
             }
 
-            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-                counts_memory(init)
+            fn memory_estimate(
+                _init: &Init<'_>,
+                opts: &Options,
+                _fragments: bool,
+                reach: &Reach,
+            ) -> u64 {
+                $memory(opts, reach)
             }
 
             fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
@@ -129,6 +169,7 @@ counts_entry!(
     "low-rank Monte Carlo, bucketed layout (the default)",
     tag::BUCKETED,
     &["size-limit", "memory-budget", "batched-clock", "engine"],
+    memory: bucketed_memory,
     |k, counts, volume, opts| AutoBucketed::<K, R, W>::new_with_mode(
         k,
         counts,
@@ -147,6 +188,7 @@ counts_entry!(
     "low-rank Monte Carlo with per-size segment trees",
     tag::LOWRANK,
     COUNT_OPTIONS,
+    memory: tree_memory,
     |k, counts, volume, opts| LowRank::<K, R>::new_with_memory_budget(
         k,
         counts,
@@ -164,6 +206,7 @@ counts_entry!(
     "low-rank Monte Carlo with the paper's binary segment trees",
     tag::LOWRANK_BINARY,
     COUNT_OPTIONS,
+    memory: binary_tree_memory,
     |k, counts, volume, opts| LowRank::<K, R, BinaryTree<R>>::new_with_memory_budget(
         k,
         counts,
@@ -216,11 +259,10 @@ impl Register for SizesEntry {
         })
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        match init {
-            Init::Sizes { sizes, .. } => 8 * 7 * sizes.len() as u64,
-            _ => 0,
-        }
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // a size, a bucket offset and R factors a particle, which never grow (the
+        // buckets, fewer than a thousand, are negligible)
+        reach.bytes(0, 0, 8 * 7, 0)
     }
 
     fn blank(init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
@@ -239,7 +281,8 @@ impl Register for SizesEntry {
 
 /// An entry of the temperature-dependent scheme (Osinsky 2023 §4) on engine `$scheme`.
 macro_rules! temperature_entry {
-    ($entry:ident, $name:expr, $summary:expr, $scheme:ident, $tag:expr) => {
+    ($entry:ident, $name:expr, $summary:expr, $scheme:ident, $tag:expr,
+     memory: ($per_size:expr, $per_particle:expr)) => {
         #[doc = concat!("The registry entry `", $name, "`.")]
         pub struct $entry;
 
@@ -313,8 +356,14 @@ macro_rules! temperature_entry {
                 }
             }
 
-            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-                counts_memory(init)
+            fn memory_estimate(
+                _init: &Init<'_>,
+                _opts: &Options,
+                _fragments: bool,
+                reach: &Reach,
+            ) -> u64 {
+                let first = reach.start.max(1).next_power_of_two().max(8);
+                reach.bytes(first, $per_size, $per_particle, 0)
             }
 
             fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
@@ -329,14 +378,18 @@ temperature_entry!(
     "temperature",
     "temperature-dependent low-rank Monte Carlo on per-size trees",
     TemperatureMc,
-    tag::TEMPERATURE
+    tag::TEMPERATURE,
+    // a temperature, a count and 3 × 2 factors a size, and the 8-ary trees' weights
+    memory: (8 + 8 + 48 + 55, 0)
 );
 temperature_entry!(
     TemperatureRejectionEntry,
     "temperature-rejection",
     "temperature-dependent acceptance-rejection (uniform pairs), the paper's baseline",
     TemperatureRejection,
-    tag::TEMPERATURE_REJECTION
+    tag::TEMPERATURE_REJECTION,
+    // a temperature, a count and 3 × 2 factors a size, and a list entry a particle
+    memory: (8 + 8 + 48, 8)
 );
 
 /// An entry of low-rank DSMC (Osinsky 2023 §5) on engine `$scheme`.
@@ -418,8 +471,15 @@ macro_rules! dsmc_entry {
                 }
             }
 
-            fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-                counts_memory(init)
+            fn memory_estimate(
+                _init: &Init<'_>,
+                _opts: &Options,
+                _fragments: bool,
+                reach: &Reach,
+            ) -> u64 {
+                // a velocity and a class entry a particle, a species (its classes and
+                // trees' leaves) a size up to the largest
+                reach.bytes(reach.start, 64, 40, 0)
             }
 
             fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {

@@ -4,7 +4,7 @@ use super::{MassFlow, workspace_len};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
 use crate::scheme::facade::{
-    Blank, Boxed, Controls, Init, InitKind, Memory, Model, ModelKind, Options, Register,
+    Blank, Boxed, Controls, Init, InitKind, Memory, Model, ModelKind, Options, Reach, Register,
     RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State,
 };
 use crate::scheme::tag;
@@ -81,11 +81,9 @@ impl Register for MassFlowEntry {
         workspace_len(particles)
     }
 
-    fn memory_estimate(init: &Init<'_>, _opts: &Options, _fragments: bool) -> u64 {
-        match init {
-            Init::Sizes { sizes, .. } => 48 * sizes.len() as u64,
-            _ => 0,
-        }
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        // sizes, masses and the sort's workspace: 48 bytes a particle, which never grow
+        reach.bytes(0, 0, 48, 0)
     }
 
     fn blank(init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {

@@ -30,27 +30,6 @@ pub(crate) fn check_within_limit(counts: &[u64], limit: u64) -> Result<()> {
     Ok(())
 }
 
-/// The bytes an integer-size scheme holds after a build from counts: its per-size
-/// arrays and trees (64 bytes a size, whatever the particle number: the size-count
-/// schemes keep no per-particle list) and, for a gas, its particles and its per-size
-/// species up to the largest size (64 bytes each). A run grows from there as the largest size grows.
-pub(crate) fn counts_memory(init: &crate::scheme::facade::Init<'_>) -> u64 {
-    use crate::scheme::facade::Init;
-    match *init {
-        Init::Counts { counts, .. } | Init::Temperatures { counts, .. } => {
-            (counts.len() as u64).saturating_mul(64)
-        }
-        Init::Velocities { sizes, .. } => {
-            // particles, and the per-size species and tables up to the largest size
-            let largest = sizes.iter().copied().max().unwrap_or(0);
-            (sizes.len() as u64)
-                .saturating_add(largest)
-                .saturating_mul(64)
-        }
-        Init::Sizes { .. } => 0,
-    }
-}
-
 /// N, N0, V and the limits of a size-count population (the counts themselves live in
 /// each scheme's own layout).
 #[derive(Clone, Copy, Debug, PartialEq)]
