@@ -3,8 +3,9 @@
 //! process's peak resident memory less its resident memory before the run, on runs
 //! that hold at least 16 MiB (below that the process's own threads and allocator
 //! dominate). One run per way the estimate is made: the exact solution's moments with
-//! particle doubling, past a gel point, the mean-field mean size, a scheme without
-//! doubling, and the tree, inverse and mass-flow layouts.
+//! particle doubling, past a gel point, the mean-field mean size (of a kernel and of a
+//! temperature model), a scheme without doubling, and the tree, inverse and mass-flow
+//! layouts.
 //! Figures: docs/results/memory-estimate.md.
 
 mod common;
@@ -100,6 +101,20 @@ fn the_estimates_of_the_tree_and_inverse_layouts_are_within_two() {
     let f = monomers("additive", 20_000, 6.0);
     within_two(&["run", f.to_str().unwrap(), "--scheme", "inverse"]);
     std::fs::remove_file(f).ok();
+}
+
+#[test]
+fn the_temperature_estimate_is_within_two() {
+    // the closed-form model, where aggregation keeps the temperature per unit size
+    let path =
+        std::env::temp_dir().join(format!("coagula-memory-temp-{}.toml", std::process::id()));
+    std::fs::write(
+        &path,
+        "[kernel]\nkind = \"temperature-closed-form\"\n[initial]\nkind = \"monodisperse\"\nparticles = 1000000\ntemperature = 1.0\n[scheme]\nname = \"temperature\"\n[output]\ntimes = [100000.0]\nobservables = [\"M0\"]\n[run]\nreplicas = 1\n",
+    )
+    .unwrap();
+    within_two(&["run", path.to_str().unwrap()]);
+    std::fs::remove_file(path).ok();
 }
 
 #[test]

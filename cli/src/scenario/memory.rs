@@ -4,6 +4,7 @@
 
 use super::plan::{Observable, Plan};
 use coagula_core::kernel::CoagulationKernel;
+use coagula_core::kernel::temperature::TemperatureKernel;
 use coagula_core::scheme::facade::{Init, Memory, Model, ModelKind, Reach, Start};
 use coagula_core::scheme::registry;
 
@@ -74,6 +75,37 @@ pub fn estimate(
                 reach.largest as f64 * plan.size_unit
             );
         }
+    }
+    if let (
+        Memory::Growing,
+        Init::Temperatures {
+            counts,
+            temperatures,
+            volume,
+        },
+        Model::Temperature(tm),
+    ) = (plan.scheme.memory, init, &plan.model)
+    {
+        // the aggregation rate with the temperature per unit size held at the start's
+        // (aggregation adds the partners' temperatures: the closed-form model keeps
+        // T_i/i exactly, a cooling gas falls below it, so this over-predicts there)
+        let (mut mass, mut heat) = (0.0, 0.0);
+        for (i, (&c, &t)) in counts.iter().zip(temperatures).enumerate() {
+            mass += (i + 1) as f64 * c as f64;
+            heat += c as f64 * t;
+        }
+        let per_size = heat / mass;
+        let diagonal = |s: f64| {
+            let i = s.round().clamp(1.0, u64::MAX as f64 / 4.0) as u64;
+            let t = per_size * i as f64;
+            tm.rates(i, t, i, t).aggregation
+        };
+        reach = reach.mean_field_of(diagonal, volume, mass, end);
+        plan.memory_basis = format!(
+            "at t = {}, largest size about {:.3e} from the mean-field mean size at the start's temperature per unit size",
+            coagula_core::error::Short(end),
+            reach.largest as f64
+        );
     }
     let per = registry::memory_estimate(plan.scheme, &init, &plan.options, fragments, &reach);
     plan.memory = per.saturating_mul(concurrent);

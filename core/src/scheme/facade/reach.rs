@@ -142,6 +142,19 @@ impl Reach {
         mass: f64,
         t: f64,
     ) -> Self {
+        self.mean_field_of(|s| kernel.rate(s, s), volume, mass, t)
+    }
+
+    /// [`mean_field`](Self::mean_field) with the diagonal rate `K(s, s)` given as a
+    /// function of the mean size s (a temperature model's aggregation rate at a fixed
+    /// temperature: with cooling, the real rate falls and this over-predicts).
+    pub fn mean_field_of(
+        self,
+        diagonal: impl Fn(f64) -> f64,
+        volume: f64,
+        mass: f64,
+        t: f64,
+    ) -> Self {
         let n0 = self.particles as f64;
         if !(volume > 0.0 && mass > 0.0 && n0 > 0.0 && t > 0.0 && t.is_finite()) {
             return self;
@@ -150,7 +163,7 @@ impl Reach {
         let all = mass; // the whole simulated mass in one particle
         // u = 1/n: du/dt = ½ K(ρu, ρu), integrated by the midpoint rule with steps
         // that change u by 2 % at most
-        let f = |u: f64| 0.5 * kernel.rate(rho * u, rho * u);
+        let f = |u: f64| 0.5 * diagonal(rho * u);
         let (mut u, mut time) = (volume / n0, 0.0);
         for _ in 0..200_000 {
             if time >= t || rho * u >= all {
