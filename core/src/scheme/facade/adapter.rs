@@ -261,9 +261,19 @@ where
     fn save_checkpoint(&self, stream: Option<[u64; 4]>, w: &mut Writer) {
         // the records carry the capacity the state has (the option's 0 means "the
         // initial number", which a clone built from a blank would read differently)
-        let held = |o: &Options| match self.blank {
-            Blank::Sizes { capacity, .. } if capacity > 0 => o.clone().with_capacity(capacity),
-            _ => o.clone(),
+        // (a scheme that takes no memory budget records the library's default, not
+        // the machine's: a restore ignores the budget, and the same state then
+        // writes the same bytes on every machine)
+        let held = |o: &Options| {
+            let o = match self.blank {
+                Blank::Sizes { capacity, .. } if capacity > 0 => o.clone().with_capacity(capacity),
+                _ => o.clone(),
+            };
+            if E::INFO.takes_option("memory-budget") {
+                o
+            } else {
+                o.with_memory_budget(crate::memory::DEFAULT_MEMORY_BUDGET)
+            }
         };
         super::envelope::write_envelope(
             w,
