@@ -53,3 +53,11 @@ pub fn get(name: &str) -> Option<(&'static str, &'static str)> {
         .find(|(f, _)| *f == name || f.strip_suffix(".toml") == Some(name))
         .copied()
 }
+
+/// The examples' names (file names without `.toml`), as `coagula run NAME` takes them.
+pub fn names() -> Vec<&'static str> {
+    EXAMPLES
+        .iter()
+        .map(|(f, _)| f.strip_suffix(".toml").unwrap_or(f))
+        .collect()
+}

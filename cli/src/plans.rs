@@ -32,7 +32,8 @@ pub fn plan(
     overrides: Vec<(String, toml::Value)>,
     steps: Option<u32>,
 ) -> Result<scenario::Plan, String> {
-    let plan = load_plan(scenario, overrides, steps)?;
+    let (name, text) = resolve(scenario)?;
+    let plan = load_plan(&name, &text, overrides, steps)?;
     if plan.scenario.sweep.is_some() {
         return Err("a [sweep] table runs only with coagula run".into());
     }
@@ -40,15 +41,15 @@ pub fn plan(
 }
 
 fn load_plan(
-    scenario: Option<&str>,
+    name: &str,
+    text: &str,
     mut overrides: Vec<(String, toml::Value)>,
     steps: Option<u32>,
 ) -> Result<scenario::Plan, String> {
-    let (name, text) = resolve(scenario)?;
     let load = |ov: &[(String, toml::Value)]| {
         scenario::load(&Source {
-            name: &name,
-            text: &text,
+            name,
+            text,
             overrides: ov,
             drops: &[],
         })
@@ -112,7 +113,19 @@ pub fn points(
     overrides: Vec<(String, toml::Value)>,
     steps: Option<u32>,
 ) -> Result<Vec<Point>, String> {
-    let base = load_plan(scenario, overrides.clone(), steps)?;
+    let (name, text) = resolve(scenario)?;
+    points_of(&name, &text, overrides, steps)
+}
+
+/// [`points`] of a scenario given as text (`name` says where it came from in errors):
+/// what Python's `coagula.run` calls with a scenario built from a dict.
+pub fn points_of(
+    name: &str,
+    text: &str,
+    overrides: Vec<(String, toml::Value)>,
+    steps: Option<u32>,
+) -> Result<Vec<Point>, String> {
+    let base = load_plan(name, text, overrides.clone(), steps)?;
     let Some(sweep) = base.scenario.sweep.clone() else {
         return Ok(vec![(Vec::new(), base)]);
     };
@@ -166,7 +179,7 @@ pub fn points(
         ov.extend(set.iter().cloned());
         let label = label(&set);
         let plan =
-            load_plan(scenario, ov, steps).map_err(|e| format!("sweep point {label}: {e}"))?;
+            load_plan(name, text, ov, steps).map_err(|e| format!("sweep point {label}: {e}"))?;
         out.push((set, plan));
     }
     Ok(out)

@@ -47,6 +47,12 @@ pub struct coag_user_kernel {
     pub user_data: *mut c_void,
 }
 
+// SAFETY: the struct is function pointers and the host's `user_data`, which coagula
+// never dereferences; the header's contract is that a sim may be stepped on any
+// thread and its callbacks are callable there (a host stepping cells on threads
+// of its own relies on it). Needed because every sim of the registry is `Send`.
+unsafe impl Send for coag_user_kernel {}
+
 /// A user fragmentation kernel.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -62,6 +68,9 @@ pub struct coag_user_fragmentation {
     /// Passed to every callback.
     pub user_data: *mut c_void,
 }
+
+// SAFETY: as for `coag_user_kernel`.
+unsafe impl Send for coag_user_fragmentation {}
 
 /// A coagulation kernel as a sim holds it: built in, or a C callback.
 #[derive(Clone, Copy, Debug)]

@@ -36,15 +36,11 @@ fn print(
     times: &[f64],
     kmax: u64,
 ) -> Result<(), coagula_core::Error> {
-    let e = match solution {
-        crate::args::Solution::Constant => Exact::constant(1.0)?,
-        crate::args::Solution::Additive => Exact::additive(),
-        crate::args::Solution::Multiplicative => Exact::multiplicative(),
-        crate::args::Solution::MarcusLushnikov => Exact::marcus_lushnikov(),
-        crate::args::Solution::CoagFrag => Exact::coagulation_fragmentation(),
-        crate::args::Solution::ConstantExponential => Exact::constant_exponential(1.0)?,
-        crate::args::Solution::Golovin => Exact::additive_exponential(),
-    };
+    // the name clap parsed is core's name of the solution
+    let name = clap::ValueEnum::to_possible_value(&solution)
+        .map(|v| v.get_name().to_string())
+        .unwrap_or_default();
+    let e = Exact::named(&name)?;
     let e = if coefficient != 1.0 {
         e.with_coefficient(coefficient)?
     } else {

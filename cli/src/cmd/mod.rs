@@ -36,7 +36,7 @@ pub fn exit(done: Done) -> ExitCode {
 }
 
 /// Runs a command.
-pub fn dispatch(command: Command) -> Done {
+pub(crate) fn dispatch(command: Command) -> Done {
     match command {
         Command::Run {
             scenario,

@@ -97,7 +97,7 @@ pub fn run(
 ) -> Result<(), String> {
     // a Langevin first-hit kernel scenario (no population: its own runner)
     let (name, text) = resolve(scenario)?;
-    if crate::reproduce::maftei2016::is_first_hits(&text) {
+    if crate::scenario::is_first_hits(&text) {
         if !overrides.is_empty()
             || steps.is_some()
             || out.csv.is_some()

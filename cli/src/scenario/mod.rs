@@ -305,5 +305,10 @@ pub fn load(src: &Source<'_>) -> Result<Plan, ScenarioError> {
     check::check(scenario, src)
 }
 
+/// Whether a scenario text is a first-hit kernel scenario.
+pub fn is_first_hits(text: &str) -> bool {
+    toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("first-hits"))
+}
+
 #[cfg(test)]
 mod tests;

@@ -5,11 +5,10 @@ use super::{InitKind, Scenario};
 use coagula_core::exact::Exact;
 use coagula_core::initial::Distribution;
 use coagula_core::kernel::{Coagulation, Fragmentation};
-use coagula_core::qmc::Randomization;
 use coagula_core::random::Generator;
 use coagula_core::scheme::facade::Simulation;
 use coagula_core::scheme::facade::Start;
-use coagula_core::scheme::facade::{Law, Model, Options, Points, SchemeId};
+use coagula_core::scheme::facade::{Model, Options, SchemeId};
 use coagula_core::scheme::registry;
 
 /// An observable of the output.
@@ -280,9 +279,7 @@ impl Plan {
     /// Whether replicas draw random numbers beyond the start (every scheme but the
     /// time-stepped one on deterministic QMC points).
     pub fn randomised(&self) -> bool {
-        self.scheme.law != Law::TimeStepped
-            || self.options.points() == Points::MonteCarlo
-            || self.options.randomization() != Randomization::None
+        self.scheme.randomised(&self.options)
     }
 }
 

@@ -34,7 +34,10 @@
 //! ```
 
 mod moments;
+mod named;
+
 pub use moments::ClosedMoments;
+pub use named::NAMES;
 
 use crate::error::{Error, Result, finite};
 use libm::{exp, lgamma, log};

@@ -151,11 +151,6 @@ fn three() -> u32 {
     3
 }
 
-/// Whether a scenario text is a first-hit kernel scenario.
-pub fn is_first_hits(text: &str) -> bool {
-    toml::from_str::<toml::Table>(text).is_ok_and(|t| t.contains_key("first-hits"))
-}
-
 /// Runs a first-hit kernel scenario: the estimate with its 95% interval, the hits, and
 /// Smoluchowski's Brownian and orthokinetic kernels for comparison; JSON with `json`.
 pub fn first_hits_scenario(name: &str, text: &str, json: bool) -> Result<(), String> {

@@ -26,7 +26,7 @@ use std::time::Instant;
 
 mod cases;
 mod fits;
-pub use cases::{cases, first_hits_scenario, is_first_hits};
+pub use cases::{cases, first_hits_scenario};
 
 /// The experiments, in the order `all` runs them.
 pub const PARTS: [&str; 3] = ["ladder", "choices", "kernel"];

@@ -9,7 +9,6 @@ use crate::error::{Error, Result};
 use crate::observe::Observe;
 use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::boxed::Box;
-use alloc::vec;
 use alloc::vec::Vec;
 use core::marker::PhantomData;
 use rand_core::Rng;
@@ -124,7 +123,7 @@ where
     /// Into the facade.
     pub fn boxed<'a, G>(self) -> Box<dyn Simulation<K, F, G> + 'a>
     where
-        S: Scheme + Observe + Checkpoint + Controls<K, F> + 'a,
+        S: Scheme + Observe + Checkpoint + Controls<K, F> + Send + 'a,
         E: 'a,
         G: Rng + ?Sized + 'static,
     {
@@ -159,7 +158,7 @@ impl<E, S: Observe, K, F> Observe for Boxed<E, S, K, F> {
 impl<E, S, K, F, G> Simulation<K, F, G> for Boxed<E, S, K, F>
 where
     E: Register,
-    S: Scheme + Observe + Checkpoint + Controls<K, F>,
+    S: Scheme + Observe + Checkpoint + Controls<K, F> + Send,
     K: RegistryKernel,
     F: RegistryFragmentation,
     G: Rng + ?Sized + 'static,
@@ -308,10 +307,10 @@ where
         }
         Ok(out)
     }
-    fn duplicate(&self) -> Result<Box<dyn Simulation<K, F, G>>> {
-        // a blank of the same shape, of a size the state holds where it has sizes (a
-        // kernel or truncation changed since the build allows that one)
-        // (only a sizes blank reads the state: a counts state may be too big to list)
+    fn blank(&self) -> Blank {
+        // of a size the state holds where it has sizes (a kernel or truncation changed
+        // since the build allows that one); only a sizes blank reads the state: a
+        // counts state may be too big to list
         let mut blank = self.blank.clone();
         if let Blank::Sizes { size, .. } = &mut blank
             && let State::Sizes(x) = self.s.state()
@@ -319,43 +318,19 @@ where
         {
             *size = m;
         }
-        let (counts, sizes, velocities);
-        let init = match &blank {
-            Blank::Counts(c, v) => Init::Counts {
-                counts: c,
-                volume: *v,
-            },
-            Blank::Sizes { size, n, mass, .. } => {
-                sizes = vec![*size; *n];
-                Init::Sizes {
-                    sizes: &sizes,
-                    mass: *mass,
-                }
-            }
-            Blank::Temperatures => Init::Temperatures {
-                counts: &[2],
-                temperatures: &[1.0],
-                volume: 1.0,
-            },
-            Blank::Velocities => {
-                counts = [1u64, 1];
-                velocities = [0.0; 6];
-                Init::Velocities {
-                    sizes: &counts,
-                    velocities: &velocities,
-                    volume: 1.0,
-                }
-            }
-        };
+        blank
+    }
+    fn built(&self) -> &Options {
+        &self.built
+    }
+    fn duplicate(&self) -> Result<Box<dyn Simulation<K, F, G>>> {
         // built under the build's settings (a call may have changed dt since; the
         // checkpoint's second record carries the settings now)
-        let opts = match blank {
-            Blank::Sizes { capacity, .. } if capacity > 0 => {
-                self.built.clone().with_capacity(capacity)
-            }
-            _ => self.built.clone(),
-        };
-        let mut fresh = E::build::<K, F, G>(self.model.clone(), &init, &opts)?;
+        let blank = <Self as Simulation<K, F, G>>::blank(self);
+        let mut fresh = blank.build(
+            |init, opts| E::build::<K, F, G>(self.model.clone(), init, opts),
+            &self.built,
+        )?;
         let mut w = Writer::new(&mut []);
         <Self as Simulation<K, F, G>>::save_checkpoint(self, None, &mut w);
         let mut buf: Vec<u8> = Vec::new();

@@ -122,18 +122,30 @@ impl SchemeInfo {
     pub fn takes_option(&self, key: &str) -> bool {
         self.options.contains(&key) || GENERAL.contains(&key)
     }
+
+    /// Whether a run under `opts` draws random numbers beyond its start: every
+    /// scheme but the time-stepped one on deterministic QMC points (Lécot et al.
+    /// 2019). A start from a distribution is the centred quantile lattice for a
+    /// scheme that does not, a randomly shifted one for a scheme that does
+    /// ([`initial::lattice_shift`](crate::initial::lattice_shift)).
+    pub fn randomised(&self, opts: &Options) -> bool {
+        self.law != Law::TimeStepped
+            || opts.points() == Points::MonteCarlo
+            || opts.randomization() != crate::qmc::Randomization::None
+    }
 }
 
 /// A registered scheme as [`registry::SCHEMES`](super::registry::SCHEMES) holds it.
 pub type SchemeId = &'static SchemeInfo;
 
-/// The kernel types the registry accepts.
-pub trait RegistryKernel: CoagulationKernel + Clone + 'static {}
-impl<K: CoagulationKernel + Clone + 'static> RegistryKernel for K {}
+/// The kernel types the registry accepts (`Send`, so that every sim is: a host
+/// steps its cells on threads of its own).
+pub trait RegistryKernel: CoagulationKernel + Clone + Send + 'static {}
+impl<K: CoagulationKernel + Clone + Send + 'static> RegistryKernel for K {}
 
 /// The fragmentation kernel types the registry accepts.
-pub trait RegistryFragmentation: FragmentationKernel + Clone + 'static {}
-impl<F: FragmentationKernel + Clone + 'static> RegistryFragmentation for F {}
+pub trait RegistryFragmentation: FragmentationKernel + Clone + Send + 'static {}
+impl<F: FragmentationKernel + Clone + Send + 'static> RegistryFragmentation for F {}
 
 /// A scheme's registry entry: its [`SchemeInfo`] and how to build it. The registry
 /// checks what the info declares (the model and initial-state kinds, fragmentation,
@@ -199,8 +211,9 @@ pub enum State<'a> {
     Counts(Cow<'a, [u64]>, f64),
 }
 
-/// Every scheme behind one object-safe interface (see the module docs).
-pub trait Simulation<K, F, G: ?Sized>: Observe {
+/// Every scheme behind one object-safe interface (see the module docs). `Send`: a sim
+/// moves to the thread that steps it (every scheme owns its state).
+pub trait Simulation<K, F, G: ?Sized>: Observe + Send {
     /// The registry entry.
     fn info(&self) -> &'static SchemeInfo;
     /// Current time.
@@ -269,6 +282,12 @@ pub trait Simulation<K, F, G: ?Sized>: Observe {
     /// the capacity may differ), returning the stream it carries; on error the sim is
     /// unchanged.
     fn restore_checkpoint(&mut self, buf: &[u8]) -> Result<Option<[u64; 4]>>;
+    /// The smallest initial state of this sim's shape ([`Blank::build`] builds a sim
+    /// its checkpoint restores into: what a clone is, and what a front end that
+    /// pickles a sim keeps beside the checkpoint, with [`built`](Self::built)).
+    fn blank(&self) -> Blank;
+    /// The settings as built (before any setter's change).
+    fn built(&self) -> &Options;
     /// An exact copy in memory the library owns (a sim in caller workspace included):
     /// the two continue identically and independently.
     fn duplicate(&self) -> Result<Box<dyn Simulation<K, F, G>>>;

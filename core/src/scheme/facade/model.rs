@@ -192,6 +192,14 @@ impl Init<'_> {
 /// or a total that is not finite and positive.
 pub fn number_volume(sizes: &[f64], mass: f64) -> Result<f64> {
     crate::error::positive("mass", mass)?;
+    // each size first: a NaN or negative one is named as such, not as a bad total
+    if let Some(&x) = sizes.iter().find(|&&x| !(x > 0.0 && x.is_finite())) {
+        return Err(Error::OutOfRange {
+            name: "initial particle size",
+            value: x,
+            range: "(0, inf)",
+        });
+    }
     let total: f64 = sizes.iter().sum();
     if !(total > 0.0 && total.is_finite()) {
         return Err(Error::OutOfRange {
@@ -236,4 +244,52 @@ pub enum Blank {
     Temperatures,
     /// Two monomers at rest.
     Velocities,
+}
+
+impl Blank {
+    /// Builds a sim from this blank under `built` (the settings as built, with the
+    /// capacity a sizes blank records): `build` gets the initial state and the
+    /// settings. What a clone, and a front end rebuilding a sim to restore a
+    /// checkpoint into (Python's pickling), build before restoring.
+    pub fn build<R>(
+        &self,
+        build: impl FnOnce(&Init<'_>, &super::Options) -> Result<R>,
+        built: &super::Options,
+    ) -> Result<R> {
+        let (counts, sizes, velocities);
+        let init = match self {
+            Blank::Counts(c, v) => Init::Counts {
+                counts: c,
+                volume: *v,
+            },
+            Blank::Sizes { size, n, mass, .. } => {
+                sizes = alloc::vec![*size; *n];
+                Init::Sizes {
+                    sizes: &sizes,
+                    mass: *mass,
+                }
+            }
+            Blank::Temperatures => Init::Temperatures {
+                counts: &[2],
+                temperatures: &[1.0],
+                volume: 1.0,
+            },
+            Blank::Velocities => {
+                counts = [1u64, 1];
+                velocities = [0.0; 6];
+                Init::Velocities {
+                    sizes: &counts,
+                    velocities: &velocities,
+                    volume: 1.0,
+                }
+            }
+        };
+        let opts = match self {
+            Blank::Sizes { capacity, .. } if *capacity > 0 => {
+                built.clone().with_capacity(*capacity)
+            }
+            _ => built.clone(),
+        };
+        build(&init, &opts)
+    }
 }
