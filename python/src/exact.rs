@@ -1,0 +1,145 @@
+//! Core's exact solutions (`coagula_core::exact`) as `coagula.exact.Solution`, the
+//! time argument a float or a numpy array.
+
+use crate::py_err;
+use coagula_core::exact::{Exact, NAMES};
+use numpy::{PyArray1, PyReadonlyArray1};
+use pyo3::prelude::*;
+
+/// An exact solution of the Smoluchowski equation by name (`coagula.exact.NAMES`),
+/// for kernel coefficient `coefficient` from unit concentration (Eibeck & Wagner
+/// 2000 §6; Lécot et al. 2019 §4; see `coagula exact`): moments, number densities
+/// `c_k(t)` over integer sizes, densities `c(x, t)` over real sizes, gel time and gel
+/// mass. A time argument may be an array; the result is then an array.
+///
+/// >>> from coagula.exact import Solution
+/// >>> round(Solution("golovin").moment(0, 1.0), 6)   # exp(-1)
+/// 0.367879
+#[pyclass(module = "coagula.exact", name = "Solution", frozen, from_py_object)]
+#[derive(Clone, Debug)]
+pub struct Solution {
+    name: String,
+    coefficient: f64,
+    e: Exact,
+}
+
+/// `f(t)` for a float, or elementwise for a 1-D array of times.
+fn over_t<'py>(
+    py: Python<'py>,
+    t: &Bound<'py, PyAny>,
+    f: impl Fn(f64) -> coagula_core::Result<f64>,
+) -> PyResult<Bound<'py, PyAny>> {
+    if let Ok(x) = t.extract::<f64>() {
+        return Ok(f(x).map_err(py_err)?.into_pyobject(py)?.into_any());
+    }
+    let ts: Vec<f64> = match t.extract::<PyReadonlyArray1<'_, f64>>() {
+        Ok(a) => a.as_array().to_vec(),
+        Err(_) => crate::arrays::reals_arg("t", t)?,
+    };
+    let v = ts
+        .iter()
+        .map(|&x| f(x))
+        .collect::<coagula_core::Result<Vec<f64>>>()
+        .map_err(py_err)?;
+    Ok(PyArray1::from_vec(py, v).into_any())
+}
+
+#[pymethods]
+impl Solution {
+    #[new]
+    #[pyo3(signature = (name, coefficient=1.0))]
+    fn new(name: &str, coefficient: f64) -> PyResult<Self> {
+        let e = Exact::named(name)
+            .and_then(|e| e.with_coefficient(coefficient))
+            .map_err(py_err)?;
+        Ok(Solution {
+            name: name.to_string(),
+            coefficient,
+            e,
+        })
+    }
+
+    /// The moment `M_m(t)` (m = 0..3).
+    fn moment<'py>(
+        &self,
+        py: Python<'py>,
+        m: u32,
+        t: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        over_t(py, t, |x| self.e.moment(m, x))
+    }
+
+    /// `c_k(t)`, the concentration of size k (solutions over integer sizes).
+    fn number_density<'py>(
+        &self,
+        py: Python<'py>,
+        k: u64,
+        t: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        over_t(py, t, |x| self.e.number_density(k, x))
+    }
+
+    /// `c(x, t)` (solutions over real sizes).
+    fn density<'py>(
+        &self,
+        py: Python<'py>,
+        x: f64,
+        t: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        over_t(py, t, |s| self.e.density(x, s))
+    }
+
+    /// The gel mass (0 before the gel time).
+    fn gel_mass<'py>(&self, py: Python<'py>, t: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        over_t(py, t, |x| self.e.gel_mass(x))
+    }
+
+    /// The gel time, or None for a solution that does not gel.
+    #[getter]
+    fn gel_time(&self) -> Option<f64> {
+        self.e.gel_time()
+    }
+
+    /// Whether its sizes are real (`density`) rather than integers (`number_density`).
+    #[getter]
+    fn continuous(&self) -> bool {
+        self.e.is_continuous()
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "coagula.exact.Solution({:?}, coefficient={:?})",
+            self.name, self.coefficient
+        )
+    }
+
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String, f64))> {
+        let cls = py.import("coagula._coagula")?.getattr("Solution")?;
+        Ok((cls, (self.name.clone(), self.coefficient)))
+    }
+}
+
+/// The closed-form temperature family of Osinsky 2023 §4 (collision rate
+/// `c (i j)^{γ}`-type, docs/design/temperature.md) from monomers at number
+/// concentration `n0` and temperature `t0`: `(number, mean_temperature)` at time `t`.
+#[pyfunction]
+#[pyo3(signature = (t, *, c=1.0, gamma=0.5, n0=1.0, t0=1.0))]
+fn temperature_closed_form(t: f64, c: f64, gamma: f64, n0: f64, t0: f64) -> PyResult<(f64, f64)> {
+    let m = coagula_core::kernel::temperature::ClosedForm::new(c, gamma).map_err(py_err)?;
+    for (name, v) in [("t", t), ("n0", n0), ("t0", t0)] {
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "{name} must be finite and >= 0 (got {v})"
+            )));
+        }
+    }
+    let e = m.exact(n0, t0, t);
+    Ok((e.number(), e.mean_temperature()))
+}
+
+pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_class::<Solution>()?;
+    m.add_function(wrap_pyfunction!(temperature_closed_form, m)?)?;
+    m.add("EXACT_NAMES", NAMES.to_vec())?;
+    Ok(())
+}

@@ -1,0 +1,229 @@
+"""The Simulation class: numpy round trips, every error path, checkpoints, pickling,
+clones, callbacks, threads."""
+
+import copy
+import pickle
+import threading
+
+import numpy as np
+import pytest
+
+import coagula
+from coagula import CoagulaError, Initial, Kernel, Simulation, UserKernel
+
+
+def lowrank(n=2000, seed=1, **kw):
+    return Simulation("lowrank", Kernel("additive"), Initial.monodisperse(1, particles=n), seed=seed, **kw)
+
+
+def test_the_registry_is_enumerable():
+    names = [s["name"] for s in coagula.schemes()]
+    assert len(names) == len(set(names)) >= 14
+    assert {"massflow", "lowrank", "dsa", "temperature", "dsmc"} <= set(names)
+    for s in coagula.schemes():
+        assert s["inits"] and s["model"] in ("coagulation", "temperature", "gas")
+    assert any(k["name"] == "additive" for k in coagula.kernels())
+    assert any(o["name"] == "memory_budget" for o in coagula.options())
+    assert "quickstart-golovin" in coagula.examples()
+
+
+def test_counts_round_trip_and_observables():
+    sim = Simulation("lowrank", "constant", Initial.counts([0, 0], 1.0), seed=1)
+    counts = np.array([5, 0, 3, 0, 0, 1], dtype=np.uint64)
+    sim.set_counts(counts, 2.0)
+    assert np.array_equal(sim.counts(), counts) and sim.counts().dtype == np.uint64
+    sizes, n = sim.pairs()
+    assert list(sizes) == [1, 3, 6] and list(n) == [5, 3, 1]
+    assert sim.volume == 2.0 and sim.particles == 9
+    assert sim.moment(0) == 4.5 and sim.moment(1) == (5 + 9 + 6) / 2
+    # half-open classes: adjacent ones add up to their union
+    assert sim.concentration(1, 3) + sim.concentration(3, 7) == sim.concentration(1, 7) == 4.5
+    assert sim.concentration(1, 3) == 2.5
+    # int64 arrays and lists are counts too
+    sim.set_counts(np.array([1, 2], dtype=np.int64), 1.0)
+    sim.set_counts([3, 4], 1.0)
+    assert list(sim.counts()) == [3, 4]
+    sim.set_pairs([1, 1_000_000], [10, 1], 1.0)
+    assert sim.particles == 11 and sim.pairs()[0][-1] == 1_000_000
+
+
+def test_sizes_round_trip():
+    sim = Simulation("dsa", "additive", Initial.sizes(np.ones(100), 1.0), seed=2)
+    x = np.linspace(0.5, 2.0, 64)
+    sim.set_sizes(x)
+    assert np.array_equal(np.sort(sim.sizes()), x)
+    # a strided view is read as the values it shows
+    sim.set_sizes(np.linspace(0.5, 2.0, 128)[::2])
+    assert np.array_equal(np.sort(sim.sizes()), np.linspace(0.5, 2.0, 128)[::2])
+    assert sim.sizes().dtype == np.float64
+
+
+@pytest.mark.parametrize(
+    "call, exc, words",
+    [
+        (lambda: Simulation("no-such", "additive", Initial.monodisperse(1, particles=10)), ValueError, "unknown scheme"),
+        (lambda: Kernel("additive", gamma=2.0), ValueError, "not a parameter"),
+        (lambda: Kernel("no-such"), ValueError, "kernel"),
+        (lambda: Kernel("product"), ValueError, "required"),
+        (lambda: lowrank(dt=0.1), ValueError, "dt"),
+        (lambda: lowrank(no_such_option=1), ValueError, "not an option"),
+        (lambda: lowrank(memory_budget=-1), ValueError, "memory_budget"),
+        (lambda: lowrank(memory_budget=1.5), ValueError, "memory_budget"),
+        (lambda: Simulation("massflow", "additive", Initial.monodisperse(1, particles=10), dt=float("nan")), ValueError, "dt"),
+        (lambda: Simulation("lowrank", "additive", Initial.counts([1, -2], 1.0)), ValueError, "negative"),
+        (lambda: Simulation("lowrank", "additive", Initial.counts(np.ones(3), 1.0)), TypeError, "float64"),
+        (lambda: Simulation("lowrank", "additive", Initial.counts(np.ones((2, 2), dtype=np.int64), 1.0)), TypeError, "2-D"),
+        (lambda: Simulation("dsa", "additive", Initial.sizes([1.0, float("nan")], 1.0)), ValueError, "particle size = NaN"),
+        (lambda: Simulation("dsa", "additive", Initial.sizes([1.0, -1.0], 1.0)), ValueError, "particle size = -1"),
+        (lambda: Simulation("dsa", "additive", Initial.sizes(np.array(["a"]), 1.0)), TypeError, "dtype"),
+        (lambda: Simulation("lowrank", "additive", Initial.counts([10], 0.0)), ValueError, "volume"),
+        (lambda: Simulation("lowrank", "additive", Initial.exponential(-1.0, particles=10)), ValueError, "mean"),
+        (lambda: Simulation("lowrank", "temperature-ballistic", Initial.counts([10], 1.0)), ValueError, "coagulation kernel"),
+        (lambda: Simulation("lowrank", "additive", Initial.sizes([1.0, 2.0], 1.0)), ValueError, "initial state"),
+        (lambda: Simulation("lowrank", 3, Initial.counts([10], 1.0)), ValueError, "kernel must be"),
+        (lambda: Initial.monodisperse(1, particles=0), ValueError, "particles"),
+        (lambda: UserKernel(lambda x, y: 1.0, rank=9, factors=lambda x: ([], [])), ValueError, "rank"),
+        (lambda: UserKernel(1.0), ValueError, "callable"),
+        (lambda: lowrank().advance_to(float("nan")), ValueError, "t"),
+        (lambda: lowrank().advance_to(-1.0), ValueError, ""),
+        (lambda: lowrank().observable("no-such"), ValueError, "not an observable"),
+        (lambda: lowrank().sizes(), ValueError, "counts"),
+        (lambda: lowrank().set_dt(0.1), ValueError, "time step"),
+        (lambda: lowrank().restore(b"garbage"), CoagulaError, "checkpoint"),
+        (lambda: lowrank(memory_budget=1 << 12).advance_to(1.0), MemoryError, "memory"),
+        (lambda: coagula.exact.Solution("no-such"), ValueError, "exact solution"),
+        (lambda: coagula.run({"kernel": {"kind": "additive"}}), ValueError, "initial"),
+        (lambda: coagula.run("no-such-file.toml"), ValueError, "no such file"),
+    ],
+)
+def test_errors_are_exceptions_with_core_messages(call, exc, words):
+    with pytest.raises(exc) as e:
+        call()
+    assert words.lower() in str(e.value).lower(), str(e.value)
+
+
+def test_refused_input_leaves_the_state_unchanged():
+    sim = lowrank()
+    sim.advance_to(0.3)
+    before = sim.save()
+    for bad in ([1, -1], np.array([1.5])):
+        with pytest.raises((ValueError, TypeError)):
+            sim.set_counts(bad, 1.0)
+    with pytest.raises(ValueError):
+        sim.set_counts([1, 2], float("nan"))
+    with pytest.raises(CoagulaError):
+        sim.restore(before[:-3])
+    assert sim.save() == before
+
+
+def test_checkpoint_split_equals_unbroken_run():
+    a, b = lowrank(seed=5), lowrank(seed=5)
+    a.advance_to(1.0)
+    b.advance_to(0.4)
+    data = b.save()
+    c = lowrank(seed=99)  # another seed: the checkpoint carries the stream
+    c.restore(data)
+    c.advance_to(1.0)
+    assert c.save() == a.save()
+    assert c.totals == a.totals
+
+
+def test_pickle_and_clone_continue_identically():
+    for sim in (lowrank(seed=3), Simulation("massflow", "additive", Initial.exponential(1.0, particles=512), seed=3, dt=0.05)):
+        sim.advance_to(0.5)
+        twins = [pickle.loads(pickle.dumps(sim)), sim.clone(), copy.deepcopy(sim)]
+        sim.advance_to(1.0)
+        for t in twins:
+            t.advance_to(1.0)
+            assert t.save() == sim.save()
+            assert t.moment(2) == sim.moment(2)
+
+
+def test_a_user_kernel_pickles_and_runs_like_the_builtin():
+    k = UserKernel(_additive, rank=2, factors=_additive_factors, exact=True)
+    sim = Simulation("lowrank", k, Initial.monodisperse(1, particles=500), seed=4)
+    sim.advance_to(0.2)
+    twin = pickle.loads(pickle.dumps(sim))
+    sim.advance_to(0.5)
+    twin.advance_to(0.5)
+    assert twin.save() == sim.save()
+    # a user kernel that must be evaluated (no exact bound) gives the builtin's bits
+    # when its rate is the builtin's
+    inexact = UserKernel(_additive, rank=2, factors=_additive_factors)
+    one = Simulation("lowrank", inexact, Initial.monodisperse(1, particles=300), seed=8)
+    one.advance_to(0.3)
+    assert one.totals["events"] > 0
+
+
+def _additive(x, y):
+    return x + y
+
+
+def _additive_factors(x):
+    return [x, 1.0], [1.0, x]
+
+
+def test_a_raising_callback_is_raised_from_advance_to():
+    def rate(x, y):
+        raise RuntimeError("boom")
+
+    k = UserKernel(rate, rank=2, factors=_additive_factors)
+    sim = Simulation("lowrank", k, Initial.monodisperse(1, particles=100), seed=1)
+    with pytest.raises(CoagulaError) as e:
+        sim.advance_to(1.0)
+    assert isinstance(e.value.__cause__, RuntimeError)
+    # the sim is usable afterwards with another kernel
+    sim.set_kernel(UserKernel(_additive, rank=2, factors=_additive_factors))
+    sim.advance_to(1.0)
+    assert sim.time == 1.0
+
+
+def test_a_callback_stepping_its_own_sim_is_refused_not_a_deadlock():
+    holder = {}
+
+    def rate(x, y):
+        holder["sim"].advance_to(10.0)
+        return x + y
+
+    k = UserKernel(rate, rank=2, factors=_additive_factors)
+    holder["sim"] = sim = Simulation("lowrank", k, Initial.monodisperse(1, particles=100), seed=1)
+    with pytest.raises(CoagulaError) as e:
+        sim.advance_to(1.0)
+    assert "already in a call" in str(e.value.__cause__)
+
+
+def test_work_limit_interrupts_and_resumes_to_the_same_bits():
+    a, b = lowrank(seed=6), lowrank(seed=6)
+    a.advance_to(1.0)
+    while b.advance_to(1.0, work_limit=100)["interrupted"]:
+        pass
+    assert b.time == 1.0 and b.save() == a.save()
+
+
+def test_threads_step_their_own_sims_as_sequentially():
+    def run(seed, out):
+        s = lowrank(n=20_000, seed=seed)
+        s.advance_to(2.0)
+        out[seed] = s.save()
+
+    seq, par = {}, {}
+    for seed in (1, 2):
+        run(seed, seq)
+    ts = [threading.Thread(target=run, args=(seed, par)) for seed in (1, 2)]
+    for t in ts:
+        t.start()
+    for t in ts:
+        t.join()
+    assert seq == par
+
+
+def test_temperatures_and_velocities_read_out():
+    t = Simulation("temperature", Kernel("temperature-ballistic"), Initial.counts([1000], 1000.0, temperatures=[1.0]), seed=1)
+    t.advance_to(0.5)
+    sizes, temps = t.size_values("temperature")
+    assert len(sizes) == len(temps) > 1 and np.all(temps >= 0)
+    g = Simulation("dsmc", Kernel("hard-spheres", restitution=0.9), Initial.counts([200], 2000.0, temperatures=[1.0]), seed=1)
+    sizes, v = g.velocities()
+    assert v.shape == (200, 3) and sizes.dtype == np.uint64
+    g.advance_to(1.0)
+    assert g.particles <= 200

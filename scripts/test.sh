@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Every test of the repository: the Rust workspace's (`cargo test --workspace`), then
+# the Python package's (built into a scratch venv under target/, with pytest).
+# The README's test command; .ci/run calls it. Needs cargo and python3 (>= 3.9, with
+# venv and pip); the pip packages (maturin, pytest, numpy, xarray, scipy) are
+# installed into the venv from PyPI.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+cargo test --workspace
+
+# The C library the Python tests compare bits with (the test profile's build, which
+# `cargo test` has compiled most of).
+cargo build -q -p coagula-ffi --profile test
+export COAGULA_LIB="$PWD/target/debug/libcoagula.so"
+
+venv=target/pyvenv
+if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv"
+fi
+"$venv/bin/python" -m pip install -q --disable-pip-version-check \
+    'maturin>=1.9,<2' 'pytest>=7' 'numpy>=1.21' 'xarray>=2022.3' scipy
+# The package as a user installs it: a release wheel (without the command line's
+# plotting and argument parsing, which the package does not link)
+rm -rf target/wheels
+"$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels \
+    --interpreter "$venv/bin/python"
+"$venv/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall \
+    --no-deps target/wheels/coagula-*.whl
+# from outside the source tree, so that the installed package is the one imported
+(cd target && ../"$venv/bin/python" -m pytest -q -p no:cacheprovider ../python/tests)
