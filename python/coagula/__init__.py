@@ -2,7 +2,8 @@
 
 Every scheme of the library's registry behind one class, :class:`Simulation`;
 kernels from core's table (:class:`Kernel`) or Python callables
-(:class:`UserKernel`); initial states (:class:`Initial`); scenario files run as
+(:class:`UserKernel`); initial states (:class:`Initial`); Langevin trajectory
+batches (:class:`Langevin`, Maftei et al. 2016); scenario files run as
 ``coagula run`` runs them (:func:`run`); exact solutions (:mod:`coagula.exact`).
 The numerics are the Rust core's: this package translates.
 
@@ -27,7 +28,9 @@ from ._coagula import (
     Fragmentation,
     Initial,
     Kernel,
+    Langevin,
     Simulation,
+    StepReport,
     UserKernel,
     examples,
     kernels,
@@ -41,7 +44,9 @@ __all__ = [
     "Fragmentation",
     "Initial",
     "Kernel",
+    "Langevin",
     "Simulation",
+    "StepReport",
     "UserKernel",
     "examples",
     "exact",

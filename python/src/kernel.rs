@@ -29,7 +29,7 @@ type Reduced<'py, A> = PyResult<(Bound<'py, PyAny>, A)>;
 pub(crate) struct Raised(Mutex<Option<PyErr>>);
 
 impl Raised {
-    fn keep(&self, e: PyErr) {
+    pub(crate) fn keep(&self, e: PyErr) {
         if let Ok(mut slot) = self.0.lock()
             && slot.is_none()
         {

@@ -13,6 +13,7 @@ mod arrays;
 mod exact;
 mod initial;
 mod kernel;
+mod langevin;
 mod scenario;
 mod sim;
 
@@ -121,6 +122,7 @@ fn _coagula(m: &Bound<'_, PyModule>) -> PyResult<()> {
     kernel::register(m)?;
     initial::register(m)?;
     sim::register(m)?;
+    langevin::register(m)?;
     exact::register(m)?;
     scenario::register(m)?;
     Ok(())
