@@ -136,8 +136,9 @@ pub enum Error {
         why: &'static str,
     },
     /// A kernel returned a rate above the bound it declared (the low-rank bound, or
-    /// the supremum acceptance–rejection proposes with): a scheme built on that bound
-    /// would be biased, so it stops instead.
+    /// the supremum acceptance–rejection proposes with), or below the acceptance floor
+    /// it declared (an exact low-rank claim): a scheme built on that bound would be
+    /// biased, so it stops instead.
     BoundExceeded {
         /// Which bound was exceeded.
         name: &'static str,
@@ -239,8 +240,9 @@ impl fmt::Display for Error {
             }
             Error::BoundExceeded { name, rate, bound } => write!(
                 f,
-                "the kernel returned {}, above its declared {name} {}: the bound must hold for every pair",
+                "the kernel returned {}, {} its declared {name} {}: the bound must hold for every pair",
                 Short(rate),
+                if rate < bound { "below" } else { "above" },
                 Short(bound)
             ),
         }

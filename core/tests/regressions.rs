@@ -170,6 +170,41 @@ fn an_exact_low_rank_kernel_is_spot_checked() {
     run_until_error(&mut bk, |s| s.counts().into_owned(), 10_000, invalid_rate);
 }
 
+/// A kernel declared exactly low-rank whose factors give twice the kernel (the
+/// rank-2 `x·1 + 1·y` for `x + y`: A + Aᵀ = 2(x + y)) was accepted and simulated at
+/// twice its rate (M0(1) = e^-2 instead of e^-1, found from Python). The spot check now
+/// also holds the kernel to the floor its acceptance relied on.
+#[test]
+fn an_overclaimed_exact_low_rank_kernel_is_caught() {
+    struct Twice;
+    impl CoagulationKernel for Twice {
+        fn rate(&self, x: f64, y: f64) -> f64 {
+            x + y
+        }
+        fn rank(&self) -> usize {
+            2
+        }
+        fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
+            (a[0], b[0], a[1], b[1]) = (x, 1.0, 1.0, x);
+        }
+        fn low_rank_is_exact(&self) -> bool {
+            true
+        }
+    }
+    let mut lr = LowRank::<_, 2>::monodisperse(Twice, 10_000).unwrap();
+    run_until_error(&mut lr, |s| s.counts().to_vec(), 10_000, bound_exceeded);
+    let mut bk = Bucketed::<_, 2, 4>::monodisperse(Twice, 10_000).unwrap();
+    run_until_error(&mut bk, |s| s.counts().into_owned(), 10_000, bound_exceeded);
+    let e = lr
+        .advance_to(lr.time() + 1.0, &mut Pcg64Mcg::new(1))
+        .unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("below its declared acceptance floor"),
+        "{e}"
+    );
+}
+
 /// Item 7: restoring a checkpoint taken before the size table grew into a scheme
 /// whose table had grown, then advancing, panicked (`m − fab.len()` underflow). Now the
 /// restored run continues, bit-identical to the unbroken one.

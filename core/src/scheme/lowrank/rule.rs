@@ -184,8 +184,18 @@ pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
         }
     };
     if !evaluated && spot {
-        // accepted without K: a spot check now and then
-        bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+        // accepted without K: a spot check now and then, of the bound and of the floor
+        // the acceptance relied on (a kernel below it, e.g. an exact low-rank claim
+        // whose A + Aᵀ is twice the kernel, would be simulated at the wrong rate)
+        let k = bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+        let relied = squeeze.min(bound);
+        if k < relied * (1.0 - 1e-9) {
+            return Err(crate::Error::BoundExceeded {
+                name: "acceptance floor ρ·(A + Aᵀ) (an exact low-rank kernel has ρ = 1)",
+                rate: k,
+                bound: relied,
+            });
+        }
     }
     Ok(true)
 }
