@@ -135,8 +135,8 @@ def run(
 
     >>> import coagula
     >>> ds = coagula.run("quickstart-golovin", replicas=2, set={"initial.particles": 1024})
-    >>> list(ds.observable.values)[:2]
-    ['M0', 'M1']
+    >>> [str(o) for o in ds.observable.values]
+    ['M0', 'M2']
     """
     if isinstance(scenario, os.PathLike):
         scenario = os.fspath(scenario)

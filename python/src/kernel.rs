@@ -401,10 +401,11 @@ fn _kernel(name: &str, params: Vec<(String, f64)>) -> PyResult<Kernel> {
 /// A bound the kernel exceeds at run time is a `CoagulaError`.
 ///
 /// >>> import coagula
-/// >>> k = coagula.UserKernel(lambda x, y: x + y, rank=2,
-/// ...                        factors=lambda x: ([x, 1.0], [1.0, x]), exact=True)
+/// >>> # x + y = A + Aᵀ with A(x, y) = x · 1: rank 1, exact
+/// >>> k = coagula.UserKernel(lambda x, y: x + y, rank=1,
+/// ...                        factors=lambda x: ([x], [1.0]), exact=True)
 /// >>> k.rank
-/// 2
+/// 1
 #[pyclass(module = "coagula", frozen, from_py_object)]
 #[derive(Clone, Debug)]
 pub struct UserKernel {

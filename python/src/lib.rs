@@ -34,12 +34,12 @@ create_exception!(
 pub(crate) fn py_err(e: Error) -> PyErr {
     let msg = e.to_string();
     match e {
-        Error::Capacity { .. } => PyMemoryError::new_err(msg),
+        // (as the C ABI's COAG_CAPACITY: a size or count past what memory holds)
+        Error::Capacity { .. } | Error::Overflow { .. } => PyMemoryError::new_err(msg),
         Error::InvalidRate { .. }
         | Error::BoundExceeded { .. }
         | Error::Checkpoint { .. }
-        | Error::CheckpointOption { .. }
-        | Error::Overflow { .. } => CoagulaError::new_err(msg),
+        | Error::CheckpointOption { .. } => CoagulaError::new_err(msg),
         _ => PyValueError::new_err(msg),
     }
 }
@@ -52,7 +52,7 @@ pub(crate) fn py_err(e: Error) -> PyErr {
 ///
 /// >>> import coagula
 /// >>> [s["name"] for s in coagula.schemes()][:2]
-/// ['massflow', 'mfa']
+/// ['massflow', 'lowrank']
 #[pyfunction]
 fn schemes(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
     registry::SCHEMES
