@@ -88,6 +88,7 @@ def test_sizes_round_trip():
         (lambda: lowrank().advance_to(-1.0), ValueError, ""),
         (lambda: lowrank().observable("no-such"), ValueError, "not an observable"),
         (lambda: lowrank().sizes(), ValueError, "counts"),
+        (lambda: Simulation("lowrank-sizes", "additive", Initial.sizes(np.ones(4), 1.0)).set_sizes([]), ValueError, "empty list"),
         (lambda: lowrank().set_dt(0.1), ValueError, "time step"),
         (lambda: lowrank().restore(b"garbage"), CoagulaError, "checkpoint"),
         (lambda: lowrank(memory_budget=1 << 12).advance_to(1.0), MemoryError, "memory"),

@@ -198,9 +198,10 @@ impl<const R: usize, const W: usize> Layout<R, W> {
         budget: usize,
     ) -> Result<Self> {
         if sizes.is_empty() {
-            return Err(Error::Capacity {
-                name: "particles (at least one)",
-                capacity: 0,
+            // (not a capacity: nothing ran out; the bucket layout spans the sizes it
+            // holds, so it needs one)
+            return Err(Error::Unsupported {
+                what: "an empty list of sizes: lowrank-sizes holds at least one particle (dsa and mfa take an empty system)",
             });
         }
         if sizes.len() >= u32::MAX as usize {
