@@ -35,9 +35,11 @@
 
 mod moments;
 mod named;
+mod sectional;
 
 pub use moments::ClosedMoments;
 pub use named::NAMES;
+pub use sectional::{Books, MAX_PIVOTS, Sectional};
 
 use crate::error::{Error, Result, finite};
 use libm::{exp, lgamma, log};
