@@ -290,7 +290,7 @@ impl<K: CoagulationKernel> Sectional<K> {
     }
 
     /// Removal at rate `lambda(x)` per particle (finite, ≥ 0 at every pivot).
-    pub fn with_removal(mut self, lambda: impl Fn(f64) -> f64) -> Result<Self> {
+    pub fn with_removal(mut self, mut lambda: impl FnMut(f64) -> f64) -> Result<Self> {
         for (i, &x) in self.x.iter().enumerate() {
             let l = lambda(x);
             if !(l >= 0.0 && l.is_finite()) {
@@ -305,7 +305,7 @@ impl<K: CoagulationKernel> Sectional<K> {
     }
 
     /// Growth `dx/dt = g(x)` (finite, ≥ 0 at every pivot).
-    pub fn with_growth(mut self, g: impl Fn(f64) -> f64) -> Result<Self> {
+    pub fn with_growth(mut self, mut g: impl FnMut(f64) -> f64) -> Result<Self> {
         for (i, &x) in self.x.iter().enumerate() {
             let v = g(x);
             if !(v >= 0.0 && v.is_finite()) {
@@ -355,6 +355,11 @@ impl<K: CoagulationKernel> Sectional<K> {
         let mut idx = 0;
         for j in 0..m {
             let nj = n[j];
+            if nj == 0.0 {
+                // (an empty pivot: no pair with it; its row of the table is skipped)
+                idx += j + 1;
+                continue;
+            }
             for k in 0..=j {
                 let r = self.rate[idx] * nj * n[k];
                 let s = self.split[idx];
