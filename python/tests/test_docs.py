@@ -45,3 +45,19 @@ def test_the_public_api_is_documented():
     for name in coagula.__all__:
         obj = getattr(coagula, name)
         assert obj.__doc__ and len(obj.__doc__) > 20, name
+
+
+def test_the_readme_python_example_runs():
+    """The README's "From Python" example, as written there."""
+    import os
+    import re
+
+    readme = os.path.join(os.path.dirname(__file__), "..", "..", "README.md")
+    with open(readme, encoding="utf-8") as f:
+        blocks = re.findall(r"```python\n(.*?)```", f.read(), flags=re.S)
+    assert blocks, "README has no Python example"
+    scope = {}
+    exec(compile(blocks[0], "README.md", "exec"), scope)
+    sim, ds = scope["sim"], scope["ds"]
+    assert sim.time == 2.0 and abs(sim.moment(0) - 0.1353) < 0.01
+    assert "mean" in ds
