@@ -575,10 +575,11 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
             } else {
                 kernel
             };
-            let kernel: Coagulation = if counts_scheme {
-                kernel.with_min_size(1.0).map_err(|e| src.at("kernel", e))?
-            } else {
-                kernel
+            // as the scheme runs it (core's rule: min-size 1 on integer sizes)
+            let kernel: Coagulation = match scheme.runs(Builtin::Coagulation(kernel)) {
+                Ok(Builtin::Coagulation(k)) => k,
+                Ok(_) => kernel,
+                Err(e) => return Err(src.at("kernel", e)),
             };
             (Model::coagulation(kernel, fragmentation), b)
         }

@@ -123,6 +123,24 @@ impl SchemeInfo {
         self.options.contains(&key) || GENERAL.contains(&key)
     }
 
+    /// A built-in kernel as this scheme runs it: a coagulation kernel on an
+    /// integer-size scheme (one that builds from counts) has its low-rank bound taken
+    /// from size 1 (`min-size = 1`: a tighter bound, fewer rejections); every other
+    /// pairing as it is. What the CLI and Python build with, so that the same seed
+    /// gives the same bits from both (a C caller sets `min-size` itself).
+    pub fn runs(
+        &self,
+        b: crate::kernel::builtin::Builtin,
+    ) -> crate::error::Result<crate::kernel::builtin::Builtin> {
+        use crate::kernel::builtin::Builtin;
+        match b {
+            Builtin::Coagulation(k) if self.inits.contains(&InitKind::Counts) => {
+                Ok(Builtin::Coagulation(k.with_min_size(1.0)?))
+            }
+            b => Ok(b),
+        }
+    }
+
     /// Whether a run under `opts` draws random numbers beyond its start: every
     /// scheme but the time-stepped one on deterministic QMC points (Lécot et al.
     /// 2019). A start from a distribution is the centred quantile lattice for a

@@ -263,7 +263,10 @@ impl Blank {
                 volume: *v,
             },
             Blank::Sizes { size, n, mass, .. } => {
-                sizes = alloc::vec![*size; *n];
+                let mut v = alloc::vec::Vec::new();
+                crate::memory::try_reserve(&mut v, *n)?;
+                v.resize(*n, *size);
+                sizes = v;
                 Init::Sizes {
                     sizes: &sizes,
                     mass: *mass,

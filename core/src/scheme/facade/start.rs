@@ -109,10 +109,18 @@ impl Distribution {
                 });
             }
         };
-        let lattice = |n: usize| -> Vec<f64> {
-            (0..n)
-                .map(|k| self.inverse((k as f64 + shift) / n as f64, mass))
-                .collect()
+        // (allocations that fail are a capacity error, not an abort)
+        let lattice = |n: usize| -> Result<Vec<f64>> {
+            let mut v = Vec::new();
+            crate::memory::try_reserve(&mut v, n)?;
+            v.extend((0..n).map(|k| self.inverse((k as f64 + shift) / n as f64, mass)));
+            Ok(v)
+        };
+        let filled = |n: usize, x: f64| -> Result<Vec<f64>> {
+            let mut v = Vec::new();
+            crate::memory::try_reserve(&mut v, n)?;
+            v.resize(n, x);
+            Ok(v)
         };
         Ok(match self {
             Distribution::Monodisperse { size } => {
@@ -132,13 +140,13 @@ impl Distribution {
                     }
                 } else {
                     Start::Sizes {
-                        sizes: vec![*size; n],
+                        sizes: filled(n, *size)?,
                         mass: c0 * size,
                     }
                 }
             }
             Distribution::Exponential { .. } | Distribution::Lognormal { .. } => {
-                let xs = lattice(n);
+                let xs = lattice(n)?;
                 if counts_scheme {
                     Start::Counts {
                         counts: counts_on_grid(xs.iter().copied(), grid)?,
