@@ -177,7 +177,7 @@ impl PySectional {
         growth: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         use coagula_core::exact::Sectional;
-        let k = crate::kernel::coagulation_of(kernel)?;
+        let k = crate::kernel::coagulation_of(kernel, None)?;
         let grid =
             Sectional::<crate::kernel::PyCoag>::grid(dense, largest, ratio).map_err(py_err)?;
         let mut s = Sectional::new(k, grid).map_err(py_err)?;
@@ -223,13 +223,29 @@ impl PySectional {
         self.lock()?.add_at(size, number).map_err(py_err)
     }
 
-    /// Integrates to `t` (interpreter detached).
+    /// Integrates to `t` (interpreter detached; in pieces of about 1000 steps, between
+    /// which Ctrl-C stops it with `KeyboardInterrupt`, the solution at the piece's end).
     #[pyo3(signature = (t, *, dt))]
     fn advance_to(&self, py: Python<'_>, t: f64, dt: f64) -> PyResult<()> {
-        py.detach(|| {
-            self.lock()
-                .and_then(|mut s| s.advance_to(t, dt).map_err(py_err))
-        })
+        let now = self.lock()?.time();
+        let pieces = if t > now && dt > 0.0 && t.is_finite() {
+            ((t - now) / dt / 1000.0).ceil().clamp(1.0, 1e6)
+        } else {
+            1.0
+        };
+        for k in 1..=pieces as u64 {
+            let until = if k == pieces as u64 {
+                t
+            } else {
+                now + (t - now) * (k as f64 / pieces)
+            };
+            py.detach(|| {
+                self.lock()
+                    .and_then(|mut s| s.advance_to(until, dt).map_err(py_err))
+            })?;
+            py.check_signals()?;
+        }
+        Ok(())
     }
 
     /// `M_k` per unit volume.

@@ -77,6 +77,15 @@ impl Initial {
                 concentration,
                 temperatures,
             } => {
+                // the start's particles must fit the memory budget before they are
+                // drawn (10^12 particles would otherwise end the interpreter)
+                let bytes = (*particles as u64).saturating_mul(8);
+                if bytes > opts.memory_budget() as u64 {
+                    return Err(pyo3::exceptions::PyMemoryError::new_err(format!(
+                        "particles = {particles}: the start alone needs {bytes} bytes, above the memory budget of {} (the memory_budget option)",
+                        opts.memory_budget()
+                    )));
+                }
                 let r = if temperatures.is_empty() {
                     let shift = lattice_shift(info.randomised(opts), opts.seed(), opts.stream());
                     dist.start(info, *particles, *concentration, 1.0, shift)

@@ -17,29 +17,60 @@ use coagula_core::scheme::facade::Model;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// What `__reduce__` returns: the callable that rebuilds the object, and its
 /// arguments.
 type Reduced<'py, A> = PyResult<(Bound<'py, PyAny>, A)>;
 
-/// An exception raised by a Python callback during a call, kept until the call
-/// returns (the first one; later ones are dropped).
+std::thread_local! {
+    /// The first exception a Python callback raised during the current call on this
+    /// thread (callbacks run on the thread that makes the call, detached or not).
+    static RAISED: std::cell::RefCell<Option<PyErr>> = const { std::cell::RefCell::new(None) };
+}
+
+/// Where a callback's exception waits for the call that invoked it: this thread's slot,
+/// so sims, clones and threads sharing a kernel never see each other's exceptions.
 #[derive(Debug, Default)]
-pub(crate) struct Raised(Mutex<Option<PyErr>>);
+pub(crate) struct Raised;
 
 impl Raised {
+    /// Keeps `e` unless an earlier exception of this call is kept.
     pub(crate) fn keep(&self, e: PyErr) {
-        if let Ok(mut slot) = self.0.lock()
-            && slot.is_none()
-        {
-            *slot = Some(e);
-        }
+        RAISED.with(|r| {
+            let mut r = r.borrow_mut();
+            if r.is_none() {
+                *r = Some(e);
+            }
+        });
     }
 
     /// The kept exception, if any (cleared).
     pub(crate) fn take(&self) -> Option<PyErr> {
-        self.0.lock().ok().and_then(|mut s| s.take())
+        take_raised()
+    }
+}
+
+/// Clears this thread's slot: what a call does before it may invoke callbacks.
+pub(crate) fn clear_raised() {
+    drop(take_raised());
+}
+
+/// This thread's kept exception, if any (cleared).
+pub(crate) fn take_raised() -> Option<PyErr> {
+    RAISED.with(|r| r.borrow_mut().take())
+}
+
+/// `e`, or the exception a callback raised that caused it (chained as its cause).
+pub(crate) fn with_raised(py: Python<'_>, e: PyErr, what: &str) -> PyErr {
+    match take_raised() {
+        None => e,
+        Some(cause) => {
+            let err =
+                crate::CoagulaError::new_err(format!("a Python callback raised {what}: {cause}"));
+            err.set_cause(py, Some(cause));
+            err
+        }
     }
 }
 
@@ -77,16 +108,6 @@ pub(crate) struct UserFns {
 pub(crate) enum PyCoag {
     Builtin(Coagulation),
     User(Arc<UserFns>),
-}
-
-impl PyCoag {
-    /// The exception a user kernel raised during the last call, if any.
-    pub(crate) fn raised(&self) -> Option<PyErr> {
-        match self {
-            PyCoag::Builtin(_) => None,
-            PyCoag::User(u) => u.raised.take(),
-        }
-    }
 }
 
 impl CoagulationKernel for PyCoag {
@@ -201,15 +222,6 @@ pub(crate) enum PyFrag {
     None,
     Binary(BinaryUniform),
     User(Arc<UserFrag>),
-}
-
-impl PyFrag {
-    pub(crate) fn raised(&self) -> Option<PyErr> {
-        match self {
-            PyFrag::User(u) => u.raised.take(),
-            _ => None,
-        }
-    }
 }
 
 impl FragmentationKernel for PyFrag {
@@ -456,7 +468,7 @@ impl UserKernel {
                 rank,
                 exact,
                 sup: sup.map(|f| callable("sup", &f)).transpose()?,
-                raised: Raised::default(),
+                raised: Raised,
             }),
         })
     }
@@ -545,7 +557,7 @@ impl Fragmentation {
                 rate: rate.unbind(),
                 inverse_piece: inverse_piece.unbind(),
                 sup_rate,
-                raised: Raised::default(),
+                raised: Raised,
             })),
         })
     }
@@ -628,16 +640,25 @@ fn kernels(py: Python<'_>) -> PyResult<Vec<Bound<'_, PyDict>>> {
 
 /// The physics a `kernel=` argument names: a `Kernel`, a `UserKernel` or a built-in
 /// kernel's name (its defaults), with the fragmentation.
-pub(crate) fn model_of(kernel: &Bound<'_, PyAny>, frag: PyFrag) -> PyResult<Model<PyCoag, PyFrag>> {
+pub(crate) fn model_of(
+    kernel: &Bound<'_, PyAny>,
+    frag: PyFrag,
+    scheme: Option<&coagula_core::scheme::facade::SchemeInfo>,
+) -> PyResult<Model<PyCoag, PyFrag>> {
+    // a built-in as the scheme runs it (core's rule, which the CLI applies too)
+    let narrow = |b: Builtin| match scheme {
+        Some(info) => info.runs(b).map_err(py_err),
+        None => Ok(b),
+    };
     if let Ok(k) = kernel.cast::<Kernel>() {
-        return Model::of_builtin(k.get().built, PyCoag::Builtin, frag).map_err(py_err);
+        return Model::of_builtin(narrow(k.get().built)?, PyCoag::Builtin, frag).map_err(py_err);
     }
     if let Ok(u) = kernel.cast::<UserKernel>() {
         return Ok(Model::coagulation(PyCoag::User(u.get().fns.clone()), frag));
     }
     if let Ok(name) = kernel.extract::<String>() {
         let b = builtin::make(&name, &[]).map_err(py_err)?;
-        return Model::of_builtin(b, PyCoag::Builtin, frag).map_err(py_err);
+        return Model::of_builtin(narrow(b)?, PyCoag::Builtin, frag).map_err(py_err);
     }
     Err(PyValueError::new_err(
         "kernel must be a coagula.Kernel, a coagula.UserKernel or a built-in kernel's name (coagula.kernels() lists them)",
@@ -645,8 +666,11 @@ pub(crate) fn model_of(kernel: &Bound<'_, PyAny>, frag: PyFrag) -> PyResult<Mode
 }
 
 /// The coagulation kernel a `set_kernel` argument names.
-pub(crate) fn coagulation_of(kernel: &Bound<'_, PyAny>) -> PyResult<PyCoag> {
-    match model_of(kernel, PyFrag::None)? {
+pub(crate) fn coagulation_of(
+    kernel: &Bound<'_, PyAny>,
+    scheme: Option<&coagula_core::scheme::facade::SchemeInfo>,
+) -> PyResult<PyCoag> {
+    match model_of(kernel, PyFrag::None, scheme)? {
         Model::Coagulation { kernel, .. } => Ok(kernel),
         _ => Err(PyValueError::new_err(
             "kernel: a temperature model or a gas is not a coagulation kernel",

@@ -200,7 +200,7 @@ impl Langevin {
                 }
             }
         } else if drift_obj.is_callable() {
-            PyDrift::Callable(Arc::new((drift_obj.clone().unbind(), Raised::default())))
+            PyDrift::Callable(Arc::new((drift_obj.clone().unbind(), Raised)))
         } else {
             return Err(PyValueError::new_err(
                 "drift: None, \"friction\", \"maftei2016\" or a callable b(t, x, u)",
@@ -276,6 +276,13 @@ impl Langevin {
         u0: Vec<f64>,
         seed: u64,
     ) -> PyResult<Self> {
+        if let Some(p) = period
+            && !(p > 0.0 && p.is_finite())
+        {
+            return Err(PyValueError::new_err(format!(
+                "period = {p}: a periodic border is finite and > 0 (None for none)"
+            )));
+        }
         let spec = Spec {
             n: trajectories,
             dim,
@@ -315,17 +322,11 @@ impl Langevin {
                     }
                 })
             };
-            let out = match work_limit {
-                // no budget and no poll: the batch may step in any order of work
-                None if matches!(self.drift, PyDrift::Builtin(_)) => {
-                    with_batch!(&mut *g, b => b.advance_to(t))
-                }
-                _ => {
-                    let mut budget =
-                        Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
-                    with_batch!(&mut *g, b => b.advance_within(t, &mut budget))
-                }
-            };
+            // (always polled: Ctrl-C stops a long call; the trajectories' streams are
+            // their own, so the bits do not depend on how the work is split)
+            let mut budget = Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
+            crate::kernel::clear_raised();
+            let out = with_batch!(&mut *g, b => b.advance_within(t, &mut budget));
             Ok((out, signal))
         })?;
         if let PyDrift::Callable(f) = &self.drift

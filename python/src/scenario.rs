@@ -12,8 +12,21 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
+/// Deepest nesting of tables and arrays a scenario value may have (a scenario has
+/// three; a self-referencing dict would otherwise recurse until the stack ends).
+const MAX_DEPTH: usize = 32;
+
 /// A Python value as TOML (tables, arrays, booleans, integers, floats, strings).
 fn toml_of(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    toml_at(key, v, 0)
+}
+
+fn toml_at(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
+    if depth > MAX_DEPTH {
+        return Err(PyValueError::new_err(format!(
+            "{key}: nested more than {MAX_DEPTH} deep (a dict or list that contains itself?)"
+        )));
+    }
     if v.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(v.extract()?));
     }
@@ -39,14 +52,14 @@ fn toml_of(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
             } else {
                 format!("{key}.{k}")
             };
-            t.insert(k, toml_of(&path, &x)?);
+            t.insert(k, toml_at(&path, &x, depth + 1)?);
         }
         return Ok(toml::Value::Table(t));
     }
     if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
         let items = v
             .try_iter()?
-            .map(|x| toml_of(key, &x?))
+            .map(|x| toml_at(key, &x?, depth + 1))
             .collect::<PyResult<Vec<_>>>()?;
         return Ok(toml::Value::Array(items));
     }

@@ -11,7 +11,7 @@ use crate::{CoagulaError, py_err};
 use coagula_core::checkpoint::Writer;
 use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::facade::{
-    Blank, KEYS, Kind, Model, Options, SchemeId, Simulation as Facade, State, Value, peek_stream,
+    Blank, KEYS, Kind, Options, SchemeId, Simulation as Facade, State, Value, peek_stream,
 };
 use coagula_core::scheme::{Budget, StepReport, registry};
 use numpy::{PyArray1, PyArray2};
@@ -249,18 +249,6 @@ impl Sim {
         Ok(f(&mut *self.lock()?))
     }
 
-    /// The exception a Python kernel or fragmentation callback raised in the last
-    /// call, if any.
-    fn raised(sim: &Dyn) -> Option<PyErr> {
-        match sim.model() {
-            Model::Coagulation {
-                kernel,
-                fragmentation,
-            } => kernel.raised().or_else(|| fragmentation.raised()),
-            _ => None,
-        }
-    }
-
     fn build(
         scheme: &str,
         kernel: &Bound<'_, PyAny>,
@@ -272,7 +260,8 @@ impl Sim {
         let py = kernel.py();
         let id = registry::find(scheme).map_err(py_err)?;
         let opts = options_of(kw)?;
-        let model = model_of(kernel, fragmentation_of(frag)?)?;
+        let model = model_of(kernel, fragmentation_of(frag)?, Some(id))?;
+        crate::kernel::clear_raised();
         let sim = match (init, blank) {
             (Some(init), _) => {
                 let start = init.start(id, &opts)?;
@@ -281,7 +270,7 @@ impl Sim {
             (None, Some(b)) => b.build(|i, o| registry::build(id, model, i, o), &opts),
             (None, None) => unreachable!("a build has an initial state or a blank"),
         }
-        .map_err(py_err)?;
+        .map_err(|e| crate::kernel::with_raised(py, py_err(e), "while the sim was built"))?;
         let rng = generator(opts.seed(), opts.stream());
         let options = match kw {
             Some(d) => d.copy()?,
@@ -349,12 +338,23 @@ fn blank_of(t: &Bound<'_, PyTuple>) -> PyResult<Blank> {
     let kind: String = t.get_item(0)?.extract()?;
     Ok(match kind.as_str() {
         "counts" => Blank::Counts(t.get_item(1)?.extract()?, t.get_item(2)?.extract()?),
-        "sizes" => Blank::Sizes {
-            size: t.get_item(1)?.extract()?,
-            n: t.get_item(2)?.extract()?,
-            mass: t.get_item(3)?.extract()?,
-            capacity: t.get_item(4)?.extract()?,
-        },
+        "sizes" => {
+            let n: usize = t.get_item(2)?.extract()?;
+            let capacity: usize = t.get_item(4)?.extract()?;
+            // a pickle's blank is as many particles as the sim held: within what memory
+            // can hold (a crafted one must not end the interpreter)
+            if n > (1 << 36) || capacity > (1 << 36) {
+                return Err(PyValueError::new_err(
+                    "not a pickled coagula.Simulation (its blank holds more than 2^36 particles)",
+                ));
+            }
+            Blank::Sizes {
+                size: t.get_item(1)?.extract()?,
+                n,
+                mass: t.get_item(3)?.extract()?,
+                capacity,
+            }
+        }
         "temperatures" => Blank::Temperatures,
         "velocities" => Blank::Velocities,
         _ => return Err(PyValueError::new_err("not a pickled coagula.Simulation")),
@@ -407,9 +407,9 @@ impl Sim {
                 })
             };
             let mut budget = Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
+            crate::kernel::clear_raised();
             let out = sim.advance_within(t, &mut budget, rng);
-            let raised = Sim::raised(&**sim);
-            Ok((out, signal, raised))
+            Ok((out, signal, crate::kernel::take_raised()))
         })?;
         if let Some(e) = raised {
             let err = CoagulaError::new_err(format!(
@@ -456,11 +456,21 @@ impl Sim {
     /// The concentration of particles with `a ≤ x < b` (half-open: adjacent classes
     /// add up to their union).
     fn concentration(&self, a: f64, b: f64) -> PyResult<f64> {
+        if a.is_nan() || b.is_nan() {
+            return Err(PyValueError::new_err(format!(
+                "concentration({a}, {b}): the class edges must be numbers"
+            )));
+        }
         self.with(|c| c.sim.class_concentration(a, b))
     }
 
     /// The number density at size `x` (integer sizes: `c_x`).
     fn number_density(&self, x: f64) -> PyResult<f64> {
+        if x.is_nan() {
+            return Err(PyValueError::new_err(
+                "number_density(nan): the size must be a number",
+            ));
+        }
         self.with(|c| c.sim.number_density(x))
     }
 
@@ -503,15 +513,38 @@ impl Sim {
     /// for the integer-size schemes. Dense up to the largest occupied size: `pairs()`
     /// gives only the occupied sizes.
     fn counts<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray1<u64>>> {
-        let v = self.with(|c| match c.sim.state() {
-            State::Counts(n, _) => {
-                // up to the largest occupied size (the tables may reach further)
-                let len = n.iter().rposition(|&c| c > 0).map_or(0, |i| i + 1);
-                Ok(n[..len].to_vec())
+        let v = self.with(|c| -> PyResult<Vec<u64>> {
+            if let State::Sizes(_) = c.sim.state() {
+                return Err(PyValueError::new_err(
+                    "counts: this scheme's state is particle sizes (use sizes())",
+                ));
             }
-            State::Sizes(_) => Err(PyValueError::new_err(
-                "counts: this scheme's state is particle sizes (use sizes())",
-            )),
+            // from the occupied sizes, within the memory budget (a dense array up to a
+            // size of 2^31 is 16 GiB)
+            let mut largest = 0u64;
+            c.sim
+                .for_each_count(&mut |s, n| {
+                    if n > 0 {
+                        largest = largest.max(s);
+                    }
+                })
+                .map_err(py_err)?;
+            let budget = c.sim.options().memory_budget() as u64;
+            if largest.saturating_mul(8) > budget {
+                return Err(pyo3::exceptions::PyMemoryError::new_err(format!(
+                    "counts(): the largest size is {largest}, a dense array of {} bytes, above the memory budget of {budget}; pairs() gives the occupied sizes only",
+                    largest.saturating_mul(8)
+                )));
+            }
+            let mut out = Vec::new();
+            out.try_reserve_exact(largest as usize).map_err(|_| {
+                pyo3::exceptions::PyMemoryError::new_err("counts(): no memory for the dense array")
+            })?;
+            out.resize(largest as usize, 0);
+            c.sim
+                .for_each_count(&mut |s, n| out[(s - 1) as usize] = n)
+                .map_err(py_err)?;
+            Ok(out)
         })??;
         Ok(PyArray1::from_vec(py, v))
     }
@@ -591,9 +624,11 @@ impl Sim {
     }
 
     /// Replaces the coagulation kernel.
-    fn set_kernel(&self, kernel: &Bound<'_, PyAny>) -> PyResult<()> {
-        let k = coagulation_of(kernel)?;
-        self.with(|c| c.sim.set_kernel(k))?.map_err(py_err)
+    fn set_kernel(&self, py: Python<'_>, kernel: &Bound<'_, PyAny>) -> PyResult<()> {
+        let k = coagulation_of(kernel, Some(self.scheme))?;
+        crate::kernel::clear_raised();
+        self.with(|c| c.sim.set_kernel(k))?
+            .map_err(|e| crate::kernel::with_raised(py, py_err(e), "in set_kernel"))
     }
 
     /// Replaces the fragmentation kernel (massflow, mfa, dsa).

@@ -88,6 +88,8 @@ def test_sizes_round_trip():
         (lambda: lowrank().advance_to(-1.0), ValueError, ""),
         (lambda: lowrank().observable("no-such"), ValueError, "not an observable"),
         (lambda: lowrank().sizes(), ValueError, "counts"),
+        (lambda: lowrank().concentration(float("nan"), 2.0), ValueError, "edges"),
+        (lambda: lowrank().number_density(float("nan")), ValueError, "size"),
         (lambda: Simulation("lowrank-sizes", "additive", Initial.sizes(np.ones(4), 1.0)).set_sizes([]), ValueError, "empty list"),
         (lambda: lowrank().set_dt(0.1), ValueError, "time step"),
         (lambda: lowrank().restore(b"garbage"), CoagulaError, "checkpoint"),
@@ -253,3 +255,47 @@ def test_temperatures_and_velocities_read_out():
     assert v.shape == (200, 3) and sizes.dtype == np.uint64
     g.advance_to(1.0)
     assert g.particles <= 200
+
+
+def test_what_an_independent_review_found_no_longer_crashes():
+    # a dict that contains itself (was a stack overflow)
+    d = {}
+    d["x"] = d
+    with pytest.raises(ValueError, match="nested"):
+        coagula.run(d)
+    # a start of 10^12 particles (was an abort in the allocator)
+    for scheme in ("massflow", "mfa", "dsa", "lowrank-sizes"):
+        with pytest.raises(MemoryError, match="memory_budget"):
+            Simulation(scheme, "additive", Initial.monodisperse(1, particles=10**12))
+    # a dense counts array up to 2^31 (was an abort): pairs() still works
+    s = Simulation("rejection", "additive", Initial.monodisperse(1, particles=64))
+    s.set_pairs([1, 2**31], [1, 1], 1.0)
+    with pytest.raises(MemoryError, match="pairs"):
+        s.counts()
+    assert list(s.pairs()[0]) == [1, 2**31]
+    # a crafted pickle's blank (was an abort or a panic)
+    from coagula._coagula import _simulation
+
+    for n in (10**12, 2**64 - 1):
+        with pytest.raises((ValueError, OverflowError)):
+            _simulation("massflow", "additive", None, {}, ("sizes", 1.0, n, 1.0, n), b"")
+
+
+def test_a_callbacks_exception_belongs_to_its_own_call():
+    calls = {"n": 0}
+
+    def once(x, y):
+        calls["n"] += 1
+        if calls["n"] == 1:
+            raise RuntimeError("first call")
+        return x + y
+
+    k = UserKernel(once, rank=2, factors=_additive_factors, sup=lambda lo, hi: 2 * hi)
+    # inverse evaluates the kernel while it is built: the exception is the cause
+    with pytest.raises(CoagulaError) as e:
+        Simulation("inverse", k, Initial.monodisperse(1, particles=16), seed=1)
+    assert isinstance(e.value.__cause__, RuntimeError)
+    # and is not reported again by a later, unrelated call
+    sim = Simulation("lowrank", k, Initial.monodisperse(1, particles=100), seed=1)
+    sim.advance_to(0.01)
+    assert sim.time == 0.01

@@ -28,6 +28,10 @@ def scenario(scheme, initial, **scheme_options):
     [
         ("lowrank", {"kind": "monodisperse", "size": 1, "particles": 4096}, Initial.monodisperse(1, particles=4096), {}),
         ("inverse", {"kind": "monodisperse", "size": 1, "particles": 512}, Initial.monodisperse(1, particles=512), {}),
+        # (count schemes run a built-in kernel's bound from size 1: core's rule, which
+        # the CLI and Python both apply: SchemeInfo::runs; dsa-counts differed before)
+        ("dsa-counts", {"kind": "monodisperse", "size": 1, "particles": 1024}, Initial.monodisperse(1, particles=1024), {}),
+        ("lowrank-tree", {"kind": "monodisperse", "size": 1, "particles": 1024}, Initial.monodisperse(1, particles=1024), {}),
         ("dsa", {"kind": "exponential", "mean": 1.0, "particles": 2048}, Initial.exponential(1.0, particles=2048), {}),
         ("massflow", {"kind": "exponential", "mean": 1.0, "particles": 1024}, Initial.exponential(1.0, particles=1024), {"dt": 0.05}),
     ],
@@ -61,7 +65,9 @@ def test_python_gives_the_bits_of_the_c_abi():
     c = _lib()
     vp = ctypes.c_void_p
     k, o, s = vp(), vp(), vp()
-    assert c.coag_kernel_new(b"additive", (ctypes.c_double * 1)(1.0), 1, ctypes.byref(k)) == 0
+    # coefficient 1, min-size 1: what the CLI and Python run a built-in kernel with on
+    # an integer-size scheme (core's SchemeInfo::runs); a C caller sets it itself
+    assert c.coag_kernel_new(b"additive", (ctypes.c_double * 2)(1.0, 1.0), 2, ctypes.byref(k)) == 0
     assert c.coag_options_new(ctypes.byref(o)) == 0
     assert c.coag_options_set_count(o, b"seed", ctypes.c_uint64(11)) == 0
     counts = (ctypes.c_uint64 * 1)(3000)

@@ -65,6 +65,7 @@ def test_a_callable_drift_and_errors():
         (dict(wall="sticky", x0=[1.0], u0=[0.0]), ValueError),
         (dict(drift="maftei2016", dim=2, radius=1.0, x0=[2.0, 0.0], u0=[0.0, 0.0]), ValueError),
         (dict(x0=[1.0, 2.0], u0=[0.0]), ValueError),
+        (dict(period=0.0, x0=[1.0], u0=[0.0]), ValueError),
     ]:
         with pytest.raises(exc):
             Langevin(10, **kw)
