@@ -8,7 +8,6 @@ use crate::kernel::Raised;
 use crate::{CoagulaError, py_err};
 use coagula_core::langevin::{Batch, BuiltinDrift, Config, Drift, Friction, VelocityBound, Wall};
 use coagula_core::observe::Replicas;
-use coagula_core::scheme::Budget;
 use numpy::PyArray2;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -312,21 +311,12 @@ impl Langevin {
     ) -> PyResult<Bound<'py, PyDict>> {
         let (out, signal) = py.detach(|| -> PyResult<_> {
             let mut g = self.lock()?;
-            let mut signal: Option<PyErr> = None;
-            let mut cancel = || {
-                Python::attach(|py| match py.check_signals() {
-                    Ok(()) => false,
-                    Err(e) => {
-                        signal = Some(e);
-                        true
-                    }
-                })
-            };
             // (always polled: Ctrl-C stops a long call; the trajectories' streams are
             // their own, so the bits do not depend on how the work is split)
-            let mut budget = Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
-            crate::kernel::clear_raised();
-            let out = with_batch!(&mut *g, b => b.advance_within(t, &mut budget));
+            let (out, signal) = crate::with_signals(
+                work_limit,
+                |budget| with_batch!(&mut *g, b => b.advance_within(t, budget)),
+            );
             Ok((out, signal))
         })?;
         if let PyDrift::Callable(f) = &self.drift

@@ -44,6 +44,31 @@ pub(crate) fn py_err(e: Error) -> PyErr {
     }
 }
 
+/// Runs `f` under a budget of `work_limit` units (none: unlimited) whose cancellation
+/// poll checks for Ctrl-C, with this thread's callback slot cleared first (a detached
+/// call's stepping: `Simulation` and `Langevin`). Returns `f`'s result and the signal's
+/// exception if one stopped it.
+pub(crate) fn with_signals<R>(
+    work_limit: Option<u64>,
+    f: impl FnOnce(&mut coagula_core::scheme::Budget<'_>) -> R,
+) -> (R, Option<PyErr>) {
+    let mut signal: Option<PyErr> = None;
+    let mut cancel = || {
+        Python::attach(|py| match py.check_signals() {
+            Ok(()) => false,
+            Err(e) => {
+                signal = Some(e);
+                true
+            }
+        })
+    };
+    let mut budget =
+        coagula_core::scheme::Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
+    kernel::clear_raised();
+    let out = f(&mut budget);
+    (out, signal)
+}
+
 /// Every scheme of the registry with what it takes, as dicts: `name`, `paper`,
 /// `summary`, `model` (`coagulation`, `temperature` or `gas`), `inits` (the initial
 /// states it builds from), `samples` (what a list of sizes is samples of),

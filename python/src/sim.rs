@@ -13,7 +13,7 @@ use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::facade::{
     Blank, KEYS, Kind, Options, SchemeId, Simulation as Facade, State, Value, peek_stream,
 };
-use coagula_core::scheme::{Budget, StepReport, registry};
+use coagula_core::scheme::{StepReport, registry};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -396,19 +396,8 @@ impl Sim {
         let (out, signal, raised) = py.detach(|| -> PyResult<_> {
             let mut cell = self.lock()?;
             let Cell { sim, rng } = &mut *cell;
-            let mut signal: Option<PyErr> = None;
-            let mut cancel = || {
-                Python::attach(|py| match py.check_signals() {
-                    Ok(()) => false,
-                    Err(e) => {
-                        signal = Some(e);
-                        true
-                    }
-                })
-            };
-            let mut budget = Budget::work(work_limit.unwrap_or(u64::MAX)).with_cancel(&mut cancel);
-            crate::kernel::clear_raised();
-            let out = sim.advance_within(t, &mut budget, rng);
+            let (out, signal) =
+                crate::with_signals(work_limit, |budget| sim.advance_within(t, budget, rng));
             Ok((out, signal, crate::kernel::take_raised()))
         })?;
         if let Some(e) = raised {
