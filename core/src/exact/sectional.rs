@@ -441,6 +441,16 @@ impl<K: CoagulationKernel> Sectional<K> {
                 range: "[0, 1e8]",
             });
         }
+        // the work up front: 4 passes over the pair table a step, at most 1e12 pair
+        // updates a call (minutes; a finer grid with as many steps would run for days)
+        let work = steps * 4.0 * self.rate.len() as f64;
+        if work > 1e12 {
+            return Err(Error::OutOfRange {
+                name: "pair updates of the call (4 x steps x pairs of pivots; fewer steps or pivots)",
+                value: work,
+                range: "[0, 1e12]",
+            });
+        }
         let steps = steps as u64;
         if steps == 0 {
             return Ok(());

@@ -138,6 +138,9 @@ fn bad_input_is_refused() {
     assert!(s.add_at(1e300, 1.0).is_err());
     assert!(s.advance_to(-1.0, 0.1).is_err());
     assert!(s.advance_to(1.0, 0.0).is_err());
+    // work refused up front, not run for days: 1e8 steps over ~100 pivots
+    assert!(s.advance_to(1e4, 1e-4).is_err());
+    assert_eq!(s.time(), 0.0);
     assert!(monomers(1.2).with_removal(|_| f64::NAN).is_err());
     assert!(monomers(1.2).with_growth(|_| -1.0).is_err());
     // a step too long for the rates leaves the state as it was
