@@ -49,6 +49,7 @@ pub mod kernel;
 pub mod langevin;
 pub mod memory;
 pub mod observe;
+pub mod process;
 pub mod qmc;
 pub mod random;
 pub mod sample;

@@ -26,6 +26,8 @@ mod kernel_bounds;
 mod no_panic;
 #[path = "particle_sizes.rs"]
 mod particle_sizes;
+#[path = "processes.rs"]
+mod processes;
 #[path = "regime_sweep.rs"]
 mod regime_sweep;
 #[path = "regressions.rs"]

@@ -176,6 +176,12 @@ pub struct Budget<'a> {
     left: u64,
     until_poll: u64,
     cancel: Option<&'a mut dyn FnMut() -> bool>,
+    /// Stop after a particle doubling (the process layer's thinning bound holds only
+    /// until one: `docs/design/processes.md`).
+    halt_at_doubling: bool,
+    /// The units left when a doubling halted the call (`left` is 0 until resumed), and
+    /// the time of the doubling.
+    halted: Option<(u64, f64)>,
 }
 
 impl core::fmt::Debug for Budget<'_> {
@@ -199,6 +205,8 @@ impl<'a> Budget<'a> {
             left: units,
             until_poll: POLL_EVERY,
             cancel: None,
+            halt_at_doubling: false,
+            halted: None,
         }
     }
 
@@ -231,6 +239,30 @@ impl<'a> Budget<'a> {
             return true;
         }
         self.poll()
+    }
+
+    /// A particle doubling happened: when the call is to halt at one, the budget reads
+    /// as spent (the scheme stops before its next proposal, as when work runs out)
+    /// until [`resume`](Self::resume).
+    #[inline]
+    pub(crate) fn doubled(&mut self, at: f64) {
+        if self.halt_at_doubling && self.halted.is_none() {
+            self.halted = Some((self.left, at));
+            self.left = 0;
+        }
+    }
+
+    /// Whether calls stop after a particle doubling (see [`doubled`](Self::doubled)).
+    pub(crate) fn set_halt_at_doubling(&mut self, on: bool) {
+        self.halt_at_doubling = on;
+    }
+
+    /// Gives back the units a doubling held; the time of the doubling that halted the
+    /// call, if one did since the last resume.
+    pub(crate) fn resume(&mut self) -> Option<f64> {
+        let (left, at) = self.halted.take()?;
+        self.left = left;
+        Some(at)
     }
 
     /// Polls the callback (before a costly unit, e.g. a time step).

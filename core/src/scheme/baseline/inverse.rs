@@ -362,6 +362,7 @@ impl<K: CoagulationKernel> Scheme for Inverse<K> {
                 }
                 self.pop.double();
                 rep.doublings += 1;
+                budget.doubled(self.time);
             }
         };
         rep.time = self.time;

@@ -277,6 +277,7 @@ impl<K: CoagulationKernel> Scheme for AcceptanceRejection<K> {
                 self.sizes.extend_from_within(..);
                 self.pop.double();
                 rep.doublings += 1;
+                budget.doubled(self.time);
             }
         };
         rep.time = self.time;

@@ -1,12 +1,14 @@
 //! What a scheme implements for the facade ([`Controls`]) and the box that turns it
 //! into a [`Simulation`] ([`Boxed`]).
 
+use super::driven::Driver;
 use super::model::{Blank, Init, Model};
 use super::options::{BucketMode, Options};
 use super::{Register, RegistryFragmentation, RegistryKernel, SchemeInfo, Simulation, State};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
 use crate::error::{Error, Result};
 use crate::observe::Observe;
+use crate::process::{Books, Processes};
 use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::boxed::Box;
 use alloc::vec::Vec;
@@ -95,6 +97,8 @@ pub trait Controls<K, F> {
 /// clone is built from.
 pub struct Boxed<E, S, K, F> {
     s: S,
+    /// The processes beside coagulation, when set.
+    driver: Option<Driver>,
     model: Model<K, F>,
     built: Options,
     opts: Options,
@@ -112,6 +116,7 @@ where
         let fragments = model.fragments();
         Boxed {
             s,
+            driver: None,
             model,
             built: opts.clone(),
             opts: opts.clone(),
@@ -128,6 +133,19 @@ where
         G: Rng + ?Sized + 'static,
     {
         Box::new(self)
+    }
+}
+
+impl<E, S, K, F> Boxed<E, S, K, F>
+where
+    S: Controls<K, F>,
+{
+    /// The host replaced the state: the processes' books start from it.
+    fn rebase(&mut self) -> Result<()> {
+        match &mut self.driver {
+            Some(d) => d.rebase(&self.s),
+            None => Ok(()),
+        }
     }
 }
 
@@ -173,7 +191,10 @@ where
         self.s.totals()
     }
     fn advance_to(&mut self, t: f64, rng: &mut G) -> Result<StepReport> {
-        self.s.advance_to(t, rng)
+        match &mut self.driver {
+            Some(d) => d.advance(&mut self.s, t, &mut Budget::unlimited(), rng),
+            None => self.s.advance_to(t, rng),
+        }
     }
     fn advance_within(
         &mut self,
@@ -181,7 +202,34 @@ where
         budget: &mut Budget<'_>,
         rng: &mut G,
     ) -> Result<StepReport> {
-        self.s.advance_within(t, budget, rng)
+        match &mut self.driver {
+            Some(d) => d.advance(&mut self.s, t, budget, rng),
+            None => self.s.advance_within(t, budget, rng),
+        }
+    }
+    fn set_processes(&mut self, procs: Option<Processes>) -> Result<()> {
+        let Some(procs) = procs.filter(|p| !p.is_empty()) else {
+            self.driver = None;
+            return Ok(());
+        };
+        E::INFO.takes_processes(&procs)?;
+        if self.model.fragments() {
+            // a fragmentation raises the particle number: the thinning bound would not hold
+            return Err(Error::Unsupported {
+                what: "processes beside coagulation with a fragmentation kernel (they run with coagulation alone)",
+            });
+        }
+        let integer = matches!(self.s.state(), State::Counts(..));
+        let mut d = Driver::new(procs, integer, 0, 0.0);
+        d.rebase(&self.s)?;
+        self.driver = Some(d);
+        Ok(())
+    }
+    fn processes(&self) -> Option<&Processes> {
+        self.driver.as_ref().map(Driver::processes)
+    }
+    fn books(&self) -> Option<Books> {
+        self.driver.as_ref().map(Driver::books)
     }
     fn state(&self) -> State<'_> {
         self.s.state()
@@ -202,13 +250,16 @@ where
         self.s.velocities(f)
     }
     fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        self.s.set_counts(counts, volume)
+        self.s.set_counts(counts, volume)?;
+        self.rebase()
     }
     fn set_pairs(&mut self, sizes: &[u64], counts: &[u64], volume: f64) -> Result<()> {
-        self.s.set_pairs(sizes, counts, volume)
+        self.s.set_pairs(sizes, counts, volume)?;
+        self.rebase()
     }
     fn set_sizes(&mut self, sizes: &[f64]) -> Result<()> {
-        self.s.set_sizes(sizes)
+        self.s.set_sizes(sizes)?;
+        self.rebase()
     }
     fn set_kernel(&mut self, kernel: K) -> Result<()> {
         let Model::Coagulation { fragmentation, .. } = &self.model else {
@@ -240,7 +291,11 @@ where
         Ok(())
     }
     fn set_time(&mut self, t: f64) -> Result<()> {
-        self.s.set_time(t)
+        self.s.set_time(t)?;
+        if let Some(d) = &mut self.driver {
+            d.forget();
+        }
+        Ok(())
     }
     fn set_mass(&mut self, mass: f64) -> Result<()> {
         self.s.set_mass(mass)
@@ -274,10 +329,20 @@ where
                 o.with_memory_budget(crate::memory::DEFAULT_MEMORY_BUDGET)
             }
         };
+        let (built, now) = (held(&self.built).words(), held(&self.opts).words());
+        let procs = self.driver.as_ref().map(Driver::record);
+        let mut records: [&[u64]; 3] = [&built, &now, &[]];
+        let used = match &procs {
+            Some(p) => {
+                records[2] = p;
+                3
+            }
+            None => 2,
+        };
         super::envelope::write_envelope(
             w,
             E::INFO.tag,
-            &[&held(&self.built).words(), &held(&self.opts).words()],
+            &records[..used],
             self.model.fingerprint(),
             stream,
             |w| self.s.save(w),
@@ -286,13 +351,30 @@ where
     fn restore_checkpoint(&mut self, buf: &[u8]) -> Result<Option<[u64; 4]>> {
         let mut out = None;
         let (s, built, opts) = (&mut self.s, &self.built, &self.opts);
+        let driver = &self.driver;
         let mut records = None;
+        let mut procs = None;
         super::envelope::read_envelope(
             buf,
             E::INFO.tag,
             self.model.fingerprint(),
             |words| {
-                let r = super::envelope::check_records(built, opts, words)?;
+                let (settings, rest) = words.split_at(words.len().min(2));
+                let r = super::envelope::check_records(built, opts, settings)?;
+                procs = match (driver, rest) {
+                    (None, []) => None,
+                    (Some(d), [p]) => Some(d.read_record(p)?),
+                    (None, _) => {
+                        return Err(Error::Checkpoint {
+                            what: "written with processes beside coagulation: set the same processes before restoring",
+                        });
+                    }
+                    (Some(_), _) => {
+                        return Err(Error::Checkpoint {
+                            what: "written without processes beside coagulation (or with a malformed process record)",
+                        });
+                    }
+                };
                 records = Some(r);
                 Ok(())
             },
@@ -304,6 +386,9 @@ where
         if let Some((b, o)) = records {
             self.built = b;
             self.opts = o;
+        }
+        if let (Some(d), Some((pending, books))) = (&mut self.driver, procs) {
+            d.install(pending, books);
         }
         Ok(out)
     }
@@ -331,6 +416,7 @@ where
             |init, opts| E::build::<K, F, G>(self.model.clone(), init, opts),
             &self.built,
         )?;
+        fresh.set_processes(self.driver.as_ref().map(|d| d.processes().clone()))?;
         let mut w = Writer::new(&mut []);
         <Self as Simulation<K, F, G>>::save_checkpoint(self, None, &mut w);
         let mut buf: Vec<u8> = Vec::new();

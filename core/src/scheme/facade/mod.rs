@@ -15,6 +15,7 @@
 //! runs monomorphised.
 
 mod adapter;
+mod driven;
 mod envelope;
 mod model;
 mod options;
@@ -141,6 +142,26 @@ impl SchemeInfo {
         }
     }
 
+    /// Whether the scheme takes the processes `p` beside coagulation
+    /// ([`crate::process`]): the finite-N schemes over counts take a source, removal
+    /// and growth by monomer attachment; those over real sizes (`lowrank-sizes`, `dsa`)
+    /// a source and removal; all of them with coagulation alone (no fragmentation
+    /// kernel). The mass-flow, time-stepped, temperature and gas schemes take none yet
+    /// (`docs/design/processes.md`).
+    pub fn takes_processes(&self, p: &crate::process::Processes) -> crate::error::Result<()> {
+        if self.law != Law::FiniteN {
+            return Err(crate::Error::Unsupported {
+                what: "processes beside coagulation on this scheme (they run on the finite-N schemes: lowrank, lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes, dsa)",
+            });
+        }
+        if p.growth.is_some() && !self.inits.contains(&InitKind::Counts) {
+            return Err(crate::Error::Unsupported {
+                what: "growth on a scheme over real sizes (growth by monomer attachment runs on the integer-size schemes: lowrank)",
+            });
+        }
+        Ok(())
+    }
+
     /// Whether a run under `opts` draws random numbers beyond its start: every
     /// scheme but the time-stepped one on deterministic QMC points (Lécot et al.
     /// 2019). A start from a distribution is the centred quantile lattice for a
@@ -248,6 +269,15 @@ pub trait Simulation<K, F, G: ?Sized>: Observe + Send {
         budget: &mut Budget<'_>,
         rng: &mut G,
     ) -> Result<StepReport>;
+    /// Sets the processes beside coagulation ([`crate::process`]; `None` or empty
+    /// processes: none), with books starting from the state now. Errors: a scheme that
+    /// does not take them ([`SchemeInfo::takes_processes`]); nothing changes then.
+    fn set_processes(&mut self, procs: Option<crate::process::Processes>) -> Result<()>;
+    /// The processes set, if any.
+    fn processes(&self) -> Option<&crate::process::Processes>;
+    /// The processes' books (what was injected, removed and grown), if processes are
+    /// set. A step's flows are the difference of the books after and before it.
+    fn books(&self) -> Option<crate::process::Books>;
     /// The state (sizes or counts; the counts as a dense vector up to the largest size:
     /// see [`for_each_count`](Self::for_each_count) for the occupied sizes only).
     fn state(&self) -> State<'_>;

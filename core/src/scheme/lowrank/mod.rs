@@ -396,7 +396,12 @@ where
     /// One proposal; returns whether it was accepted (and then whether the proposal
     /// rate must be refreshed). `self.time` already includes the waiting time.
     #[inline(always)]
-    fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G, rep: &mut StepReport) -> Result<bool> {
+    fn propose<G: Rng + ?Sized>(
+        &mut self,
+        rng: &mut G,
+        rep: &mut StepReport,
+        budget: &mut Budget<'_>,
+    ) -> Result<bool> {
         let Some(c) = self.engine.propose(rng) else {
             rep.rejections += 1;
             return Ok(false);
@@ -443,6 +448,7 @@ where
             self.pop.double();
             self.engine.double(&self.pop);
             rep.doublings += 1;
+            budget.doubled(self.time);
         }
         self.engine.settle(&self.pop);
         Ok(true)
@@ -520,7 +526,7 @@ where
                 let before = self.time;
                 self.time = at;
                 rep.proposals += 1;
-                match self.propose(rng, &mut rep) {
+                match self.propose(rng, &mut rep, budget) {
                     Ok(true) => {
                         rep.events += 1;
                         if self.engine.needs_refresh() || self.pop.n < 2 {
@@ -575,7 +581,7 @@ where
             }
             k += 1;
             rep.proposals += 1;
-            match self.propose(rng, rep) {
+            match self.propose(rng, rep, budget) {
                 Ok(true) => {
                     rep.events += 1;
                     if self.engine.needs_refresh() || self.pop.n < 2 {

@@ -555,6 +555,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for LowRankSiz
                     break Err(e);
                 }
                 rep.doublings += 1;
+                budget.doubled(self.time);
                 self.pending = None;
             }
             let s = self.rate_sum();

@@ -1,0 +1,321 @@
+//! Processes beside coagulation: a particle source, size-dependent removal and growth
+//! by monomer attachment, with the books a host needs to close its budgets.
+//!
+//! What a process is lives here; how it joins a scheme is the facade's (one way in for
+//! every scheme of the registry: [`Simulation::set_processes`](crate::scheme::facade::Simulation::set_processes)).
+//! The processes and coagulation are independent competing Poisson clocks, so the
+//! combined finite-N chain is simulated exactly by thinning over the scheme's own exact
+//! clock (Gillespie 1976; the design is `docs/design/processes.md`):
+//!
+//! * **source** — particles arrive at rate `S V` (S per unit volume and time), each
+//!   with a size drawn from a [`Distribution`] (nucleation: monodisperse; emission: any
+//!   of them). On integer sizes a continuous distribution's draw is rounded to the
+//!   nearest integer, at least 1 (as [`counts_on_grid`](crate::initial::counts_on_grid)
+//!   puts a continuous start on the grid: say so where it matters);
+//! * **removal** — each particle leaves at rate `λ(x) = c x^p` (dilution and outflow:
+//!   `p = 0`; deposition and sedimentation: a power of size). Dilution with a
+//!   background population is a removal at λ and a source of rate `λ n_b` with the
+//!   background's distribution ([`Processes::dilution`]);
+//! * **growth** — on integer sizes, a particle of size i gains a monomer at rate
+//!   `G(i) = g i^q`: the attachment chain, exact there (its mean follows
+//!   `dx/dt = G(x)` to first order in `1/x`).
+//!
+//! The exponents are at most 1: then `Σ λ(x_i)` and `Σ G(x_i)` never grow when two
+//! particles merge (`(x + y)^p ≤ x^p + y^p` for `0 ≤ p ≤ 1`, `≤ x^p` for `p ≤ 0`), so
+//! the total process rate at the last process event bounds it until the next one — the
+//! thinning bound that makes the scheme exact.
+//!
+//! # Example
+//! ```
+//! use coagula_core::kernel::{Coagulation, NoFragmentation};
+//! use coagula_core::process::{Processes, Source};
+//! use coagula_core::initial::Distribution;
+//! use coagula_core::random::{Generator, generator};
+//! use coagula_core::scheme::facade::{Init, Model, Options, Simulation};
+//! use coagula_core::scheme::registry;
+//! let model = Model::Coagulation {
+//!     kernel: Coagulation::constant(1.0).unwrap(),
+//!     fragmentation: NoFragmentation,
+//! };
+//! // an empty box of volume 1000 and monomers nucleated at S = 0.5 per unit volume
+//! let init = Init::Counts { counts: &[], volume: 1000.0 };
+//! let info = registry::find("lowrank").unwrap();
+//! let mut sim: Box<dyn Simulation<_, _, Generator>> =
+//!     registry::build(info, model, &init, &Options::default()).unwrap();
+//! let source = Source::new(0.5, Distribution::Monodisperse { size: 1.0 }).unwrap();
+//! sim.set_processes(Some(Processes::default().with_source(source))).unwrap();
+//! sim.advance_to(4.0, &mut generator(7, 0)).unwrap();
+//! let books = sim.books().unwrap();
+//! // every particle injected is a monomer: the mass is what was injected
+//! assert_eq!(books.injected_mass, books.injected_number as f64);
+//! assert_eq!(books.current_mass(), books.injected_mass);
+//! // M1 = S t = 2 per unit volume, within the noise of ~2000 injections
+//! assert!((sim.moment(1.0) - 2.0).abs() < 0.2);
+//! ```
+
+use crate::error::{Error, Result};
+use crate::initial::Distribution;
+use crate::random::open_unit;
+use rand_core::Rng;
+
+/// The largest exponent of a removal or growth rate (see the module docs).
+pub const MAX_EXPONENT: f64 = 1.0;
+/// The smallest one (a rate `x^p` below it underflows on any size of interest).
+pub const MIN_EXPONENT: f64 = -10.0;
+
+fn exponent(name: &'static str, p: f64) -> Result<f64> {
+    if p.is_finite() && (MIN_EXPONENT..=MAX_EXPONENT).contains(&p) {
+        Ok(p)
+    } else {
+        Err(Error::OutOfRange {
+            name,
+            value: p,
+            range: "[-10, 1] (at most 1: the thinning bound needs a rate that merging cannot raise)",
+        })
+    }
+}
+
+fn rate(name: &'static str, c: f64) -> Result<f64> {
+    if (0.0..=1e300).contains(&c) {
+        Ok(c)
+    } else {
+        Err(Error::OutOfRange {
+            name,
+            value: c,
+            range: "[0, 1e300]",
+        })
+    }
+}
+
+/// Particles injected at `rate` per unit volume and time with sizes from `sizes`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Source {
+    rate: f64,
+    sizes: Distribution,
+}
+
+impl Source {
+    /// A source of `rate` particles per unit volume and time (finite, ≥ 0) with sizes
+    /// drawn from `sizes` (checked as an initial distribution; an explicit list or
+    /// counts is drawn from with replacement).
+    pub fn new(rate: f64, sizes: Distribution) -> Result<Self> {
+        let rate = self::rate("source rate", rate)?;
+        match &sizes {
+            Distribution::Monodisperse { size } => {
+                crate::error::positive("source size", *size)?;
+            }
+            d => d.check()?,
+        }
+        Ok(Source { rate, sizes })
+    }
+
+    /// Particles per unit volume and time.
+    pub fn rate(&self) -> f64 {
+        self.rate
+    }
+
+    /// The size distribution.
+    pub fn sizes(&self) -> &Distribution {
+        &self.sizes
+    }
+
+    /// One size (rounded to an integer ≥ 1 when `integer`).
+    pub fn draw<G: Rng + ?Sized>(&self, integer: bool, rng: &mut G) -> f64 {
+        let x = match &self.sizes {
+            Distribution::Monodisperse { size } => *size,
+            Distribution::Sizes(x) => x[crate::random::below(rng, x.len() as u64) as usize],
+            Distribution::Counts(c) => {
+                let total = c.iter().fold(0u64, |a, &b| a.saturating_add(b));
+                let mut k = crate::random::below(rng, total);
+                let mut size = c.len();
+                for (i, &n) in c.iter().enumerate() {
+                    if k < n {
+                        size = i + 1;
+                        break;
+                    }
+                    k -= n;
+                }
+                size as f64
+            }
+            d => d.inverse(open_unit(rng), false),
+        };
+        if integer { libm::round(x).max(1.0) } else { x }
+    }
+}
+
+/// A rate `c x^p` per particle (removal) or monomers per unit time (growth).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Power {
+    /// The coefficient c ≥ 0.
+    pub coefficient: f64,
+    /// The exponent p ∈ [−10, 1].
+    pub exponent: f64,
+}
+
+impl Power {
+    /// `c x^p`, checked (`what` names it in an error).
+    pub fn new(what: &'static str, coefficient: f64, exponent: f64) -> Result<Self> {
+        Ok(Power {
+            coefficient: rate(what, coefficient)?,
+            exponent: self::exponent(what, exponent)?,
+        })
+    }
+
+    /// The rate at size `x`.
+    #[inline]
+    pub fn at(&self, x: f64) -> f64 {
+        if self.exponent == 0.0 {
+            self.coefficient
+        } else {
+            self.coefficient * libm::pow(x, self.exponent)
+        }
+    }
+}
+
+/// The processes of a population beside coagulation (any of them may be absent).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Processes {
+    /// The source.
+    pub source: Option<Source>,
+    /// The removal rate per particle, `λ(x) = c x^p`.
+    pub removal: Option<Power>,
+    /// Growth by monomer attachment, `G(i) = g i^q` (integer sizes).
+    pub growth: Option<Power>,
+}
+
+impl Processes {
+    /// With a source.
+    pub fn with_source(mut self, source: Source) -> Self {
+        self.source = Some(source);
+        self
+    }
+
+    /// With removal at `λ(x) = c x^p` per particle.
+    pub fn with_removal(mut self, c: f64, p: f64) -> Result<Self> {
+        self.removal = Some(Power::new("removal rate", c, p)?);
+        Ok(self)
+    }
+
+    /// With growth by monomer attachment at `G(i) = g i^q` per particle.
+    pub fn with_growth(mut self, g: f64, q: f64) -> Result<Self> {
+        self.growth = Some(Power::new("growth rate", g, q)?);
+        Ok(self)
+    }
+
+    /// Dilution at rate λ with a background of `number` particles per unit volume
+    /// distributed as `sizes`: removal at λ and a source at `λ number`.
+    pub fn dilution(lambda: f64, number: f64, sizes: Distribution) -> Result<Self> {
+        let inflow = rate("background number concentration", number)? * lambda;
+        Ok(Processes::default()
+            .with_removal(lambda, 0.0)?
+            .with_source(Source::new(inflow, sizes)?))
+    }
+
+    /// Whether there is no process at all.
+    pub fn is_empty(&self) -> bool {
+        self.source.is_none() && self.removal.is_none() && self.growth.is_none()
+    }
+}
+
+/// The books of the processes: what came in, what left and what grew, in simulation
+/// particles and their mass (sizes summed), since the processes were set (or the state
+/// was replaced by a host), and the merges that took the number down. A particle
+/// doubling doubles every entry, the initial state included, so that the mass
+/// `initial + injected − removed + grown` and the number
+/// `initial + injected − removed − merged` are the state's: exactly for integer sizes
+/// (masses below 2^53), to rounding otherwise.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Books {
+    /// Particles at the start of the books.
+    pub initial_number: u64,
+    /// Their mass.
+    pub initial_mass: f64,
+    /// Particles the source injected.
+    pub injected_number: u64,
+    /// Their mass.
+    pub injected_mass: f64,
+    /// Particles removed.
+    pub removed_number: u64,
+    /// Their mass.
+    pub removed_mass: f64,
+    /// Monomers attached by growth (mass gained; the number is unchanged).
+    pub grown_mass: f64,
+    /// Merges by coagulation (each takes the number down by one).
+    pub merged: u64,
+    /// Particle doublings since the start of the books.
+    pub doublings: u64,
+}
+
+impl Books {
+    /// Books starting from `number` particles of total mass `mass`.
+    pub fn starting(number: u64, mass: f64) -> Self {
+        Books {
+            initial_number: number,
+            initial_mass: mass,
+            ..Books::default()
+        }
+    }
+
+    /// The particle number the books give.
+    pub fn current_number(&self) -> u64 {
+        (self.initial_number.saturating_add(self.injected_number))
+            .saturating_sub(self.removed_number)
+            .saturating_sub(self.merged)
+    }
+
+    /// The mass the books give.
+    pub fn current_mass(&self) -> f64 {
+        self.initial_mass + self.injected_mass - self.removed_mass + self.grown_mass
+    }
+
+    /// After a particle doubling.
+    pub(crate) fn double(&mut self) {
+        self.initial_number = self.initial_number.saturating_mul(2);
+        self.injected_number = self.injected_number.saturating_mul(2);
+        self.removed_number = self.removed_number.saturating_mul(2);
+        self.merged = self.merged.saturating_mul(2);
+        self.initial_mass *= 2.0;
+        self.injected_mass *= 2.0;
+        self.removed_mass *= 2.0;
+        self.grown_mass *= 2.0;
+        self.doublings += 1;
+    }
+
+    pub(crate) fn save(&self, w: &mut crate::checkpoint::Writer) {
+        w.u64(self.initial_number);
+        w.f64(self.initial_mass);
+        w.u64(self.injected_number);
+        w.f64(self.injected_mass);
+        w.u64(self.removed_number);
+        w.f64(self.removed_mass);
+        w.f64(self.grown_mass);
+        w.u64(self.merged);
+        w.u64(self.doublings);
+    }
+
+    pub(crate) fn load(r: &mut crate::checkpoint::Reader) -> Result<Self> {
+        let b = Books {
+            initial_number: r.u64()?,
+            initial_mass: r.f64()?,
+            injected_number: r.u64()?,
+            injected_mass: r.f64()?,
+            removed_number: r.u64()?,
+            removed_mass: r.f64()?,
+            grown_mass: r.f64()?,
+            merged: r.u64()?,
+            doublings: r.u64()?,
+        };
+        let masses = [
+            b.initial_mass,
+            b.injected_mass,
+            b.removed_mass,
+            b.grown_mass,
+        ];
+        if masses.iter().any(|m| !(m.is_finite() && *m >= 0.0)) {
+            return Err(Error::Checkpoint {
+                what: "process books with a negative or non-finite mass",
+            });
+        }
+        Ok(b)
+    }
+}

@@ -1,0 +1,486 @@
+//! The processes of [`crate::process`] driven over a scheme's own exact clock, for every
+//! scheme of the registry that takes them (the facade names no scheme: it reads and
+//! replaces the state through [`Controls`]).
+//!
+//! Thinning (`docs/design/processes.md`): at the last process event (or call start) the
+//! total process rate `R = S V + Σ λ(x_i) + Σ G(x_i)` bounds it until the next process
+//! event, since merging cannot raise it and V changes only at a particle doubling, where
+//! the scheme halts ([`Budget::doubled`]) and the bound is drawn afresh (an exponential's
+//! residual is exponential). A candidate comes at `Exp(R̄)`; the scheme coagulates to it
+//! with its own clock; then a source, removal or growth event happens with probability
+//! its rate over `R̄` (which particle: in proportion to its rate), or nothing.
+//!
+//! The candidate is kept across calls and in checkpoints, so that a run split at any
+//! times gives the bits of an unbroken one.
+//!
+//! Cost: a process event reads and replaces the state (`O(occupied sizes)` on counts,
+//! `O(N)` on sizes); a scheme's own O(log) insert and remove is the next step
+//! (`docs/design/processes.md`).
+
+use super::{Controls, State};
+use crate::checkpoint::{Reader, Writer};
+use crate::error::{Error, Result};
+use crate::memory::try_reserve;
+use crate::observe::Observe;
+use crate::process::{Books, Power, Processes};
+use crate::random::{exp1, open_unit};
+use crate::scheme::{Budget, Scheme, StepReport};
+use alloc::vec::Vec;
+use rand_core::Rng;
+
+/// Words of the checkpoint record: fingerprint, candidate (3), books (9).
+const RECORD: usize = 13;
+
+/// The processes of one sim, their books and the pending candidate.
+#[derive(Clone, Debug)]
+pub(crate) struct Driver {
+    procs: Processes,
+    books: Books,
+    /// The next candidate time and the bound it was drawn with.
+    pending: Option<(f64, f64)>,
+    integer: bool,
+}
+
+/// A population as the driver edits it.
+enum Held {
+    Counts(Vec<(u64, u64)>),
+    Sizes(Vec<f64>),
+}
+
+fn held<K, F, S: Controls<K, F>>(s: &S) -> Result<Held> {
+    match s.state() {
+        State::Sizes(x) => {
+            let mut v = Vec::new();
+            try_reserve(&mut v, x.len() + 1)?;
+            v.extend_from_slice(x);
+            Ok(Held::Sizes(v))
+        }
+        State::Counts(..) => {
+            let mut v = Vec::new();
+            let mut err = None;
+            s.for_each_count(&mut |i, n| {
+                if err.is_none()
+                    && let Err(e) = try_reserve(&mut v, 1)
+                {
+                    err = Some(e);
+                }
+                if err.is_none() {
+                    v.push((i, n));
+                }
+            })?;
+            match err {
+                Some(e) => Err(e),
+                None => Ok(Held::Counts(v)),
+            }
+        }
+    }
+}
+
+/// Particle number and mass of the state.
+fn tally<K, F, S: Controls<K, F>>(s: &S) -> Result<(u64, f64)> {
+    match s.state() {
+        State::Sizes(x) => Ok((x.len() as u64, x.iter().sum())),
+        State::Counts(..) => {
+            let (mut n, mut m) = (0u64, 0u128);
+            s.for_each_count(&mut |i, c| {
+                n = n.saturating_add(c);
+                m = m.saturating_add(u128::from(i) * u128::from(c));
+            })?;
+            Ok((n, m as f64))
+        }
+    }
+}
+
+/// `Σ rate(x)` over the particles of `h`.
+fn total(h: &Held, rate: &Power) -> f64 {
+    match h {
+        Held::Counts(v) => v.iter().map(|&(i, n)| rate.at(i as f64) * n as f64).sum(),
+        Held::Sizes(x) => x.iter().map(|&y| rate.at(y)).sum(),
+    }
+}
+
+/// The particle (index into `h`) at `u ∈ [0, Σ rate)` of the cumulative rates.
+fn pick(h: &Held, rate: &Power, mut u: f64) -> usize {
+    let last = match h {
+        Held::Counts(v) => v.len(),
+        Held::Sizes(x) => x.len(),
+    };
+    for k in 0..last {
+        let w = match h {
+            Held::Counts(v) => rate.at(v[k].0 as f64) * v[k].1 as f64,
+            Held::Sizes(x) => rate.at(x[k]),
+        };
+        if u < w {
+            return k;
+        }
+        u -= w;
+    }
+    // rounding past the last: the last particle of positive rate
+    (0..last)
+        .rev()
+        .find(|&k| match h {
+            Held::Counts(v) => v[k].1 > 0 && rate.at(v[k].0 as f64) > 0.0,
+            Held::Sizes(x) => rate.at(x[k]) > 0.0,
+        })
+        .unwrap_or(0)
+}
+
+/// What a process event did.
+enum Event {
+    Inject(f64),
+    Remove(usize),
+    Grow(usize),
+}
+
+impl Driver {
+    /// The driver of `procs` on a scheme whose sizes are integers (`integer`) or not,
+    /// with books starting from `number` particles of mass `mass`.
+    pub(crate) fn new(procs: Processes, integer: bool, number: u64, mass: f64) -> Self {
+        Driver {
+            procs,
+            books: Books::starting(number, mass),
+            pending: None,
+            integer,
+        }
+    }
+
+    pub(crate) fn processes(&self) -> &Processes {
+        &self.procs
+    }
+
+    pub(crate) fn books(&self) -> Books {
+        self.books
+    }
+
+    /// The host replaced the state: new books from it, the candidate drawn afresh.
+    pub(crate) fn rebase<K, F, S: Controls<K, F>>(&mut self, s: &S) -> Result<()> {
+        let (n, m) = tally(s)?;
+        self.books = Books::starting(n, m);
+        self.pending = None;
+        Ok(())
+    }
+
+    /// The clock was set: the candidate is drawn afresh.
+    pub(crate) fn forget(&mut self) {
+        self.pending = None;
+    }
+
+    fn source_rate(&self, volume: f64) -> f64 {
+        self.procs
+            .source
+            .as_ref()
+            .map_or(0.0, |s| s.rate() * volume)
+    }
+
+    /// The total process rate of the state.
+    fn rate<K, F, S: Controls<K, F> + Observe>(&self, s: &S) -> Result<(f64, Option<Held>)> {
+        let mut r = self.source_rate(s.volume());
+        if self.procs.removal.is_none() && self.procs.growth.is_none() {
+            return Ok((r, None));
+        }
+        let h = held(s)?;
+        for p in [&self.procs.removal, &self.procs.growth]
+            .into_iter()
+            .flatten()
+        {
+            r += total(&h, p);
+        }
+        Ok((r, Some(h)))
+    }
+
+    /// Runs `s` to `t` within `budget` with the processes (see the module docs).
+    pub(crate) fn advance<K, F, S, G>(
+        &mut self,
+        s: &mut S,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport>
+    where
+        S: Scheme + Controls<K, F> + Observe,
+        G: Rng + ?Sized,
+    {
+        crate::scheme::check_target(s.time(), t)?;
+        let mut out = StepReport {
+            time: s.time(),
+            ..StepReport::default()
+        };
+        loop {
+            let (at, bound) = match self.pending {
+                Some(p) => p,
+                None => {
+                    let (r, _) = self.rate(s)?;
+                    let r = crate::error::finite("total process rate", r)?;
+                    let at = if r > 0.0 {
+                        s.time() + exp1(rng) / r
+                    } else {
+                        f64::INFINITY
+                    };
+                    self.pending = Some((at, r));
+                    (at, r)
+                }
+            };
+            let target = if at <= t { at } else { t };
+            budget.set_halt_at_doubling(true);
+            let rep = s.advance_within(target, budget, rng);
+            budget.set_halt_at_doubling(false);
+            let halted = budget.resume();
+            let rep = rep?;
+            out.accumulate(&rep);
+            // every event of the coagulation schemes that take processes is a merge
+            self.books.merged = self.books.merged.saturating_add(rep.events);
+            if let Some(td) = halted {
+                // V and N doubled at td: the bound no longer holds. No event followed
+                // (the scheme halts before its next proposal), so the state has stood
+                // since td: back to td, where the candidate's residual wait (exponential)
+                // and the scheme's next proposal are drawn afresh — the same whether or
+                // not the call's target came first, so a split run keeps its bits.
+                for _ in 0..rep.doublings {
+                    self.books.double();
+                }
+                s.set_time(td)?;
+                self.pending = None;
+                out.interrupted = false;
+                out.time = td;
+                continue;
+            }
+            if rep.interrupted {
+                return Ok(out);
+            }
+            if at > t {
+                out.time = s.time();
+                return Ok(out);
+            }
+            // the candidate at `at`, where the scheme stands
+            if !budget.take(1) {
+                out.interrupted = true;
+                out.time = s.time();
+                return Ok(out);
+            }
+            self.candidate(s, bound, rng)?;
+            self.pending = None;
+            out.time = s.time();
+            if at >= t {
+                return Ok(out);
+            }
+        }
+    }
+
+    /// Decides and applies the candidate (on error the state and books are unchanged;
+    /// the candidate stays pending).
+    fn candidate<K, F, S, G>(&mut self, s: &mut S, bound: f64, rng: &mut G) -> Result<()>
+    where
+        S: Controls<K, F> + Observe,
+        G: Rng + ?Sized,
+    {
+        let mut u = open_unit(rng) * bound;
+        let src = self.source_rate(s.volume());
+        let event = if u < src {
+            let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
+            Some((Event::Inject(source.draw(self.integer, rng)), None))
+        } else {
+            u -= src;
+            let (_, h) = self.rate(s)?;
+            let mut chosen = None;
+            if let Some(h) = h {
+                for (p, grow) in [(&self.procs.removal, false), (&self.procs.growth, true)] {
+                    let Some(p) = p else { continue };
+                    let w = total(&h, p);
+                    if u < w {
+                        let k = pick(&h, p, u);
+                        chosen = Some(if grow {
+                            Event::Grow(k)
+                        } else {
+                            Event::Remove(k)
+                        });
+                        break;
+                    }
+                    u -= w;
+                }
+                chosen.map(|e| (e, Some(h)))
+            } else {
+                None
+            }
+        };
+        let Some((event, h)) = event else {
+            return Ok(()); // thinned
+        };
+        let h = match h {
+            Some(h) => h,
+            None => held(s)?,
+        };
+        self.apply(s, h, event)
+    }
+
+    fn apply<K, F, S>(&mut self, s: &mut S, h: Held, event: Event) -> Result<()>
+    where
+        S: Controls<K, F> + Observe,
+    {
+        let volume = s.volume();
+        let mut books = self.books;
+        match h {
+            Held::Counts(mut v) => {
+                match event {
+                    Event::Inject(x) => {
+                        let i = x as u64;
+                        match v.binary_search_by_key(&i, |p| p.0) {
+                            Ok(k) => v[k].1 += 1,
+                            Err(k) => {
+                                try_reserve(&mut v, 1)?;
+                                v.insert(k, (i, 1));
+                            }
+                        }
+                        books.injected_number += 1;
+                        books.injected_mass += x;
+                    }
+                    Event::Remove(k) => {
+                        v[k].1 -= 1;
+                        books.removed_number += 1;
+                        books.removed_mass += v[k].0 as f64;
+                    }
+                    Event::Grow(k) => {
+                        let i = v[k].0;
+                        v[k].1 -= 1;
+                        match v.binary_search_by_key(&(i + 1), |p| p.0) {
+                            Ok(j) => v[j].1 += 1,
+                            Err(j) => {
+                                try_reserve(&mut v, 1)?;
+                                v.insert(j, (i + 1, 1));
+                            }
+                        }
+                        books.grown_mass += 1.0;
+                    }
+                }
+                v.retain(|p| p.1 > 0);
+                let (mut sizes, mut counts) = (Vec::new(), Vec::new());
+                try_reserve(&mut sizes, v.len())?;
+                try_reserve(&mut counts, v.len())?;
+                sizes.extend(v.iter().map(|p| p.0));
+                counts.extend(v.iter().map(|p| p.1));
+                s.set_pairs(&sizes, &counts, volume)?;
+            }
+            Held::Sizes(mut x) => {
+                match event {
+                    Event::Inject(y) => {
+                        x.push(y);
+                        books.injected_number += 1;
+                        books.injected_mass += y;
+                    }
+                    Event::Remove(k) => {
+                        books.removed_number += 1;
+                        books.removed_mass += x[k];
+                        x.swap_remove(k);
+                    }
+                    Event::Grow(_) => {
+                        return Err(Error::Unsupported {
+                            what: "growth on a scheme over real sizes (growth by monomer attachment runs on integer sizes: lowrank)",
+                        });
+                    }
+                }
+                s.set_sizes(&x)?;
+            }
+        }
+        self.books = books;
+        Ok(())
+    }
+
+    /// The checkpoint record: a fingerprint of the processes, the candidate and the
+    /// books.
+    pub(crate) fn record(&self) -> Vec<u64> {
+        let mut words = Vec::new();
+        let mut buf = [0u8; 8 * RECORD];
+        let mut w = Writer::new(&mut buf);
+        w.u64(fingerprint(&self.procs));
+        match self.pending {
+            Some((at, r)) => {
+                w.u64(1);
+                w.f64(at);
+                w.f64(r);
+            }
+            None => {
+                w.u64(0);
+                w.f64(0.0);
+                w.f64(0.0);
+            }
+        }
+        self.books.save(&mut w);
+        for c in buf.chunks_exact(8) {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(c);
+            words.push(u64::from_le_bytes(b));
+        }
+        words
+    }
+
+    /// The candidate and books of a record written by [`record`](Self::record) for the
+    /// same processes (checked; nothing changes here).
+    pub(crate) fn read_record(&self, words: &[u64]) -> Result<(Option<(f64, f64)>, Books)> {
+        let bad = |what| Error::Checkpoint { what };
+        if words.len() != RECORD {
+            return Err(bad("a process record of the wrong length"));
+        }
+        let mut buf = [0u8; 8 * RECORD];
+        for (c, w) in buf.chunks_exact_mut(8).zip(words) {
+            c.copy_from_slice(&w.to_le_bytes());
+        }
+        let mut r = Reader::new(&buf);
+        if r.u64()? != fingerprint(&self.procs) {
+            return Err(bad(
+                "written with other processes (source, removal or growth)",
+            ));
+        }
+        let pending = match r.u64()? {
+            0 => {
+                r.f64()?;
+                r.f64()?;
+                None
+            }
+            1 => {
+                let (at, b) = (r.f64()?, r.f64()?);
+                if !(at.is_finite() || at == f64::INFINITY) || !(b.is_finite() && b >= 0.0) {
+                    return Err(bad("a process candidate that is not a time"));
+                }
+                Some((at, b))
+            }
+            _ => return Err(bad("invalid process candidate flag")),
+        };
+        Ok((pending, Books::load(&mut r)?))
+    }
+
+    /// Installs what [`read_record`](Self::read_record) returned.
+    pub(crate) fn install(&mut self, pending: Option<(f64, f64)>, books: Books) {
+        self.pending = pending;
+        self.books = books;
+    }
+}
+
+/// A fingerprint of the processes' parameters.
+fn fingerprint(p: &Processes) -> u64 {
+    use crate::initial::Distribution as D;
+    let mut words: Vec<u64> = Vec::new();
+    if let Some(s) = &p.source {
+        words.push(1);
+        words.push(s.rate().to_bits());
+        match s.sizes() {
+            D::Monodisperse { size } => words.extend([1, size.to_bits()]),
+            D::Exponential { mean } => words.extend([2, mean.to_bits()]),
+            D::Lognormal { median, gsd } => words.extend([3, median.to_bits(), gsd.to_bits()]),
+            D::Sizes(x) => {
+                words.push(4);
+                words.push(crate::checkpoint::fingerprint(
+                    x.iter().map(|v| v.to_bits()),
+                ));
+            }
+            D::Counts(c) => {
+                words.push(5);
+                words.push(crate::checkpoint::fingerprint(c.iter().copied()));
+            }
+        }
+    }
+    for (tag, q) in [(2, &p.removal), (3, &p.growth)] {
+        if let Some(q) = q {
+            words.extend([tag, q.coefficient.to_bits(), q.exponent.to_bits()]);
+        }
+    }
+    crate::checkpoint::fingerprint(words)
+}

@@ -1,0 +1,518 @@
+//! Sources, removal and growth beside coagulation (issue 42), on every scheme of the
+//! registry that takes them: the books balance exactly; removal and growth alone follow
+//! their exact finite-N laws; a source and a sink with the constant kernel follow the
+//! exact finite-N master equation; checkpoints split = unbroken; schemes that take no
+//! processes refuse them and stay as they were.
+
+use crate::common;
+
+use coagula_core::Error;
+use coagula_core::initial::Distribution;
+use coagula_core::kernel::{Coagulation, NoFragmentation};
+use coagula_core::observe::Replicas;
+use coagula_core::process::{Books, Processes, Source};
+use coagula_core::scheme::facade::{Init, InitKind, Model, Options, SchemeId, State};
+use coagula_core::scheme::registry;
+use rand_pcg::Pcg64Mcg;
+use rand_pcg::rand_core::SeedableRng;
+
+/// The schemes that take processes.
+fn process_schemes() -> Vec<SchemeId> {
+    let p = Processes::default().with_removal(1.0, 0.0).unwrap();
+    registry::SCHEMES
+        .iter()
+        .copied()
+        .filter(|s| s.takes_processes(&p).is_ok())
+        .collect()
+}
+
+/// Whether the scheme doubles its particles (the direct simulations do not).
+fn doubles(id: SchemeId) -> bool {
+    !id.name.starts_with("dsa")
+}
+
+/// A sim of `id` from `counts` in `volume` (as particle sizes for a sizes scheme).
+fn sim(id: SchemeId, k: Coagulation, counts: &[u64], volume: f64) -> Box<common::Sim> {
+    let model = Model::coagulation(k, NoFragmentation);
+    if id.inits.contains(&InitKind::Counts) {
+        let init = Init::Counts { counts, volume };
+        return registry::build(id, model, &init, &Options::default()).unwrap();
+    }
+    let mut sizes = Vec::new();
+    for (i, &c) in counts.iter().enumerate() {
+        sizes.extend(std::iter::repeat_n((i + 1) as f64, c as usize));
+    }
+    let n = sizes.len() as f64;
+    // mass per unit volume: the sizes' sum over `volume`
+    let init = Init::Sizes {
+        sizes: &sizes,
+        mass: sizes.iter().sum::<f64>() / volume,
+    };
+    // a fixed-capacity scheme gets room for what the sources bring
+    let opts = if id.takes_option("capacity") {
+        Options::default().with_capacity(sizes.len() * 8 + 64)
+    } else {
+        Options::default()
+    };
+    let s = registry::build(id, model, &init, &opts).unwrap();
+    assert!((s.volume() - volume).abs() < 1e-9 * volume, "{n} particles");
+    s
+}
+
+/// Particle number and mass of the state.
+fn tally(s: &common::Sim) -> (u64, f64) {
+    match s.state() {
+        State::Sizes(x) => (x.len() as u64, x.iter().sum()),
+        State::Counts(..) => {
+            let (mut n, mut m) = (0u64, 0u64);
+            s.for_each_count(&mut |i, c| {
+                n += c;
+                m += i * c;
+            })
+            .unwrap();
+            (n, m as f64)
+        }
+    }
+}
+
+fn rng(seed: u64) -> Pcg64Mcg {
+    Pcg64Mcg::seed_from_u64(seed)
+}
+
+fn monomers(rate: f64) -> Source {
+    Source::new(rate, Distribution::Monodisperse { size: 1.0 }).unwrap()
+}
+
+/// Every process alone and all together, on integer and on real sizes.
+fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
+    let mut v = vec![
+        (
+            "monomer source",
+            Processes::default().with_source(monomers(0.5)),
+        ),
+        (
+            "exponential source",
+            Processes::default()
+                .with_source(Source::new(0.5, Distribution::Exponential { mean: 3.0 }).unwrap()),
+        ),
+        (
+            "listed source",
+            Processes::default()
+                .with_source(Source::new(0.5, Distribution::Counts(vec![0, 2, 0, 1])).unwrap()),
+        ),
+        (
+            "dilution",
+            Processes::default().with_removal(0.3, 0.0).unwrap(),
+        ),
+        (
+            "deposition x^1",
+            Processes::default().with_removal(0.02, 1.0).unwrap(),
+        ),
+        (
+            "deposition x^-1",
+            Processes::default().with_removal(0.5, -1.0).unwrap(),
+        ),
+        (
+            "background dilution",
+            Processes::dilution(0.2, 0.5, Distribution::Exponential { mean: 2.0 }).unwrap(),
+        ),
+    ];
+    if integer {
+        v.push((
+            "growth",
+            Processes::default().with_growth(0.3, 0.0).unwrap(),
+        ));
+        v.push((
+            "linear growth",
+            Processes::default().with_growth(0.1, 1.0).unwrap(),
+        ));
+        v.push((
+            "all",
+            Processes::dilution(0.2, 0.5, Distribution::Monodisperse { size: 1.0 })
+                .unwrap()
+                .with_growth(0.2, 1.0 / 3.0)
+                .unwrap(),
+        ));
+    }
+    v
+}
+
+fn balance(b: &Books, s: &common::Sim, what: &str) {
+    let (n, m) = tally(s);
+    assert_eq!(b.current_number(), n, "{what}: number");
+    if matches!(s.state(), State::Counts(..)) {
+        assert_eq!(b.current_mass(), m, "{what}: mass (exact on integer sizes)");
+    } else {
+        assert!(
+            (b.current_mass() - m).abs() <= 1e-12 * m.max(1.0),
+            "{what}: mass {} vs {m}",
+            b.current_mass()
+        );
+    }
+}
+
+#[test]
+fn the_books_balance_on_every_scheme_and_process() {
+    let schemes = process_schemes();
+    let names: Vec<&str> = schemes.iter().map(|s| s.name).collect();
+    assert_eq!(names.len(), 8, "{names:?}");
+    for id in schemes {
+        let integer = id.inits.contains(&InitKind::Counts);
+        for (what, p) in cases(integer) {
+            let what = format!("{} / {what}", id.name);
+            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[60, 20, 5], 40.0);
+            s.set_processes(Some(p.clone())).unwrap();
+            let mut g = rng(3);
+            let mut events = 0;
+            for k in 1..=20 {
+                s.advance_to(0.5 * f64::from(k), &mut g).unwrap();
+                let b = s.books().unwrap();
+                balance(&b, &*s, &what);
+                events = b.injected_number + b.removed_number + b.grown_mass as u64;
+            }
+            assert!(events > 10, "{what}: only {events} process events");
+        }
+    }
+}
+
+#[test]
+fn schemes_without_processes_refuse_them_and_stay_as_they_were() {
+    let p = Processes::default().with_removal(0.3, 0.0).unwrap();
+    for &id in registry::SCHEMES {
+        if id.takes_processes(&p).is_ok() {
+            continue;
+        }
+        let Some(mut s) = common::standard(id, 64, Coagulation::constant(1.0).unwrap()) else {
+            continue;
+        };
+        let before = s.particles();
+        match s.set_processes(Some(p.clone())) {
+            Err(Error::Unsupported { what }) => {
+                assert!(what.contains("lowrank"), "{}: {what}", id.name)
+            }
+            other => panic!("{}: {other:?}", id.name),
+        }
+        assert!(s.processes().is_none() && s.books().is_none());
+        assert_eq!(s.particles(), before);
+    }
+    // growth on real sizes names the scheme that has it
+    let id = registry::find("lowrank-sizes").unwrap();
+    let g = Processes::default().with_growth(1.0, 0.0).unwrap();
+    let msg = id.takes_processes(&g).unwrap_err().to_string();
+    assert!(msg.contains("lowrank"), "{msg}");
+}
+
+#[test]
+fn bad_processes_are_refused() {
+    assert!(Source::new(-1.0, Distribution::Monodisperse { size: 1.0 }).is_err());
+    assert!(Source::new(f64::NAN, Distribution::Monodisperse { size: 1.0 }).is_err());
+    assert!(Source::new(1.0, Distribution::Monodisperse { size: 0.0 }).is_err());
+    assert!(
+        Source::new(
+            1.0,
+            Distribution::Lognormal {
+                median: 1.0,
+                gsd: 0.5
+            }
+        )
+        .is_err()
+    );
+    for p in [1.5, f64::NAN, f64::INFINITY, -11.0] {
+        assert!(Processes::default().with_removal(1.0, p).is_err(), "{p}");
+        assert!(Processes::default().with_growth(1.0, p).is_err(), "{p}");
+    }
+    assert!(Processes::default().with_removal(-1.0, 0.0).is_err());
+    assert!(
+        Processes::default()
+            .with_removal(f64::INFINITY, 0.0)
+            .is_err()
+    );
+}
+
+/// Removal alone (coagulation negligible): each particle of size i survives to t with
+/// probability e^{−λ(i) t}, independently — binomial totals over the replicas.
+#[test]
+fn removal_alone_is_exponential_per_size() {
+    let (reps, t) = (400u64, 1.5);
+    let counts = [40u64, 30, 0, 20];
+    let (c, p) = (0.3, 0.5);
+    for id in process_schemes() {
+        let mut kept = [0u64; 4];
+        for r in 0..reps {
+            let mut s = sim(id, Coagulation::constant(1e-12).unwrap(), &counts, 100.0);
+            s.set_processes(Some(Processes::default().with_removal(c, p).unwrap()))
+                .unwrap();
+            s.advance_to(t, &mut rng(r + 11)).unwrap();
+            let mut at = |i: u64, n: u64| kept[i as usize - 1] += n;
+            match s.state() {
+                State::Sizes(x) => x.iter().for_each(|&y| at(y as u64, 1)),
+                State::Counts(..) => s.for_each_count(&mut at).unwrap(),
+            }
+        }
+        for (i, &n0) in counts.iter().enumerate() {
+            if n0 == 0 {
+                continue;
+            }
+            let q = (-c * ((i + 1) as f64).powf(p) * t).exp();
+            let trials = (reps * n0) as f64;
+            let z = (kept[i] as f64 - trials * q) / (trials * q * (1.0 - q)).sqrt();
+            assert!(z.abs() < 5.0, "{} size {}: z = {z:.2}", id.name, i + 1);
+        }
+    }
+}
+
+/// Growth alone on integer sizes: at constant G = g each particle gains Poisson(g t)
+/// monomers; at G(i) = g i (a Yule process) a particle of size i has mean size
+/// i e^{gt} and variance i e^{gt}(e^{gt} − 1).
+#[test]
+fn growth_alone_follows_the_attachment_chain() {
+    let (reps, t) = (300u64, 1.2);
+    let counts = [30u64, 10];
+    let n0: u64 = counts.iter().sum();
+    let m0 = 30.0 + 20.0;
+    for id in process_schemes()
+        .into_iter()
+        .filter(|s| s.inits.contains(&InitKind::Counts))
+    {
+        for (g, q) in [(0.4, 0.0), (0.3, 1.0)] {
+            let mut mass = 0.0;
+            for r in 0..reps {
+                let mut s = sim(id, Coagulation::constant(1e-12).unwrap(), &counts, 100.0);
+                s.set_processes(Some(Processes::default().with_growth(g, q).unwrap()))
+                    .unwrap();
+                s.advance_to(t, &mut rng(r + 1000)).unwrap();
+                mass += tally(&*s).1;
+            }
+            let (mean, var) = if q == 0.0 {
+                let a = n0 as f64 * g * t;
+                (m0 + a, a)
+            } else {
+                let e = (g * t).exp();
+                (m0 * e, m0 * e * (e - 1.0))
+            };
+            let z = (mass - reps as f64 * mean) / (reps as f64 * var).sqrt();
+            assert!(z.abs() < 5.0, "{} G = {g} i^{q}: z = {z:.2}", id.name);
+        }
+    }
+}
+
+/// The exact finite-N law of the constant kernel K = 1 with a monomer source S V and
+/// removal λ N, *with the particle-doubling rule as the schemes apply it*: the state is
+/// (N, n0, d) — V = V0 2^d; a merge that leaves N < n0/2 doubles N and V; a process
+/// event replaces the state through the host's setter, which makes its particle number
+/// the new doubling reference n0. Solved by uniformisation; returns E[N/V] at `times`.
+fn source_sink_reference(
+    s: f64,
+    lambda: f64,
+    n_start: u64,
+    v0: f64,
+    times: &[f64],
+    doubling: bool,
+) -> Vec<f64> {
+    const NMAX: usize = 96;
+    const DMAX: usize = 3;
+    let index = |n: usize, n0: usize, d: usize| (d * (NMAX + 1) + n0) * (NMAX + 1) + n;
+    let size = (NMAX + 1) * (NMAX + 1) * (DMAX + 1);
+    let mut edges: Vec<Vec<(usize, f64)>> = vec![Vec::new(); size];
+    let mut out_rate = vec![0.0; size];
+    for d in 0..=DMAX {
+        let v = v0 * f64::from(1u32 << d);
+        for n0 in 0..=NMAX {
+            for n in 0..=NMAX {
+                let from = index(n, n0, d);
+                let mut add = |to: usize, r: f64| {
+                    if r > 0.0 {
+                        edges[from].push((to, r));
+                        out_rate[from] += r;
+                    }
+                };
+                if n >= 2 {
+                    let r = (n * (n - 1)) as f64 / (2.0 * v);
+                    let m = n - 1;
+                    if doubling && m < n0 / 2 {
+                        // doubling (the cap at DMAX is checked to hold no probability)
+                        let dd = (d + 1).min(DMAX);
+                        add(index((2 * m).min(NMAX), n0, dd), r);
+                    } else {
+                        add(index(m, n0, d), r);
+                    }
+                }
+                if n < NMAX {
+                    add(index(n + 1, n + 1, d), s * v);
+                }
+                if n >= 1 {
+                    add(index(n - 1, n - 1, d), lambda * n as f64);
+                }
+            }
+        }
+    }
+    let big = out_rate.iter().cloned().fold(0.0, f64::max) * 1.01;
+    let mut p = vec![0.0; size];
+    p[index(n_start as usize, n_start as usize, 0)] = 1.0;
+    let mut out = Vec::new();
+    let mut now = 0.0;
+    for &t in times {
+        // in pieces of a ≤ 20 expected jumps (no underflow of e^{-a})
+        while now < t {
+            let dt = (t - now).min(20.0 / big);
+            let a = big * dt;
+            let mut term = p.clone();
+            let mut weight = (-a).exp();
+            let mut acc: Vec<f64> = term.iter().map(|x| x * weight).collect();
+            let mut k = 0u32;
+            while f64::from(k) < a || weight > 1e-18 {
+                k += 1;
+                let mut next = vec![0.0; size];
+                for (i, &pi) in term.iter().enumerate() {
+                    if pi == 0.0 {
+                        continue;
+                    }
+                    next[i] += pi * (1.0 - out_rate[i] / big);
+                    for &(j, r) in &edges[i] {
+                        next[j] += pi * r / big;
+                    }
+                }
+                term = next;
+                weight *= a / f64::from(k);
+                for (x, y) in acc.iter_mut().zip(&term) {
+                    *x += y * weight;
+                }
+            }
+            p = acc;
+            now += dt;
+        }
+        let mut e = 0.0;
+        let mut edge = 0.0;
+        for d in 0..=DMAX {
+            for n0 in 0..=NMAX {
+                for n in 0..=NMAX {
+                    let q = p[index(n, n0, d)];
+                    e += q * n as f64 / (v0 * f64::from(1u32 << d));
+                    if d == DMAX || n == NMAX {
+                        edge += q;
+                    }
+                }
+            }
+        }
+        assert!(edge < 1e-9, "the truncation holds {edge}");
+        out.push(e);
+    }
+    out
+}
+
+/// Every scheme that takes processes against the exact finite-N law of a source and a
+/// sink (above), with N0 = V = 16: at N ~ 16 an error of O(1/N) (a rate off by
+/// N/(N − 1), a process applied to the wrong volume) moves E[N/V] by several percent,
+/// many standard errors of 3000 replicas. E[M1/V] = S/λ + (m0 − S/λ) e^{−λt} holds
+/// exactly at any N (it is linear), and is checked too.
+#[test]
+fn a_source_and_a_sink_follow_the_finite_n_master_equation() {
+    let (s_rate, lambda, n0, v0) = (1.0, 0.5, 16u64, 16.0);
+    let times = [0.5, 2.0];
+    let exact = source_sink_reference(s_rate, lambda, n0, v0, &times, true);
+    let plain = source_sink_reference(s_rate, lambda, n0, v0, &times, false);
+    let reps = 3000u64;
+    let z_max = common::z_max(reps);
+    let mut failures = String::new();
+    for (k, id) in process_schemes().into_iter().enumerate() {
+        let mut number = vec![Replicas::new(); times.len()];
+        let mut mass = vec![Replicas::new(); times.len()];
+        for r in 0..reps {
+            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[n0], v0);
+            let p = Processes::default()
+                .with_source(monomers(s_rate))
+                .with_removal(lambda, 0.0)
+                .unwrap();
+            s.set_processes(Some(p)).unwrap();
+            let mut g = rng((k as u64) << 32 | r);
+            for (i, &t) in times.iter().enumerate() {
+                s.advance_to(t, &mut g).unwrap();
+                number[i].push(s.particles() as f64 / s.volume());
+                mass[i].push(s.moment(1.0));
+            }
+        }
+        for (i, &t) in times.iter().enumerate() {
+            let m_exact = s_rate / lambda + (1.0 - s_rate / lambda) * (-lambda * t).exp();
+            for (what, st, want) in [
+                (
+                    "E[N/V]",
+                    &number[i],
+                    if doubles(id) { exact[i] } else { plain[i] },
+                ),
+                ("E[M1/V]", &mass[i], m_exact),
+            ] {
+                let z = (st.mean() - want) / st.std_error();
+                if z.abs() > z_max {
+                    failures += &format!(
+                        "{} t = {t} {what}: {:.5} vs exact {want:.5} (z = {z:.2})\n",
+                        id.name,
+                        st.mean()
+                    );
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
+/// A run split at any times, through a checkpoint into a fresh sim, gives the bits of an
+/// unbroken one (the pending candidate and the books travel in the envelope); a
+/// checkpoint with processes is refused by a sim without them, and the other way round.
+#[test]
+fn split_runs_through_checkpoints_keep_their_bits() {
+    for id in process_schemes() {
+        let integer = id.inits.contains(&InitKind::Counts);
+        let p = Processes::dilution(0.3, 0.5, Distribution::Monodisperse { size: 1.0 }).unwrap();
+        let p = if integer {
+            p.with_growth(0.1, 1.0).unwrap()
+        } else {
+            p
+        };
+        let make = || {
+            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[100, 30], 50.0);
+            s.set_processes(Some(p.clone())).unwrap();
+            s
+        };
+        let mut whole = make();
+        let mut g = rng(5);
+        whole.advance_to(4.0, &mut g).unwrap();
+        let mut split = make();
+        let mut h = rng(5);
+        for t in [0.3, 1.1, 2.5] {
+            split.advance_to(t, &mut h).unwrap();
+            let mut buf = vec![0u8; 1 << 20];
+            let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
+            split.save_checkpoint(None, &mut w);
+            let len = w.finish().unwrap();
+            let mut fresh = make();
+            fresh.restore_checkpoint(&buf[..len]).unwrap();
+            // a sim without processes refuses it, and is unchanged
+            let mut bare = sim(id, Coagulation::constant(1.0).unwrap(), &[100, 30], 50.0);
+            let before = common::state_bits(&*bare);
+            assert!(bare.restore_checkpoint(&buf[..len]).is_err(), "{}", id.name);
+            assert_eq!(common::state_bits(&*bare), before);
+            split = fresh;
+        }
+        split.advance_to(4.0, &mut h).unwrap();
+        assert_eq!(
+            common::state_bits(&*whole),
+            common::state_bits(&*split),
+            "{}",
+            id.name
+        );
+        assert_eq!(whole.books(), split.books(), "{}", id.name);
+        let b = whole.books().unwrap();
+        assert!(
+            b.injected_number > 0 && b.removed_number > 0,
+            "{}: {b:?}",
+            id.name
+        );
+        // a duplicate continues identically
+        let mut copy = whole.duplicate().unwrap();
+        let (mut g1, mut g2) = (rng(9), rng(9));
+        whole.advance_to(6.0, &mut g1).unwrap();
+        copy.advance_to(6.0, &mut g2).unwrap();
+        assert_eq!(common::state_bits(&*whole), common::state_bits(&*copy));
+        assert_eq!(whole.books(), copy.books());
+    }
+}
