@@ -28,6 +28,9 @@ module coagula
   ! exact solutions (coag_exact_*)
   integer(c_int32_t), parameter :: COAG_EXACT_CONSTANT = 0, COAG_EXACT_ADDITIVE = 1, &
        COAG_EXACT_MULTIPLICATIVE = 2, COAG_EXACT_MARCUS_LUSHNIKOV = 3, COAG_EXACT_COAG_FRAG = 4
+  ! a source's sizes (coag_sim_set_source)
+  integer(c_int32_t), parameter :: COAG_SOURCE_MONODISPERSE = 0, COAG_SOURCE_EXPONENTIAL = 1, &
+       COAG_SOURCE_LOGNORMAL = 2
   ! Langevin batches and first hits
   integer(c_int32_t), parameter :: COAG_WALL_SPECULAR = 0, COAG_WALL_ABSORBING = 1
   integer(c_int32_t), parameter :: COAG_BOUND_NONE = 0, COAG_BOUND_CLAMP = 1, COAG_BOUND_REFLECT = 2
@@ -85,6 +88,18 @@ module coagula
      integer(c_int64_t) :: events, proposals, rejections, bound_violations, clipped, doublings, &
           removed, bounces                     ! uint64_t
   end type coag_step_report
+
+  ! the books of a sim's processes: set struct_size = c_sizeof(it)
+  type, bind(c) :: coag_books
+     integer(c_size_t) :: struct_size
+     integer(c_int64_t) :: initial_number      ! uint64_t
+     real(c_double) :: initial_mass
+     integer(c_int64_t) :: injected_number     ! uint64_t
+     real(c_double) :: injected_mass
+     integer(c_int64_t) :: removed_number      ! uint64_t
+     real(c_double) :: removed_mass, grown_mass
+     integer(c_int64_t) :: merged, doublings   ! uint64_t
+  end type coag_books
 
   ! a first-hit kernel estimation: set struct_size = c_sizeof(it)
   type, bind(c) :: coag_first_hits
@@ -716,6 +731,32 @@ module coagula
        import
        type(c_ptr), value :: sim
        real(c_double), value :: mass
+     end function
+     integer(c_int32_t) function coag_sim_set_source(sim, rate, kind, p1, p2) bind(c, name="coag_sim_set_source")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), value :: rate
+       integer(c_int32_t), value :: kind          ! COAG_SOURCE_*
+       real(c_double), value :: p1, p2
+     end function
+     integer(c_int32_t) function coag_sim_set_removal(sim, coefficient, exponent) bind(c, name="coag_sim_set_removal")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), value :: coefficient, exponent
+     end function
+     integer(c_int32_t) function coag_sim_set_growth(sim, coefficient, exponent) bind(c, name="coag_sim_set_growth")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), value :: coefficient, exponent
+     end function
+     integer(c_int32_t) function coag_sim_clear_processes(sim) bind(c, name="coag_sim_clear_processes")
+       import
+       type(c_ptr), value :: sim
+     end function
+     integer(c_int32_t) function coag_sim_books(sim, out) bind(c, name="coag_sim_books")
+       import
+       type(c_ptr), value :: sim
+       type(coag_books), intent(inout) :: out     ! struct_size set
      end function
      ! ------------------------------------------------------------ the library
      type(c_ptr) function coag_version() bind(c, name="coag_version")

@@ -220,6 +220,23 @@ extern "C" {
 #define COAG_FAMILY_GAS 2
 
 /*
+ A source's sizes: every particle of size `p1` (nucleation).
+ */
+#define COAG_SOURCE_MONODISPERSE 0
+
+/*
+ A source's sizes: exponential of mean `p1` (rounded to integers ≥ 1 on an
+ integer-size scheme).
+ */
+#define COAG_SOURCE_EXPONENTIAL 1
+
+/*
+ A source's sizes: log-normal of median `p1` and geometric standard deviation `p2`
+ (rounded likewise).
+ */
+#define COAG_SOURCE_LOGNORMAL 2
+
+/*
  Success.
  */
 #define COAG_OK 0
@@ -762,6 +779,54 @@ typedef struct {
  A host callback returning 64 uniformly random bits per call.
  */
 typedef uint64_t (*coag_rng_callback)(void *user_data);
+
+/*
+ The books of a sim's processes (see `coag_sim_books`). The caller sets
+ `struct_size` to `sizeof(coag_books)`.
+ */
+typedef struct {
+  /*
+   `sizeof(coag_books)` as the caller compiled it.
+   */
+  size_t struct_size;
+  /*
+   Particles when the books started (the processes were set or the host replaced
+   the state), doubled with every particle doubling since.
+   */
+  uint64_t initial_number;
+  /*
+   Their mass (sizes summed).
+   */
+  double initial_mass;
+  /*
+   Particles the source injected.
+   */
+  uint64_t injected_number;
+  /*
+   Their mass.
+   */
+  double injected_mass;
+  /*
+   Particles removed.
+   */
+  uint64_t removed_number;
+  /*
+   Their mass.
+   */
+  double removed_mass;
+  /*
+   Mass gained by monomer attachment.
+   */
+  double grown_mass;
+  /*
+   Merges by coagulation.
+   */
+  uint64_t merged;
+  /*
+   Particle doublings since the books started.
+   */
+  uint64_t doublings;
+} coag_books;
 
 /*
  Exact moment `M_m(t)` (m = 0..3) of a `COAG_EXACT_*` solution from `n_1(0) = 1`.
@@ -1394,6 +1459,62 @@ int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_
  `sim` NULL or live; `buf` valid for `len` bytes.
  */
 int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
+
+/*
+ Sets the sim's particle source: `rate` particles per unit volume and time (finite,
+ ≥ 0), sizes of `kind` (`COAG_SOURCE_*`) with parameters `p1`, `p2` (unused ones
+ ignored). Processes run on the finite-N schemes with coagulation alone (lowrank,
+ lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes,
+ dsa); elsewhere `COAG_UNSUPPORTED`. Setting any process starts the books from the
+ state now. Errors leave the sim unchanged.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_source(coag_sim *sim, double rate, int32_t kind, double p1, double p2);
+
+/*
+ Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
+ ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
+ sedimentation at a power of size. Dilution with a background population is this and
+ a source of rate `λ n_b` with the background's sizes. As `coag_sim_set_source`
+ otherwise.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_removal(coag_sim *sim, double coefficient, double exponent);
+
+/*
+ Sets growth by monomer attachment: a particle of size i gains a monomer at rate
+ `G(i) = coefficient · i^exponent` (exponent in [−10, 1]); integer-size schemes only
+ (a scheme over real sizes: `COAG_UNSUPPORTED`). As `coag_sim_set_source` otherwise.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_growth(coag_sim *sim, double coefficient, double exponent);
+
+/*
+ Removes every process (and the books).
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_clear_processes(coag_sim *sim);
+
+/*
+ Writes the books of the sim's processes into `out` (`struct_size` bytes): what was
+ injected, removed and grown since the books started, so that the mass
+ `initial + injected − removed + grown` and the number
+ `initial + injected − removed − merged` are the state's (exactly on integer sizes).
+ A step's flows are the books after it minus before. `COAG_UNSUPPORTED` when no
+ process is set.
+
+ # Safety
+ `sim` NULL or live; `out` NULL or valid for `out->struct_size` bytes.
+ */
+int32_t coag_sim_books(const coag_sim *sim, coag_books *out);
 
 /*
  The sim's current time.

@@ -598,6 +598,24 @@ class Sim {
     void set_dt(double dt) { check(coag_sim_set_dt(s_.get(), dt)); }
     void set_time(double t) { check(coag_sim_set_time(s_.get(), t)); }
     void set_mass(double mass) { check(coag_sim_set_mass(s_.get(), mass)); }
+    /// Processes beside coagulation (see coagula.h): kind is a COAG_SOURCE_* constant.
+    void set_source(double rate, std::int32_t kind, double p1, double p2 = 0.0) {
+        check(coag_sim_set_source(s_.get(), rate, kind, p1, p2));
+    }
+    void set_removal(double coefficient, double exponent) {
+        check(coag_sim_set_removal(s_.get(), coefficient, exponent));
+    }
+    void set_growth(double coefficient, double exponent) {
+        check(coag_sim_set_growth(s_.get(), coefficient, exponent));
+    }
+    void clear_processes() { check(coag_sim_clear_processes(s_.get())); }
+    /// The processes' books (throws COAG_UNSUPPORTED when none is set).
+    coag_books books() const {
+        coag_books b{};
+        b.struct_size = sizeof b;
+        check(coag_sim_books(s_.get(), &b));
+        return b;
+    }
 
     coag_sim *get() noexcept { return s_.get(); }
     const coag_sim *get() const noexcept { return s_.get(); }

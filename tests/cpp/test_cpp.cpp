@@ -560,6 +560,26 @@ void test_temperature() {
 
 /// A gas of hard spheres with restitution 1: elastic collisions conserve momentum and
 /// energy; particles given are read back as given.
+// sources, removal and growth: the books balance; errors as exceptions
+void test_processes() {
+    auto k = Kernel::constant(1.0);
+    Options o;
+    o.set("seed", 9);
+    auto sim = Sim::from_counts("lowrank", k, {800, 50}, 900.0, &o);
+    sim.set_source(0.4, COAG_SOURCE_LOGNORMAL, 2.0, 1.5);
+    sim.set_removal(0.1, 0.0);
+    sim.set_growth(0.05, 1.0);
+    sim.advance_to(2.0);
+    coag_books b = sim.books();
+    double mass = b.initial_mass + b.injected_mass - b.removed_mass + b.grown_mass;
+    double n = static_cast<double>(b.initial_number + b.injected_number - b.removed_number - b.merged);
+    CHECK(n == static_cast<double>(sim.particle_count()), "books: the number");
+    CHECK(std::fabs(mass - sim.moment(1.0) * n / sim.moment(0.0)) < 1e-9 * mass, "books: the mass");
+    CHECK(code_of([&] { sim.set_removal(1.0, 3.0); }) == COAG_INVALID_ARGUMENT, "removal exponent 3");
+    sim.clear_processes();
+    CHECK(code_of([&] { sim.books(); }) == COAG_UNSUPPORTED, "no books without processes");
+}
+
 void test_gas() {
     auto hs = Kernel::builtin("hard-spheres", {1.0});
     Options o;
@@ -697,6 +717,7 @@ int main() {
         test_event_driven();
         test_temperature();
         test_gas();
+        test_processes();
         test_langevin();
     }, &msg);
     CHECK(code == COAG_OK, "uncaught: %s", msg.c_str());

@@ -130,6 +130,7 @@ program test_fortran
   call test_dsa()
   call test_temperature()
   call test_gas()
+  call test_processes()
   call test_langevin()
   print '(a, i0, a, i0, a)', "test_fortran: ", nchecks - nfail, " passed, ", nfail, " failed"
   if (nfail /= 0) stop 1
@@ -641,6 +642,40 @@ contains
 
   ! hard spheres with restitution 1: elastic collisions conserve momentum and energy;
   ! particles given are read back; a checkpoint continues bit for bit
+  ! a monomer source, dilution and growth by attachment on lowrank: the books balance
+  subroutine test_processes()
+    type(c_ptr) :: k, o, sim
+    type(coag_books) :: b
+    integer(c_int64_t) :: n
+    real(c_double) :: m0, m1, v
+    k = kernel("constant", [1.0_c_double])
+    o = seeded(3, 0)
+    call ok(coag_sim_new_counts(cs("lowrank"), k, c_null_ptr, o, [1000_c_int64_t], 1_c_size_t, &
+         1000.0_c_double, sim))
+    call coag_options_free(o)
+    call ok(coag_sim_set_source(sim, 0.5_c_double, COAG_SOURCE_MONODISPERSE, 1.0_c_double, 0.0_c_double))
+    call ok(coag_sim_set_removal(sim, 0.2_c_double, 0.0_c_double))
+    call ok(coag_sim_set_growth(sim, 0.1_c_double, 1.0_c_double))
+    call expect(coag_sim_set_removal(sim, 1.0_c_double, 2.0_c_double), COAG_INVALID_ARGUMENT, "removal exponent 2")
+    call expect(coag_sim_set_source(sim, 1.0_c_double, 7, 1.0_c_double, 0.0_c_double), COAG_INVALID_ARGUMENT, &
+         "source kind 7")
+    call ok(coag_sim_advance_to(sim, 2.0_c_double, c_null_ptr))
+    b%struct_size = c_sizeof(b)
+    call ok(coag_sim_books(sim, b))
+    call ok(coag_sim_particle_count(sim, n))
+    call ok(coag_sim_moment(sim, 0.0_c_double, m0))
+    call ok(coag_sim_moment(sim, 1.0_c_double, m1))
+    v = real(n, c_double) / m0
+    call check(b%initial_number + b%injected_number - b%removed_number - b%merged == n, "books: the number")
+    call check(abs(b%initial_mass + b%injected_mass - b%removed_mass + b%grown_mass - m1 * v) < 1e-9_c_double * m1 * v, &
+         "books: the mass")
+    call check(b%injected_number > 0 .and. b%removed_number > 0 .and. b%grown_mass > 0, "every process acted")
+    call ok(coag_sim_clear_processes(sim))
+    call expect(coag_sim_books(sim, b), COAG_UNSUPPORTED, "no books without processes")
+    call coag_sim_free(sim)
+    call coag_kernel_free(k)
+  end subroutine test_processes
+
   subroutine test_gas()
     character(len=10), parameter :: names(4) = [character(len=10) :: "momentum-x", "momentum-y", "momentum-z", "energy"]
     type(c_ptr) :: hs, o, ds, db

@@ -6,11 +6,13 @@
 
 mod advance;
 mod checkpoint;
+mod process;
 mod read;
 mod write;
 
 pub use advance::*;
 pub use checkpoint::*;
+pub use process::*;
 pub use read::*;
 pub use write::*;
 

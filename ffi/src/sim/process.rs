@@ -1,0 +1,190 @@
+//! Processes beside coagulation (core's `process` module): a particle source, removal
+//! at a power of size, growth by monomer attachment, and their books. The rules live in
+//! core; these calls translate.
+
+use super::coag_sim;
+use crate::status::{COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, fail, guard};
+use crate::util::{handle, handle_mut, write_sized};
+use coagula_core::initial::Distribution;
+use coagula_core::process::{Processes, Source};
+
+/// A source's sizes: every particle of size `p1` (nucleation).
+pub const COAG_SOURCE_MONODISPERSE: i32 = 0;
+/// A source's sizes: exponential of mean `p1` (rounded to integers ≥ 1 on an
+/// integer-size scheme).
+pub const COAG_SOURCE_EXPONENTIAL: i32 = 1;
+/// A source's sizes: log-normal of median `p1` and geometric standard deviation `p2`
+/// (rounded likewise).
+pub const COAG_SOURCE_LOGNORMAL: i32 = 2;
+
+/// The books of a sim's processes (see `coag_sim_books`). The caller sets
+/// `struct_size` to `sizeof(coag_books)`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct coag_books {
+    /// `sizeof(coag_books)` as the caller compiled it.
+    pub struct_size: usize,
+    /// Particles when the books started (the processes were set or the host replaced
+    /// the state), doubled with every particle doubling since.
+    pub initial_number: u64,
+    /// Their mass (sizes summed).
+    pub initial_mass: f64,
+    /// Particles the source injected.
+    pub injected_number: u64,
+    /// Their mass.
+    pub injected_mass: f64,
+    /// Particles removed.
+    pub removed_number: u64,
+    /// Their mass.
+    pub removed_mass: f64,
+    /// Mass gained by monomer attachment.
+    pub grown_mass: f64,
+    /// Merges by coagulation.
+    pub merged: u64,
+    /// Particle doublings since the books started.
+    pub doublings: u64,
+}
+
+const BOOKS_V1: usize = std::mem::size_of::<coag_books>();
+
+fn current(s: &coag_sim) -> Processes {
+    s.sim.processes().cloned().unwrap_or_default()
+}
+
+/// Sets the sim's particle source: `rate` particles per unit volume and time (finite,
+/// ≥ 0), sizes of `kind` (`COAG_SOURCE_*`) with parameters `p1`, `p2` (unused ones
+/// ignored). Processes run on the finite-N schemes with coagulation alone (lowrank,
+/// lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes,
+/// dsa); elsewhere `COAG_UNSUPPORTED`. Setting any process starts the books from the
+/// state now. Errors leave the sim unchanged.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_source(
+    sim: *mut coag_sim,
+    rate: f64,
+    kind: i32,
+    p1: f64,
+    p2: f64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let sizes = match kind {
+            COAG_SOURCE_MONODISPERSE => Distribution::Monodisperse { size: p1 },
+            COAG_SOURCE_EXPONENTIAL => Distribution::Exponential { mean: p1 },
+            COAG_SOURCE_LOGNORMAL => Distribution::Lognormal {
+                median: p1,
+                gsd: p2,
+            },
+            _ => {
+                return fail(
+                    COAG_INVALID_ARGUMENT,
+                    format!("source kind {kind}: not one of COAG_SOURCE_*"),
+                );
+            }
+        };
+        let p = current(s).with_source(Source::new(rate, sizes)?);
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
+/// Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
+/// ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
+/// sedimentation at a power of size. Dilution with a background population is this and
+/// a source of rate `λ n_b` with the background's sizes. As `coag_sim_set_source`
+/// otherwise.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_removal(
+    sim: *mut coag_sim,
+    coefficient: f64,
+    exponent: f64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let p = current(s).with_removal(coefficient, exponent)?;
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
+/// Sets growth by monomer attachment: a particle of size i gains a monomer at rate
+/// `G(i) = coefficient · i^exponent` (exponent in [−10, 1]); integer-size schemes only
+/// (a scheme over real sizes: `COAG_UNSUPPORTED`). As `coag_sim_set_source` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_growth(
+    sim: *mut coag_sim,
+    coefficient: f64,
+    exponent: f64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let p = current(s).with_growth(coefficient, exponent)?;
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
+/// Removes every process (and the books).
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_clear_processes(sim: *mut coag_sim) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        s.sim.set_processes(None)?;
+        Ok(())
+    })
+}
+
+/// Writes the books of the sim's processes into `out` (`struct_size` bytes): what was
+/// injected, removed and grown since the books started, so that the mass
+/// `initial + injected − removed + grown` and the number
+/// `initial + injected − removed − merged` are the state's (exactly on integer sizes).
+/// A step's flows are the books after it minus before. `COAG_UNSUPPORTED` when no
+/// process is set.
+///
+/// # Safety
+/// `sim` NULL or live; `out` NULL or valid for `out->struct_size` bytes.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_books(sim: *const coag_sim, out: *mut coag_books) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let s = unsafe { handle(sim, "sim") }?;
+        crate::util::non_null(out, "out")?;
+        // SAFETY: non-null; a coag_books begins with its size_t struct_size (contract).
+        let size = unsafe { out.cast::<usize>().read_unaligned() };
+        let Some(b) = s.sim.books() else {
+            return fail(
+                COAG_UNSUPPORTED,
+                "books: no process is set on this sim".to_string(),
+            );
+        };
+        let v = coag_books {
+            struct_size: BOOKS_V1,
+            initial_number: b.initial_number,
+            initial_mass: b.initial_mass,
+            injected_number: b.injected_number,
+            injected_mass: b.injected_mass,
+            removed_number: b.removed_number,
+            removed_mass: b.removed_mass,
+            grown_mass: b.grown_mass,
+            merged: b.merged,
+            doublings: b.doublings,
+        };
+        // SAFETY: forwarded contract (`size` bytes writable at out).
+        unsafe { write_sized(out, size, BOOKS_V1, v, "books") }
+    })
+}

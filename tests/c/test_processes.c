@@ -1,0 +1,118 @@
+/* Sources, removal and growth beside coagulation through the one handle: the books
+ * balance on every scheme that takes them; a scheme that does not refuses and stays as
+ * it was; a checkpoint restores only into a sim with the same processes, and a split
+ * run (and a clone) keeps the bits of an unbroken one. */
+#include "check.h"
+
+static const char *SCHEMES[] = {"lowrank", "lowrank-tree", "lowrank-binary-tree", "inverse",
+                                "rejection", "dsa-counts"};
+
+static coag_sim *make(const char *scheme, int with_processes) {
+    coag_kernel *k = KERNEL0("constant");
+    coag_options *o = options_seeded(21, 0);
+    uint64_t counts[2] = {300, 40};
+    coag_sim *sim = sim_counts(scheme, k, o, counts, 2, 300.0);
+    coag_options_free(o);
+    coag_kernel_free(k);
+    if (with_processes) {
+        OK(coag_sim_set_source(sim, 0.5, COAG_SOURCE_EXPONENTIAL, 2.0, 0.0));
+        OK(coag_sim_set_removal(sim, 0.1, 1.0 / 3.0));
+        OK(coag_sim_set_growth(sim, 0.05, 1.0));
+    }
+    return sim;
+}
+
+static size_t save(coag_sim *sim, uint8_t **out) {
+    size_t len, written;
+    OK(coag_sim_checkpoint_size(sim, &len));
+    *out = malloc(len);
+    OK(coag_sim_checkpoint(sim, *out, len, &written));
+    return written;
+}
+
+static int same_state(coag_sim *a, coag_sim *b) {
+    uint8_t *x, *y;
+    size_t lx = save(a, &x), ly = save(b, &y);
+    int same = lx == ly && memcmp(x, y, lx) == 0;
+    free(x);
+    free(y);
+    return same;
+}
+
+static void books_balance(coag_sim *sim, const char *scheme) {
+    coag_books b;
+    memset(&b, 0, sizeof b);
+    b.struct_size = sizeof b;
+    OK(coag_sim_books(sim, &b));
+    uint64_t n;
+    double m0, m1;
+    OK(coag_sim_particle_count(sim, &n));
+    OK(coag_sim_moment(sim, 0.0, &m0));
+    OK(coag_sim_moment(sim, 1.0, &m1));
+    CHECK(b.initial_number + b.injected_number - b.removed_number - b.merged == n,
+          "%s: the number", scheme);
+    double mass = b.initial_mass + b.injected_mass - b.removed_mass + b.grown_mass;
+    CHECK(fabs(mass - m1 * (double)n / m0) < 1e-9 * mass, "%s: the mass %g vs %g", scheme, mass,
+          m1 * (double)n / m0);
+    CHECK(b.injected_number > 0 && b.removed_number > 0 && b.grown_mass > 0, "%s: every process acted",
+          scheme);
+}
+
+int main(void) {
+    for (size_t i = 0; i < sizeof SCHEMES / sizeof *SCHEMES; i++) {
+        const char *s = SCHEMES[i];
+        coag_sim *whole = make(s, 1);
+        OK(coag_sim_advance_to(whole, 3.0, NULL));
+        books_balance(whole, s);
+        /* split through checkpoints into fresh sims */
+        coag_sim *split = make(s, 1);
+        double stops[3] = {0.4, 1.3, 2.2};
+        for (int j = 0; j < 3; j++) {
+            OK(coag_sim_advance_to(split, stops[j], NULL));
+            uint8_t *buf;
+            size_t len = save(split, &buf);
+            coag_sim *bare = make(s, 0);
+            EXPECT(coag_sim_restore(bare, buf, len), COAG_BAD_CHECKPOINT);
+            coag_sim_free(bare);
+            coag_sim *fresh = make(s, 1);
+            OK(coag_sim_restore(fresh, buf, len));
+            free(buf);
+            coag_sim_free(split);
+            split = fresh;
+        }
+        OK(coag_sim_advance_to(split, 3.0, NULL));
+        CHECK(same_state(whole, split), "%s: split = unbroken", s);
+        coag_sim *copy;
+        OK(coag_sim_clone(whole, &copy));
+        OK(coag_sim_advance_to(whole, 4.0, NULL));
+        OK(coag_sim_advance_to(copy, 4.0, NULL));
+        CHECK(same_state(whole, copy), "%s: a clone continues identically", s);
+        coag_sim_free(copy);
+        coag_sim_free(split);
+        coag_sim_free(whole);
+    }
+    /* refusals: growth on real sizes, processes on mass flow, bad parameters */
+    coag_kernel *k = KERNEL0("constant");
+    double sizes[64];
+    for (int i = 0; i < 64; i++) sizes[i] = 1.0 + i % 3;
+    coag_sim *mf;
+    OK(coag_sim_new_sizes("massflow", k, NULL, NULL, sizes, 64, 1.0, &mf));
+    EXPECT(coag_sim_set_removal(mf, 0.1, 0.0), COAG_UNSUPPORTED);
+    coag_sim_free(mf);
+    coag_sim *ls;
+    OK(coag_sim_new_sizes("lowrank-sizes", k, NULL, NULL, sizes, 64, 1.0, &ls));
+    EXPECT(coag_sim_set_growth(ls, 0.1, 0.0), COAG_UNSUPPORTED);
+    OK(coag_sim_set_removal(ls, 0.1, 0.0));
+    EXPECT(coag_sim_set_removal(ls, 0.1, 1.5), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_source(ls, -1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_source(ls, 1.0, COAG_SOURCE_LOGNORMAL, 1.0, 0.5), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_source(NULL, 1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_books(ls, NULL), COAG_NULL_PARAMETER);
+    coag_books small;
+    small.struct_size = 4;
+    EXPECT(coag_sim_books(ls, &small), COAG_INVALID_ARGUMENT);
+    coag_sim_free(ls);
+    coag_kernel_free(k);
+    printf("test_processes: %d checks, %d failed\n", checks, failures);
+    return failures != 0;
+}
