@@ -24,7 +24,7 @@ ln -sf "libcoagula.so.$major" "$prefix/lib/libcoagula.so"
 if command -v strip >/dev/null; then
     strip --strip-debug "$prefix/lib/libcoagula.a" "$prefix/lib/libcoagula.so.$version"
 fi
-install -m 644 include/coagula.h include/coagula.hpp include/coagula.f90 "$prefix/include/"
+install -m 644 include/coagula.h include/coagula.hpp include/coagula_types.f90 include/coagula.f90 "$prefix/include/"
 cat > "$prefix/lib/pkgconfig/coagula.pc" <<PC
 prefix=$prefix
 libdir=\${prefix}/lib

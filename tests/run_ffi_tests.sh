@@ -39,7 +39,7 @@ g++ -std=c++17 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
 "$out/test_cpp"
 
 gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
-    include/coagula.f90 tests/fortran/test_fortran.f90 "$lib" $libs -o "$out/test_fortran"
+    include/coagula_types.f90 include/coagula.f90 tests/fortran/test_callbacks.f90 tests/fortran/test_fortran.f90 "$lib" $libs -o "$out/test_fortran"
 "$out/test_fortran"
 
 # The C tests again without sanitizers, under valgrind's memcheck (leaks, uninitialised
