@@ -81,8 +81,8 @@ pub fn describe(plan: &Plan) -> String {
     let s = &plan.scenario;
     let mut d = String::new();
     d.push_str(&plan.title);
-    if let Some(src) = &s.source {
-        d.push_str(&format!("\nsource: {src}"));
+    if let Some(src) = &s.reference {
+        d.push_str(&format!("\nreference: {src}"));
     }
     d.push_str(&format!(
         "\nscheme: {} ({}), {} particles",

@@ -612,8 +612,10 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         warnings: Vec::new(),
         classes: Vec::new(),
         log_axes: false,
+        processes: None,
         scenario: s,
     };
+    plan.processes = super::processes::of(&plan.scenario, src, scheme, unit)?;
     if scheme.law == Law::TimeStepped && !plan.randomised() && plan.replicas > 1 {
         return Err(src.at(
             "run.replicas",
@@ -666,6 +668,8 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         _ => 1.0,
     };
     plan.exact = match plan.model {
+        // (a closed form of coagulation alone does not hold with processes)
+        _ if plan.processes.is_some() => super::processes::exact(&plan),
         Model::Coagulation { fragmentation, .. } if plan.units.is_empty() => exact_of(
             &plan.scenario,
             &plan.kernel_name,

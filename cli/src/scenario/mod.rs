@@ -18,6 +18,7 @@ mod check;
 mod memory;
 pub mod overrides;
 pub mod plan;
+pub mod processes;
 
 pub use overrides::{line_of, parse_override};
 pub use plan::{Observable, Plan, Sim};
@@ -38,8 +39,8 @@ pub const DEFAULT_NAME: &str =
 pub struct Scenario {
     /// One line saying what the case is.
     pub title: Option<String>,
-    /// The source (paper, figure, equation), shown with the results.
-    pub source: Option<String>,
+    /// The reference (paper, figure, equation), shown with the results.
+    pub reference: Option<String>,
     /// The kernel: `kind` (a name of core's table of built-in kernels) and its
     /// parameters by name.
     pub kernel: toml::Table,
@@ -51,6 +52,15 @@ pub struct Scenario {
     pub scheme: toml::Table,
     /// Output times and observables.
     pub output: OutputSpec,
+    /// A particle source beside coagulation (finite-N schemes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<processes::SourceSpec>,
+    /// Removal of particles at a power of size (finite-N schemes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sink: Option<processes::SinkSpec>,
+    /// Growth by monomer attachment (finite-N schemes over integer sizes).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub growth: Option<processes::GrowthSpec>,
     /// Replicas, seed, threads.
     #[serde(default)]
     pub run: RunSpec,
@@ -268,6 +278,15 @@ pub fn load(src: &Source<'_>) -> Result<Plan, ScenarioError> {
     let as_written = |e: toml::de::Error| ScenarioError {
         message: format!("{}: {}", src.name, e.to_string().trim_end()),
     };
+    // `source` was the citation's key before it named a particle source
+    if let Ok(t) = toml::from_str::<toml::Table>(src.text)
+        && let Some(toml::Value::String(_)) = t.get("source")
+    {
+        return Err(src.at(
+            "source",
+            "a string: the citation's key is `reference`; `[source]` is a particle source (rate, kind, ...)",
+        ));
+    }
     if src.overrides.is_empty() && src.drops.is_empty() {
         // syntax, unknown keys and wrong types, with the line
         let scenario: Scenario = toml::from_str(src.text).map_err(as_written)?;

@@ -238,6 +238,9 @@ pub struct Plan {
     pub classes: Vec<f64>,
     /// Log axes in plots.
     pub log_axes: bool,
+    /// The processes beside coagulation, in simulation units (`[source]`, `[sink]`,
+    /// `[growth]`).
+    pub processes: Option<coagula_core::process::Processes>,
 }
 
 /// The facade as the CLI instantiates it.
@@ -273,7 +276,13 @@ impl Plan {
     /// replica, which the RQMC scrambling draws from).
     pub fn build(&self, start: &Start, replica: u64) -> Result<Box<Sim>, String> {
         let opts = self.options.clone().with_stream(self.seed, replica);
-        registry::build(self.scheme, self.model, &start.init(), &opts).map_err(|e| e.to_string())
+        let mut sim = registry::build(self.scheme, self.model, &start.init(), &opts)
+            .map_err(|e| e.to_string())?;
+        if self.processes.is_some() {
+            sim.set_processes(self.processes.clone())
+                .map_err(|e| e.to_string())?;
+        }
+        Ok(sim)
     }
 
     /// Whether replicas draw random numbers beyond the start (every scheme but the

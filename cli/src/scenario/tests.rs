@@ -69,6 +69,16 @@ const KEYS: &[&str] = &[
     "run.seed",
     "run.threads",
     "title",
+    "source",
+    "source.rate",
+    "source.kind",
+    "source.size",
+    "source.mean",
+    "source.gsd",
+    "sink.rate",
+    "sink.exponent",
+    "growth.rate",
+    "growth.exponent",
     "nonsense.key",
 ];
 const VALUES: &[&str] = &[
@@ -278,4 +288,83 @@ fn scenario_parser_corpus_and_regressions() {
         }
     }
     assert!(n >= 10, "{n} inputs");
+}
+
+/// `[source]`, `[sink]` and `[growth]`: in simulation units on a size grid; refused
+/// with the key where a scheme cannot take them; the citation's old key named.
+#[test]
+fn processes_tables() {
+    let base = crate::examples::get("processes-source-dilution").unwrap().1;
+    let plan = |ov: &[&str], drops: &[&str]| {
+        let ov: Vec<_> = ov.iter().map(|o| parse_override(o).unwrap()).collect();
+        let drops: Vec<String> = drops.iter().map(|d| d.to_string()).collect();
+        load(&Source {
+            name: "p.toml",
+            text: base,
+            overrides: &ov,
+            drops: &drops,
+        })
+    };
+    let p = plan(&[], &[]).unwrap();
+    let procs = p.processes.clone().unwrap();
+    assert_eq!(procs.source.unwrap().rate(), 0.5);
+    assert_eq!(procs.removal.unwrap().coefficient, 0.25);
+    // the closed form of the moment equations: M1 = S/λ + (1 − S/λ) e^{−λt}
+    let e = p.exact.unwrap();
+    let m1 = e.value(&Observable::Moment(1.0), 4.0).unwrap();
+    assert!((m1 - (2.0 - (-1.0f64).exp())).abs() < 1e-12, "{m1}");
+    // an exponential start on a grid of 1/64: sizes and rates in grid units
+    let p = plan(
+        &[
+            "initial.kind=\"exponential\"",
+            "source.kind=\"exponential\"",
+            "source.mean=2.0",
+            "sink.exponent=1.0",
+            "growth.rate=0.5",
+            "growth.exponent=1.0",
+        ],
+        &["source.size"],
+    );
+    let p = p.unwrap_or_else(|e| panic!("{e}"));
+    let procs = p.processes.unwrap();
+    let u = p.size_unit;
+    assert_eq!(u, 1.0 / 64.0);
+    match procs.source.unwrap().sizes() {
+        coagula_core::initial::Distribution::Exponential { mean } => assert_eq!(*mean, 2.0 / u),
+        d => panic!("{d:?}"),
+    }
+    assert_eq!(procs.removal.unwrap().coefficient, 0.25 * u);
+    // linear growth dx/dt = 0.5 x: attachment at 0.5 i per grid unit
+    assert_eq!(procs.growth.unwrap().coefficient, 0.5);
+    for (ov, key) in [
+        (&["sink.exponent=2.0"][..], "sink"),
+        (
+            &["growth.rate=1.0", "scheme.name=\"lowrank-sizes\""][..],
+            "growth",
+        ),
+        (
+            &["scheme.name=\"massflow\"", "scheme.dt=0.01"][..],
+            "scheme.name",
+        ),
+        (&["source.kind=\"counts\""][..], "source.kind"),
+        (&["source.rate=-1"][..], "source"),
+        (&["source.mean=2.0"][..], "source.mean"),
+    ] {
+        let e = plan(ov, &[])
+            .err()
+            .unwrap_or_else(|| panic!("{ov:?} accepted"));
+        assert!(e.message.contains(key), "{ov:?}: {}", e.message);
+    }
+    let old = base
+        .replace("reference = ", "source = ")
+        .replace("[source]", "[inflow]");
+    let e = load(&Source {
+        name: "old.toml",
+        text: &old,
+        overrides: &[],
+        drops: &[],
+    })
+    .err()
+    .unwrap();
+    assert!(e.message.contains("reference"), "{}", e.message);
 }

@@ -1,0 +1,192 @@
+//! `[source]`, `[sink]` and `[growth]`: the processes beside coagulation (core's
+//! `process` module), in the scenario's units, turned into the simulation's.
+//!
+//! Sizes in a scenario are in its own units; an integer-size scheme from a continuous
+//! start runs on a grid where size i stands for `i · resolution` (`unit`). A source's
+//! sizes are divided by `unit`; a removal rate `c x^p` becomes `c unit^p i^p`; growth
+//! `dx/dt = g x^q` becomes monomer attachment at `g unit^{q−1} i^q` per particle. Rates
+//! per unit volume are the scenario's (the simulation's volume is N0 / c0 in them).
+
+use super::plan::{ExactRef, Plan};
+use super::{InitKind, Scenario, ScenarioError, Source};
+use coagula_core::exact::{Balance, Exact};
+use coagula_core::initial::Distribution;
+use coagula_core::process::{Processes, Source as Inflow};
+use coagula_core::scheme::facade::SchemeId;
+use serde::{Deserialize, Serialize};
+
+/// `[source]`: particles injected at `rate` per unit volume and time.
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SourceSpec {
+    /// Particles per unit volume and time (≥ 0).
+    pub rate: f64,
+    /// Their sizes: `monodisperse` (nucleation; `size`, default 1), `exponential`
+    /// (`mean`) or `lognormal` (`median`, `gsd`).
+    pub kind: InitKind,
+    /// Monodisperse size.
+    pub size: Option<f64>,
+    /// Exponential mean.
+    pub mean: Option<f64>,
+    /// Log-normal median.
+    pub median: Option<f64>,
+    /// Log-normal geometric standard deviation (> 1).
+    pub gsd: Option<f64>,
+}
+
+/// `[sink]`: removal at `rate · x^exponent` per particle (dilution and outflow at
+/// exponent 0, the default; deposition at a power of size, at most 1).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct SinkSpec {
+    /// The coefficient (≥ 0).
+    pub rate: f64,
+    /// The exponent p ∈ [−10, 1] (default 0).
+    pub exponent: Option<f64>,
+}
+
+/// `[growth]`: `dx/dt = rate · x^exponent`, as monomer attachment on the integer-size
+/// schemes (exact there).
+#[derive(Clone, Debug, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename_all = "kebab-case")]
+pub struct GrowthSpec {
+    /// The coefficient (≥ 0).
+    pub rate: f64,
+    /// The exponent q ∈ [−10, 1] (default 0: constant growth; 1: linear).
+    pub exponent: Option<f64>,
+}
+
+/// The processes of scenario `s` for `scheme`, in simulation units (`unit`: the size
+/// one unit of the simulation stands for); `None` when it has none.
+pub(super) fn of(
+    s: &Scenario,
+    src: &Source<'_>,
+    scheme: SchemeId,
+    unit: f64,
+) -> Result<Option<Processes>, ScenarioError> {
+    let mut p = Processes::default();
+    if let Some(q) = &s.source {
+        let not = |key: &str, v: Option<f64>, why: &str| match v {
+            Some(_) => Err(src.at(&format!("source.{key}"), format!("not used here ({why})"))),
+            None => Ok(()),
+        };
+        let need = |key: &str, v: Option<f64>| {
+            v.ok_or_else(|| src.at(&format!("source.{key}"), "missing"))
+        };
+        let sizes = match q.kind {
+            InitKind::Monodisperse => {
+                not("mean", q.mean, "a monodisperse source has a size")?;
+                not("median", q.median, "a monodisperse source has a size")?;
+                not("gsd", q.gsd, "a monodisperse source has a size")?;
+                Distribution::Monodisperse {
+                    size: q.size.unwrap_or(1.0) / unit,
+                }
+            }
+            InitKind::Exponential => {
+                not("size", q.size, "an exponential source has a mean")?;
+                not("median", q.median, "an exponential source has a mean")?;
+                not("gsd", q.gsd, "an exponential source has a mean")?;
+                Distribution::Exponential {
+                    mean: need("mean", q.mean)? / unit,
+                }
+            }
+            InitKind::Lognormal => {
+                not("size", q.size, "a log-normal source has a median and gsd")?;
+                not("mean", q.mean, "a log-normal source has a median and gsd")?;
+                Distribution::Lognormal {
+                    median: need("median", q.median)? / unit,
+                    gsd: need("gsd", q.gsd)?,
+                }
+            }
+            InitKind::Sizes | InitKind::Counts => {
+                return Err(src.at(
+                    "source.kind",
+                    "a source draws its sizes from monodisperse, exponential or lognormal",
+                ));
+            }
+        };
+        let inflow = Inflow::new(q.rate, sizes).map_err(|e| src.at("source", e))?;
+        p = p.with_source(inflow);
+    }
+    if let Some(k) = &s.sink {
+        let e = k.exponent.unwrap_or(0.0);
+        let c = k.rate * unit.powf(e);
+        p = p.with_removal(c, e).map_err(|e| src.at("sink", e))?;
+    }
+    if let Some(g) = &s.growth {
+        let e = g.exponent.unwrap_or(0.0);
+        let c = g.rate * unit.powf(e - 1.0);
+        p = p.with_growth(c, e).map_err(|e| src.at("growth", e))?;
+    }
+    if p.is_empty() {
+        return Ok(None);
+    }
+    scheme.takes_processes(&p).map_err(|e| {
+        let key = if s.growth.is_some()
+            && scheme
+                .takes_processes(
+                    &Processes::default()
+                        .with_growth(0.0, 0.0)
+                        .unwrap_or_default(),
+                )
+                .is_err()
+        {
+            "growth"
+        } else {
+            "scheme.name"
+        };
+        src.at(key, e)
+    })?;
+    if s.fragmentation.is_some() {
+        return Err(src.at(
+            "fragmentation",
+            "processes beside coagulation run with coagulation alone (no fragmentation)",
+        ));
+    }
+    Ok(Some(p))
+}
+
+/// The closed form of a scenario with processes, where one holds: the constant kernel
+/// from a monodisperse start with a monodisperse source, removal at a constant rate and
+/// linear growth (`coagula_core::exact::Balance`), in the scenario's units.
+pub(super) fn exact(plan: &Plan) -> Option<ExactRef> {
+    let s = &plan.scenario;
+    let x0 = match plan.dist {
+        Distribution::Monodisperse { size } => size,
+        _ => return None,
+    };
+    if plan.kernel_name != "constant" || !plan.units.is_empty() || s.fragmentation.is_some() {
+        return None;
+    }
+    let (rate, size) = match &s.source {
+        None => (0.0, 1.0),
+        Some(q) if q.kind == InitKind::Monodisperse => (q.rate, q.size.unwrap_or(1.0)),
+        Some(_) => return None,
+    };
+    let removal = match &s.sink {
+        None => 0.0,
+        Some(k) if k.exponent.unwrap_or(0.0) == 0.0 => k.rate,
+        Some(_) => return None,
+    };
+    let growth = match &s.growth {
+        None => 0.0,
+        Some(g) if g.exponent == Some(1.0) => g.rate,
+        Some(_) => return None,
+    };
+    let c0 = plan.c0;
+    let b = Balance::new(
+        plan.coefficient,
+        [c0, c0 * x0, c0 * x0 * x0],
+        rate,
+        size,
+        removal,
+        growth,
+    )
+    .ok()?;
+    Some(ExactRef {
+        solution: Exact::balance(b),
+        c0: 1.0,
+        mu: 1.0,
+        name: "constant kernel with a monomer source, dilution and linear growth (moment equations in closed form)",
+    })
+}
