@@ -85,7 +85,10 @@ impl Balance {
                     let m10 = self.start[1];
                     let q = s * x;
                     let coag = if q > 0.0 {
-                        k * ((m10 + q * t).powi(3) - m10.powi(3)) / (3.0 * q)
+                        {
+                            let m1 = m10 + q * t;
+                            k * (m1 * m1 * m1 - m10 * m10 * m10) / (3.0 * q)
+                        }
                     } else {
                         k * m10 * m10 * t
                     };
