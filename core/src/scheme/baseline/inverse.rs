@@ -634,6 +634,12 @@ impl<K: CoagulationKernel> Inverse<K> {
         self.set_counts(&dense, volume)
     }
 
+    /// Turns particle doubling on or off (kept across `set_counts`; a checkpoint does
+    /// not carry it).
+    pub fn set_doubling(&mut self, on: bool) {
+        self.pop.doubling = on;
+    }
+
     /// Sets the clock (finite, not negative): a host that keeps its own time origin.
     /// The next event is drawn afresh from the new time.
     pub fn set_time(&mut self, t: f64) -> Result<()> {
@@ -644,11 +650,12 @@ impl<K: CoagulationKernel> Inverse<K> {
 
     /// Takes the state of `fresh`, keeping time, totals and the size limit.
     fn install(&mut self, fresh: Inverse<K>) {
-        let (time, totals, limit, budget) = (
+        let (time, totals, limit, budget, doubling) = (
             self.time,
             self.totals,
             self.pop.size_limit,
             self.pop.memory_budget,
+            self.pop.doubling,
         );
         *self = fresh;
         self.time = time;
@@ -656,6 +663,7 @@ impl<K: CoagulationKernel> Inverse<K> {
         self.totals = totals;
         self.pop.size_limit = limit;
         self.pop.memory_budget = budget;
+        self.pop.doubling = doubling;
     }
 }
 

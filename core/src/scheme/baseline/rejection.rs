@@ -424,6 +424,12 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
         Ok(())
     }
 
+    /// Turns particle doubling on or off (kept across `set_counts`; a checkpoint does
+    /// not carry it).
+    pub fn set_doubling(&mut self, on: bool) {
+        self.pop.doubling = on;
+    }
+
     /// Sets the clock (finite, not negative): a host that keeps its own time origin.
     /// The next proposal is drawn afresh from the new time.
     pub fn set_time(&mut self, t: f64) -> Result<()> {

@@ -273,6 +273,9 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         Ok(())
     }
 
+    /// Direct simulation never doubles its particles: nothing to turn on or off.
+    pub fn set_doubling(&mut self, _on: bool) {}
+
     /// Sets the clock (finite, not negative); the next proposal is drawn afresh.
     pub fn set_time(&mut self, t: f64) -> Result<()> {
         self.time = super::super::check_time(t)?;

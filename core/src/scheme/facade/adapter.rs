@@ -84,6 +84,9 @@ pub trait Controls<K, F> {
     }
     /// Sets the clock.
     fn set_time(&mut self, t: f64) -> Result<()>;
+    /// Turns particle doubling on or off (off while processes run); a scheme that never
+    /// doubles ignores it.
+    fn set_doubling(&mut self, _on: bool) {}
     /// Changes the total mass.
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
         Err(Error::Unsupported {
@@ -140,10 +143,14 @@ impl<E, S, K, F> Boxed<E, S, K, F>
 where
     S: Controls<K, F>,
 {
-    /// The host replaced the state: the processes' books start from it.
+    /// The host replaced the state: the processes' books start from it (and doubling
+    /// stays off while they run).
     fn rebase(&mut self) -> Result<()> {
         match &mut self.driver {
-            Some(d) => d.rebase(&self.s),
+            Some(d) => {
+                self.s.set_doubling(false);
+                d.rebase(&self.s)
+            }
             None => Ok(()),
         }
     }
@@ -210,6 +217,7 @@ where
     fn set_processes(&mut self, procs: Option<Processes>) -> Result<()> {
         let Some(procs) = procs.filter(|p| !p.is_empty()) else {
             self.driver = None;
+            self.s.set_doubling(true);
             return Ok(());
         };
         E::INFO.takes_processes(&procs)?;
@@ -223,6 +231,8 @@ where
         let mut d = Driver::new(procs, integer, 0, 0.0);
         d.rebase(&self.s)?;
         self.driver = Some(d);
+        // the processes set the particle number: no doubling while they run
+        self.s.set_doubling(false);
         Ok(())
     }
     fn processes(&self) -> Option<&Processes> {
@@ -389,6 +399,7 @@ where
         }
         if let (Some(d), Some((pending, books))) = (&mut self.driver, procs) {
             d.install(pending, books);
+            self.s.set_doubling(false);
         }
         Ok(out)
     }
@@ -468,6 +479,9 @@ macro_rules! count_controls {
             }
             fn set_time(&mut self, t: f64) -> $crate::error::Result<()> {
                 <$ty>::set_time(self, t)
+            }
+            fn set_doubling(&mut self, on: bool) {
+                <$ty>::set_doubling(self, on)
             }
         }
     };

@@ -358,6 +358,7 @@ impl Driver {
                 sizes.extend(v.iter().map(|p| p.0));
                 counts.extend(v.iter().map(|p| p.1));
                 s.set_pairs(&sizes, &counts, volume)?;
+                s.set_doubling(false);
             }
             Held::Sizes(mut x) => {
                 match event {
@@ -378,6 +379,7 @@ impl Driver {
                     }
                 }
                 s.set_sizes(&x)?;
+                s.set_doubling(false);
             }
         }
         self.books = books;

@@ -213,6 +213,11 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         either!(&mut self.engine, s => s.set_kernel(kernel))
     }
 
+    /// See [`LowRankMc::set_doubling`].
+    pub fn set_doubling(&mut self, on: bool) {
+        either!(&mut self.engine, s => s.set_doubling(on))
+    }
+
     /// See [`LowRankMc::set_time`].
     pub fn set_time(&mut self, t: f64) -> Result<()> {
         either!(&mut self.engine, s => s.set_time(t))

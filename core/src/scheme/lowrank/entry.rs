@@ -522,6 +522,9 @@ impl<K: CoagulationKernel, F, const R: usize, const W: usize> Controls<K, F>
     fn set_time(&mut self, t: f64) -> Result<()> {
         LowRankSizes::set_time(self, t)
     }
+    fn set_doubling(&mut self, on: bool) {
+        LowRankSizes::set_doubling(self, on)
+    }
 }
 
 impl<K, F, TK, E> Controls<K, F> for LowRankMc<Temperatures<TK>, 3, E, Collide>

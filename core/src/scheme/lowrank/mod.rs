@@ -342,12 +342,19 @@ where
         let fresh = Population {
             size_limit: self.pop.size_limit,
             memory_budget: self.pop.memory_budget,
+            doubling: self.pop.doubling,
             ..Population::new(counts, volume)?
         };
         self.engine = E::build(&self.kernel, counts, &fresh)?;
         self.pop = fresh;
         self.clock = Clock::Stale;
         Ok(())
+    }
+
+    /// Turns particle doubling on or off (kept across `set_counts`; a checkpoint does
+    /// not carry it).
+    pub fn set_doubling(&mut self, on: bool) {
+        self.pop.doubling = on;
     }
 
     /// Sets the clock (finite, not negative): a host that keeps its own time origin.
@@ -655,6 +662,7 @@ where
             volume,
             size_limit,
             memory_budget: self.pop.memory_budget,
+            doubling: self.pop.doubling,
         };
         let kernel = self.rule.load(&self.kernel, r)?;
         let engine = E::load(kernel.as_ref().unwrap_or(&self.kernel), m, &pop, r)?;

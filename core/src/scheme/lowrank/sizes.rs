@@ -260,6 +260,8 @@ pub struct LowRankSizes<K, const R: usize, const W: usize> {
     volume: f64,
     /// Particle doubling happens when fewer than `n0 / 2` particles remain.
     n0: usize,
+    /// Whether particle doubling is on (off while processes run).
+    doubling: bool,
     memory_budget: usize,
     time: f64,
     pending: Option<Pending>,
@@ -307,6 +309,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
             floor: floor_of(&kernel),
             kernel,
             n0: l.sizes.len(),
+            doubling: true,
             p: l,
             volume,
             memory_budget: bytes,
@@ -355,6 +358,11 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
         self.install(l);
         self.n0 = n0;
         Ok(())
+    }
+
+    /// Turns particle doubling on or off (not carried by a checkpoint).
+    pub fn set_doubling(&mut self, on: bool) {
+        self.doubling = on;
     }
 
     /// Sets the clock (finite, not negative); the next proposal is drawn afresh.
@@ -550,7 +558,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Scheme for LowRankSiz
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         let out = loop {
-            if self.p.sizes.len() < self.n0 / 2 {
+            if self.doubling && self.p.sizes.len() < self.n0 / 2 {
                 if let Err(e) = self.double() {
                     break Err(e);
                 }

@@ -44,6 +44,9 @@ pub struct Population {
     pub size_limit: u64,
     /// Bytes the growing tables may use.
     pub memory_budget: usize,
+    /// Whether particle doubling is on (off while processes beside coagulation run:
+    /// `docs/design/processes.md`). Not part of a checkpoint: the facade sets it.
+    pub doubling: bool,
 }
 
 impl Population {
@@ -59,6 +62,7 @@ impl Population {
             volume,
             size_limit: DEFAULT_SIZE_LIMIT,
             memory_budget: DEFAULT_MEMORY_BUDGET,
+            doubling: true,
         })
     }
 
@@ -71,7 +75,7 @@ impl Population {
     /// Fewer than `N0/2` particles remain: the counts must double.
     #[inline]
     pub fn doubling_due(&self) -> bool {
-        self.n < self.n0 / 2
+        self.doubling && self.n < self.n0 / 2
     }
 
     /// Doubles N and V (the scheme doubles its counts).
