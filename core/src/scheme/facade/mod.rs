@@ -124,18 +124,25 @@ impl SchemeInfo {
         self.options.contains(&key) || GENERAL.contains(&key)
     }
 
-    /// A built-in kernel as this scheme runs it: a coagulation kernel on an
-    /// integer-size scheme (one that builds from counts) has its low-rank bound taken
-    /// from size 1 (`min-size = 1`: a tighter bound, fewer rejections); every other
-    /// pairing as it is. What the CLI and Python build with, so that the same seed
-    /// gives the same bits from both (a C caller sets `min-size` itself).
+    /// A built-in kernel as this scheme runs it: a coagulation kernel that takes a
+    /// `min-size` (its bound depends on it: additive, free-molecular) has its low-rank
+    /// bound taken from size 1 on an integer-size scheme (one that builds from counts;
+    /// a tighter bound, fewer rejections); every other pairing as it is. What the CLI
+    /// and Python build with, so that the same seed gives the same bits — and the same
+    /// checkpoint bytes — from both and from a C caller who sets `min-size` to 1 (a
+    /// kernel without the parameter is the C caller's as it is).
     pub fn runs(
         &self,
         b: crate::kernel::builtin::Builtin,
     ) -> crate::error::Result<crate::kernel::builtin::Builtin> {
-        use crate::kernel::builtin::Builtin;
+        use crate::kernel::builtin::{self, Builtin};
+        let takes_min_size = |name: &str| {
+            builtin::find(name).is_some_and(|i| i.params.iter().any(|p| p.name == "min-size"))
+        };
         match b {
-            Builtin::Coagulation(k) if self.inits.contains(&InitKind::Counts) => {
+            Builtin::Coagulation(k)
+                if self.inits.contains(&InitKind::Counts) && takes_min_size(k.name()) =>
+            {
                 Ok(Builtin::Coagulation(k.with_min_size(1.0)?))
             }
             b => Ok(b),
