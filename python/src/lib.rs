@@ -14,6 +14,7 @@ mod exact;
 mod initial;
 mod kernel;
 mod langevin;
+mod process;
 mod scenario;
 mod sim;
 

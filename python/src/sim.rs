@@ -636,6 +636,39 @@ impl Sim {
         self.with(|c| c.sim.set_time(t))?.map_err(py_err)
     }
 
+    /// Sets the processes beside coagulation (all absent: none): `source` a dict
+    /// (`rate` per unit volume and time, `kind` monodisperse/exponential/lognormal with
+    /// `size`, `mean` or `median` and `gsd`), `removal` and `growth` a coefficient or
+    /// `(coefficient, exponent)` (`c x^p` per particle; growth as monomer attachment on
+    /// integer sizes). The books start from the state now.
+    #[pyo3(signature = (*, source=None, removal=None, growth=None))]
+    fn set_processes(
+        &self,
+        source: Option<&Bound<'_, PyAny>>,
+        removal: Option<&Bound<'_, PyAny>>,
+        growth: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<()> {
+        let p = crate::process::processes_of(source, removal, growth)?;
+        self.with(|c| c.sim.set_processes(p))?.map_err(py_err)
+    }
+
+    /// The processes set, as `set_processes`' keyword arguments (None: none).
+    #[getter]
+    fn processes<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let p = self.with(|c| c.sim.processes().cloned())?;
+        p.map(|p| crate::process::processes_dict(py, &p))
+            .transpose()
+    }
+
+    /// The processes' books (None without processes): what was injected, removed and
+    /// grown, and the merges, so that the state's mass is initial + injected − removed
+    /// + grown and its number initial + injected − removed − merged.
+    #[getter]
+    fn books<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
+        let b = self.with(|c| c.sim.books())?;
+        b.map(|b| crate::process::books_dict(py, b)).transpose()
+    }
+
     /// Changes the total mass the particles carry (massflow, mfa).
     fn set_mass(&self, mass: f64) -> PyResult<()> {
         self.with(|c| c.sim.set_mass(mass))?.map_err(py_err)
@@ -692,6 +725,7 @@ impl Sim {
             self.options.bind(py),
             blank_tuple(py, &blank)?,
             PyBytes::new(py, &data?),
+            self.processes(py)?,
         )
             .into_pyobject(py)?;
         Ok((f, args))
@@ -710,8 +744,10 @@ impl Sim {
     }
 }
 
-/// Unpickles a `Simulation`: built from its blank, then its checkpoint restored.
+/// Unpickles a `Simulation`: built from its blank, its processes set, then its
+/// checkpoint restored.
 #[pyfunction]
+#[pyo3(signature = (scheme, kernel, frag, options, blank, data, processes=None))]
 fn _simulation(
     scheme: &str,
     kernel: &Bound<'_, PyAny>,
@@ -719,9 +755,16 @@ fn _simulation(
     options: &Bound<'_, PyDict>,
     blank: &Bound<'_, PyTuple>,
     data: &[u8],
+    processes: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Sim> {
     let b = blank_of(blank)?;
     let sim = Sim::build(scheme, kernel, None, Some(&b), Some(frag), Some(options))?;
+    if let Some(p) = processes {
+        let get = |k| p.get_item(k);
+        let (s, r, g) = (get("source")?, get("removal")?, get("growth")?);
+        let p = crate::process::processes_of(s.as_ref(), r.as_ref(), g.as_ref())?;
+        sim.with(|c| c.sim.set_processes(p))?.map_err(py_err)?;
+    }
     sim.with(|c| Sim::restore_into(c, data))??;
     Ok(sim)
 }

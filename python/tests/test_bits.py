@@ -89,3 +89,47 @@ def test_python_gives_the_bits_of_the_c_abi():
     c.coag_sim_free(s)
     c.coag_options_free(o)
     c.coag_kernel_free(k)
+
+
+def test_processes_give_the_same_bits_in_python_the_c_abi_and_coagula_run():
+    """A source and a sink: the CLI's scenario tables, Python's set_processes and the
+    C ABI's setters are one process in core."""
+    sc = {
+        "kernel": {"kind": "constant"},
+        "initial": {"kind": "monodisperse", "size": 1, "particles": 1000},
+        "source": {"rate": 0.5, "kind": "monodisperse", "size": 1},
+        "sink": {"rate": 0.25},
+        "scheme": {"name": "lowrank"},
+        "output": {"times": [1.0, 2.0], "observables": ["M0", "M1", "N"]},
+        "run": {"replicas": 1, "seed": 7},
+    }
+    ds = coagula.run(sc, as_xarray=False)
+    py = Simulation("lowrank", Kernel("constant"), Initial.monodisperse(1, particles=1000), seed=7)
+    py.set_processes(source={"rate": 0.5, "kind": "monodisperse", "size": 1.0}, removal=0.25)
+    c = _lib()
+    vp = ctypes.c_void_p
+    k, o, s = vp(), vp(), vp()
+    assert c.coag_kernel_new(b"constant", (ctypes.c_double * 1)(1.0), 1, ctypes.byref(k)) == 0
+    assert c.coag_options_new(ctypes.byref(o)) == 0
+    assert c.coag_options_set_count(o, b"seed", ctypes.c_uint64(7)) == 0
+    counts = (ctypes.c_uint64 * 1)(1000)
+    assert c.coag_sim_new_counts(b"lowrank", k, None, o, counts, 1, ctypes.c_double(1000.0), ctypes.byref(s)) == 0
+    d = ctypes.c_double
+    assert c.coag_sim_set_source(s, d(0.5), 0, d(1.0), d(0.0)) == 0
+    assert c.coag_sim_set_removal(s, d(0.25), d(0.0)) == 0
+    for i, t in enumerate([1.0, 2.0]):
+        py.advance_to(t)
+        assert c.coag_sim_advance_to(s, d(t), None) == 0
+        got = [py.moment(0), py.moment(1), float(py.particles)]
+        assert got == list(ds["mean"][i]), t
+        out = d()
+        assert c.coag_sim_moment(s, d(1.0), ctypes.byref(out)) == 0
+        assert struct.pack("d", out.value) == struct.pack("d", py.moment(1))
+    n = ctypes.c_size_t()
+    c.coag_sim_checkpoint_size(s, ctypes.byref(n))
+    buf = (ctypes.c_uint8 * n.value)()
+    assert c.coag_sim_checkpoint(s, buf, n, None) == 0
+    assert bytes(buf) == py.save()
+    c.coag_sim_free(s)
+    c.coag_options_free(o)
+    c.coag_kernel_free(k)

@@ -1,0 +1,142 @@
+//! Processes beside coagulation (core's `process` module) as Python values: a source as
+//! a dict (`rate`, `kind` and the distribution's keys, as a scenario's `[source]`),
+//! removal and growth as `(coefficient, exponent)` or a coefficient alone (exponent 0),
+//! the books as a dict. The rules stay in core.
+
+use crate::py_err;
+use coagula_core::initial::Distribution;
+use coagula_core::process::{Books, Processes, Source};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+fn number(d: &Bound<'_, PyDict>, key: &str) -> PyResult<Option<f64>> {
+    match d.get_item(key)? {
+        None => Ok(None),
+        Some(v) => Ok(Some(v.extract::<f64>().map_err(|_| {
+            PyValueError::new_err(format!("source[{key:?}]: a number"))
+        })?)),
+    }
+}
+
+fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
+    for k in d.keys() {
+        let k: String = k.extract()?;
+        if !["rate", "kind", "size", "mean", "median", "gsd"].contains(&k.as_str()) {
+            return Err(PyValueError::new_err(format!(
+                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd)"
+            )));
+        }
+    }
+    let rate =
+        number(d, "rate")?.ok_or_else(|| PyValueError::new_err("source: missing \"rate\""))?;
+    let kind: String = match d.get_item("kind")? {
+        Some(k) => k.extract()?,
+        None => "monodisperse".into(),
+    };
+    let need = |key: &str| -> PyResult<f64> {
+        number(d, key)?.ok_or_else(|| PyValueError::new_err(format!("source: missing {key:?}")))
+    };
+    let sizes = match kind.as_str() {
+        "monodisperse" => Distribution::Monodisperse {
+            size: number(d, "size")?.unwrap_or(1.0),
+        },
+        "exponential" => Distribution::Exponential {
+            mean: need("mean")?,
+        },
+        "lognormal" => Distribution::Lognormal {
+            median: need("median")?,
+            gsd: need("gsd")?,
+        },
+        k => {
+            return Err(PyValueError::new_err(format!(
+                "source: kind {k:?} (monodisperse, exponential or lognormal)"
+            )));
+        }
+    };
+    Source::new(rate, sizes).map_err(py_err)
+}
+
+fn power_of(what: &str, v: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
+    if let Ok(c) = v.extract::<f64>() {
+        return Ok((c, 0.0));
+    }
+    v.extract::<(f64, f64)>().map_err(|_| {
+        PyValueError::new_err(format!("{what}: a coefficient or (coefficient, exponent)"))
+    })
+}
+
+/// The processes of `set_processes`' arguments (`None` when all are absent).
+pub(crate) fn processes_of(
+    source: Option<&Bound<'_, PyAny>>,
+    removal: Option<&Bound<'_, PyAny>>,
+    growth: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Option<Processes>> {
+    let mut p = Processes::default();
+    if let Some(s) = source {
+        let d = s
+            .cast::<PyDict>()
+            .map_err(|_| PyValueError::new_err("source: a dict (rate, kind, ...)"))?;
+        p = p.with_source(source_of(d)?);
+    }
+    if let Some(r) = removal {
+        let (c, e) = power_of("removal", r)?;
+        p = p.with_removal(c, e).map_err(py_err)?;
+    }
+    if let Some(g) = growth {
+        let (c, e) = power_of("growth", g)?;
+        p = p.with_growth(c, e).map_err(py_err)?;
+    }
+    Ok((!p.is_empty()).then_some(p))
+}
+
+/// The processes as the keyword arguments of `set_processes`.
+pub(crate) fn processes_dict<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    if let Some(s) = &p.source {
+        let q = PyDict::new(py);
+        q.set_item("rate", s.rate())?;
+        match s.sizes() {
+            Distribution::Monodisperse { size } => {
+                q.set_item("kind", "monodisperse")?;
+                q.set_item("size", *size)?;
+            }
+            Distribution::Exponential { mean } => {
+                q.set_item("kind", "exponential")?;
+                q.set_item("mean", *mean)?;
+            }
+            Distribution::Lognormal { median, gsd } => {
+                q.set_item("kind", "lognormal")?;
+                q.set_item("median", *median)?;
+                q.set_item("gsd", *gsd)?;
+            }
+            _ => {
+                return Err(PyValueError::new_err(
+                    "source: a distribution Python cannot name",
+                ));
+            }
+        }
+        d.set_item("source", q)?;
+    }
+    for (key, v) in [("removal", &p.removal), ("growth", &p.growth)] {
+        if let Some(v) = v {
+            d.set_item(key, PyTuple::new(py, [v.coefficient, v.exponent])?)?;
+        }
+    }
+    Ok(d)
+}
+
+/// The books as a dict.
+pub(crate) fn books_dict(py: Python<'_>, b: Books) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("initial_number", b.initial_number)?;
+    d.set_item("initial_mass", b.initial_mass)?;
+    d.set_item("injected_number", b.injected_number)?;
+    d.set_item("injected_mass", b.injected_mass)?;
+    d.set_item("removed_number", b.removed_number)?;
+    d.set_item("removed_mass", b.removed_mass)?;
+    d.set_item("grown_mass", b.grown_mass)?;
+    d.set_item("merged", b.merged)?;
+    d.set_item("doublings", b.doublings)?;
+    Ok(d)
+}
