@@ -428,6 +428,28 @@ pub(crate) enum BenchKind {
         #[arg(long, value_enum, default_value_t = PeerProblem::Golovin)]
         problem: PeerProblem,
     },
+    /// What a monomer source and dilution cost per event against pure coagulation
+    /// (K = 1 from monomers), the same start, alternating runs.
+    Processes {
+        /// Registry scheme (one that takes processes).
+        #[arg(long, default_value = "lowrank")]
+        scheme: String,
+        /// Initial monomers (c0 = 1).
+        #[arg(long, default_value_t = 1_000_000, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]
+        n0: u64,
+        /// End time (> 0).
+        #[arg(long, default_value_t = 2.0, value_parser = positive_f64)]
+        t: f64,
+        /// Monomers injected per unit volume and time.
+        #[arg(long, default_value_t = 0.5, value_parser = positive_f64)]
+        source: f64,
+        /// Dilution rate per particle.
+        #[arg(long, default_value_t = 0.25, value_parser = positive_f64)]
+        sink: f64,
+        /// Alternating rounds (the fastest of each kept).
+        #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
+    },
 }
 
 /// A problem of `coagula bench peers`.

@@ -237,6 +237,14 @@ fn bench_command(which: BenchKind) -> Done {
             Some(steps) => bench::lowrank_host_steps(&n0, replicas, steps),
             None => bench::lowrank_small(&n0, len, t, replicas),
         }),
+        BenchKind::Processes {
+            scheme,
+            n0,
+            t,
+            source,
+            sink,
+            repeat,
+        } => ok(bench::processes(&scheme, n0, t, source, sink, repeat)),
         BenchKind::Peers {
             seeds,
             max_log2n,

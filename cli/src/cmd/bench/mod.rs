@@ -7,8 +7,10 @@ use coagula_core::scheme::registry;
 use std::time::{Duration, Instant};
 
 mod peers;
+mod processes;
 use peers::original_particles;
 pub use peers::peers;
+pub use processes::processes;
 
 /// One row of the paper's tables: time, max size M, seconds (inverse, AR, low-rank;
 /// None = over 24 h) and collisions.

@@ -87,6 +87,28 @@ pub trait Controls<K, F> {
     /// Turns particle doubling on or off (off while processes run); a scheme that never
     /// doubles ignores it.
     fn set_doubling(&mut self, _on: bool) {}
+    /// Whether the scheme edits single integer-size particles in O(1) after an
+    /// O(buckets) draw (processes then need no state replacement).
+    fn edits(&self) -> bool {
+        false
+    }
+    /// A particle drawn uniformly (`by_mass`: in proportion to its size): its size and
+    /// a handle for [`remove_drawn`](Self::remove_drawn) (schemes that edit).
+    fn draw_particle<G: Rng + ?Sized>(&self, _by_mass: bool, _rng: &mut G) -> Option<(u64, u64)> {
+        None
+    }
+    /// Removes the particle a draw returned (schemes that edit).
+    fn remove_drawn(&mut self, _x: u64, _handle: u64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "single-particle edits on this scheme",
+        })
+    }
+    /// Adds a particle of integer size `x` (schemes that edit).
+    fn add_particle(&mut self, _x: u64) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "single-particle edits on this scheme",
+        })
+    }
     /// Changes the total mass.
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
         Err(Error::Unsupported {
@@ -449,8 +471,27 @@ where
 /// `max_size`, `for_each_count`, `set_counts`, `set_pairs`, `set_kernel` and
 /// `set_time` (one definition for all of them).
 macro_rules! count_controls {
-    ([$($g:tt)*] $ty:ty, $counts:expr $(, engine = $engine:expr)?) => {
+    ([$($g:tt)*] $ty:ty, $counts:expr $(, engine = $engine:expr)? $(, edits = $edits:tt)?) => {
         impl<$($g)*, F> $crate::scheme::facade::Controls<K, F> for $ty {
+            $(
+                fn edits(&self) -> bool {
+                    let _ = $edits;
+                    <$ty>::edits(self)
+                }
+                fn draw_particle<G: rand_core::Rng + ?Sized>(
+                    &self,
+                    by_mass: bool,
+                    rng: &mut G,
+                ) -> Option<(u64, u64)> {
+                    <$ty>::draw_particle(self, by_mass, rng)
+                }
+                fn remove_drawn(&mut self, x: u64, handle: u64) -> $crate::error::Result<()> {
+                    <$ty>::remove_drawn(self, x, handle)
+                }
+                fn add_particle(&mut self, x: u64) -> $crate::error::Result<()> {
+                    <$ty>::add_particle(self, x)
+                }
+            )?
             $(
                 fn engine(&self) -> Option<$crate::scheme::facade::BucketMode> {
                     let f: fn(&Self) -> $crate::scheme::facade::BucketMode = $engine;

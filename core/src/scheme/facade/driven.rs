@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 use crate::memory::try_reserve;
 use crate::observe::Observe;
 use crate::process::{Books, Power, Processes};
-use crate::random::{exp1, open_unit};
+use crate::random::{Ziggurat, open_unit};
 use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::vec::Vec;
 use rand_core::Rng;
@@ -209,10 +209,14 @@ impl Driver {
             let (at, bound) = match self.pending {
                 Some(p) => p,
                 None => {
-                    let (r, _) = self.rate(s)?;
+                    let r = if self.fast(s) {
+                        self.bound_fast(s)
+                    } else {
+                        self.rate(s)?.0
+                    };
                     let r = crate::error::finite("total process rate", r)?;
                     let at = if r > 0.0 {
-                        s.time() + exp1(rng) / r
+                        s.time() + Ziggurat::new().sample(rng) / r
                     } else {
                         f64::INFINITY
                     };
@@ -266,6 +270,84 @@ impl Driver {
         }
     }
 
+    /// Whether the scheme edits single particles (integer sizes): then a process
+    /// event costs a draw over the buckets, not a state replacement.
+    fn fast<K, F, S: Controls<K, F>>(&self, s: &S) -> bool {
+        self.integer && s.edits()
+    }
+
+    /// The bound of the edited path: `S V`, and for removal and growth `c N` (exponent
+    /// ≤ 0: `c x^p ≤ c` on sizes ≥ 1) or `c M1` (exponent in (0, 1]: `c x^p ≤ c x`);
+    /// merging keeps M1 and lowers N, so it holds until the next process event.
+    fn bound_fast<K, F, S: Controls<K, F> + Observe>(&self, s: &S) -> f64 {
+        let (n, m) = (s.particles() as f64, self.books.current_mass());
+        let mut r = self.source_rate(s.volume());
+        for p in [&self.procs.removal, &self.procs.growth]
+            .into_iter()
+            .flatten()
+        {
+            r += p.coefficient * if p.exponent <= 0.0 { n } else { m };
+        }
+        r
+    }
+
+    /// The candidate on the edited path: a particle drawn uniformly (exponent ≤ 0) or
+    /// by mass, accepted with its rate over the component's bound per particle.
+    fn candidate_fast<K, F, S, G>(&mut self, s: &mut S, bound: f64, rng: &mut G) -> Result<()>
+    where
+        S: Controls<K, F> + Observe,
+        G: Rng + ?Sized,
+    {
+        let mut u = open_unit(rng) * bound;
+        let src = self.source_rate(s.volume());
+        if u < src {
+            let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
+            let x = source.draw(true, rng);
+            s.add_particle(x as u64)?;
+            self.books.injected_number += 1;
+            self.books.injected_mass += x;
+            return Ok(());
+        }
+        u -= src;
+        let (n, m) = (s.particles() as f64, self.books.current_mass());
+        for (p, grow) in [(self.procs.removal, false), (self.procs.growth, true)] {
+            let Some(p) = p else { continue };
+            let by_mass = p.exponent > 0.0;
+            let w = p.coefficient * if by_mass { m } else { n };
+            if u >= w {
+                u -= w;
+                continue;
+            }
+            let Some((x, h)) = s.draw_particle(by_mass, rng) else {
+                return Ok(());
+            };
+            let xf = x as f64;
+            // the rate over its bound: x^p ≤ 1, or x^p / x ≤ 1
+            let keep = if by_mass {
+                p.at(xf) / (p.coefficient * xf)
+            } else {
+                p.at(xf) / p.coefficient
+            };
+            if open_unit(rng) >= keep {
+                return Ok(());
+            }
+            s.remove_drawn(x, h)?;
+            if grow {
+                if let Err(e) = s.add_particle(x + 1) {
+                    // (back as it was: a size that was there fits)
+                    s.add_particle(x)?;
+                    return Err(e);
+                }
+                self.books.grown_mass += 1.0;
+            } else {
+                self.books.removed_number += 1;
+                self.books.removed_mass += xf;
+            }
+            return Ok(());
+        }
+        Ok(())
+    }
+
     /// Decides and applies the candidate (on error the state and books are unchanged;
     /// the candidate stays pending).
     fn candidate<K, F, S, G>(&mut self, s: &mut S, bound: f64, rng: &mut G) -> Result<()>
@@ -273,6 +355,9 @@ impl Driver {
         S: Controls<K, F> + Observe,
         G: Rng + ?Sized,
     {
+        if self.fast(s) {
+            return self.candidate_fast(s, bound, rng);
+        }
         let mut u = open_unit(rng) * bound;
         let src = self.source_rate(s.volume());
         let event = if u < src {

@@ -213,6 +213,26 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         either!(&mut self.engine, s => s.set_kernel(kernel))
     }
 
+    /// See [`LowRankMc::edits`].
+    pub fn edits(&self) -> bool {
+        either!(&self.engine, s => s.edits())
+    }
+
+    /// See [`LowRankMc::draw_particle`].
+    pub fn draw_particle<G: Rng + ?Sized>(&self, by_mass: bool, rng: &mut G) -> Option<(u64, u64)> {
+        either!(&self.engine, s => s.draw_particle(by_mass, rng))
+    }
+
+    /// See [`LowRankMc::remove_drawn`].
+    pub fn remove_drawn(&mut self, x: u64, handle: u64) -> Result<()> {
+        either!(&mut self.engine, s => s.remove_drawn(x, handle))
+    }
+
+    /// See [`LowRankMc::add_particle`].
+    pub fn add_particle(&mut self, x: u64) -> Result<()> {
+        either!(&mut self.engine, s => s.add_particle(x))
+    }
+
     /// See [`LowRankMc::set_doubling`].
     pub fn set_doubling(&mut self, on: bool) {
         either!(&mut self.engine, s => s.set_doubling(on))

@@ -423,6 +423,47 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
         }
     }
 
+    const EDITS: bool = true;
+
+    fn draw_particle<G: Rng + ?Sized>(
+        &self,
+        by_mass: bool,
+        n: u64,
+        rng: &mut G,
+    ) -> Option<(u64, (usize, u64))> {
+        let counts = self.n.iter().copied().enumerate().skip(1);
+        loop {
+            let b =
+                crate::scheme::lowrank::edit::pick_bucket(counts.clone(), n, by_mass, self.m, rng)?;
+            // a bucket's particles fill its slots 0..n_b: a uniform one
+            let s = crate::random::below(rng, self.n[b]);
+            let x = self.occupant(b, s);
+            if !by_mass || crate::scheme::lowrank::edit::keep_by_mass(b, x, self.m, rng) {
+                return Some((x, (b, s)));
+            }
+        }
+    }
+
+    fn remove_particle(&mut self, (b, s): (usize, u64), _x: u64) {
+        self.remove(b, s);
+        self.update(b, -1.0);
+    }
+
+    fn add_particle<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        x: u64,
+        pop: &Population,
+    ) -> Result<()> {
+        while x > self.m {
+            let grow = Outcome::Merge { size: self.m + 1 };
+            self.prepare(kernel, &grow, pop)?;
+        }
+        let b = self.insert(x);
+        self.update(b, 1.0);
+        Ok(())
+    }
+
     fn rate_now(&self) -> Option<f64> {
         Some(self.rate())
     }

@@ -504,8 +504,8 @@ dsmc_entry!(
     tag::DSMC_REJECTION
 );
 
-count_controls!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>] LowRankMc<K, R, E, Coagulate>, |s| s.counts());
-count_controls!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts(), engine = |s| s.mode());
+count_controls!([K: CoagulationKernel, const R: usize, E: ProposalEngine<R>] LowRankMc<K, R, E, Coagulate>, |s| s.counts(), edits = true);
+count_controls!([K: CoagulationKernel + Clone, const R: usize, const W: usize] AutoBucketed<K, R, W>, |s| s.counts(), engine = |s| s.mode(), edits = true);
 
 impl<K: CoagulationKernel, F, const R: usize, const W: usize> Controls<K, F>
     for LowRankSizes<K, R, W>

@@ -58,6 +58,7 @@ pub mod bound;
 pub mod bucketed;
 mod counted;
 pub mod dsmc;
+mod edit;
 mod entry;
 pub mod proposal;
 pub mod rule;

@@ -147,6 +147,43 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// (only called when [`REWEIGHS`](Self::REWEIGHS)).
     fn refactor<K: CoagulationKernel>(&mut self, _kernel: &K) {}
 
+    /// Whether the engine edits single particles for processes beside coagulation
+    /// ([`draw_particle`](Self::draw_particle), [`remove_particle`](Self::remove_particle),
+    /// [`add_particle`](Self::add_particle)); otherwise the facade reads and replaces
+    /// the whole state.
+    const EDITS: bool = false;
+
+    /// A particle drawn uniformly (`by_mass`: in proportion to its size) from the `n`
+    /// particles, its size and where it is; `None` without particles.
+    fn draw_particle<G: Rng + ?Sized>(
+        &self,
+        _by_mass: bool,
+        _n: u64,
+        _rng: &mut G,
+    ) -> Option<(u64, (usize, u64))> {
+        None
+    }
+
+    /// Removes the particle of size `x` a draw found at `at` (nothing changed since).
+    fn remove_particle(&mut self, _at: (usize, u64), _x: u64) {}
+
+    /// Adds a particle of size `x`, growing M first as needed (the fallible part: on
+    /// error no particle was added). `pop` is the population before the addition.
+    fn add_particle<K: CoagulationKernel>(
+        &mut self,
+        _kernel: &K,
+        _x: u64,
+        _pop: &Population,
+    ) -> Result<()> {
+        Err(Error::Unsupported {
+            what: "single-particle edits on this layout",
+        })
+    }
+
+    /// The particle-number reference rose to `pop.n0` (the quantisation that depends on
+    /// it is redone).
+    fn rereference(&mut self, _pop: &Population) {}
+
     /// Writes the engine's state after the scheme's common fields.
     fn save(&self, w: &mut Writer);
 

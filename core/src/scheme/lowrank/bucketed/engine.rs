@@ -107,6 +107,62 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
         }
     }
 
+    const EDITS: bool = true;
+
+    fn draw_particle<G: Rng + ?Sized>(
+        &self,
+        by_mass: bool,
+        n: u64,
+        rng: &mut G,
+    ) -> Option<(u64, (usize, u64))> {
+        let counts = self
+            .buckets
+            .iter()
+            .enumerate()
+            .skip(1)
+            .map(|(b, bk)| (b, bk.n));
+        loop {
+            let b =
+                crate::scheme::lowrank::edit::pick_bucket(counts.clone(), n, by_mass, self.m, rng)?;
+            // a uniform slot of the bucket, an empty one drawn again: a uniform particle
+            let bk = &self.buckets[b];
+            let (s, x) = loop {
+                let s = below(rng, bk.slots);
+                if let Some(x) = self.occupant(b, s) {
+                    break (s, x);
+                }
+            };
+            if !by_mass || crate::scheme::lowrank::edit::keep_by_mass(b, x, self.m, rng) {
+                return Some((x, (b, s)));
+            }
+        }
+    }
+
+    fn remove_particle(&mut self, (b, s): (usize, u64), x: u64) {
+        self.remove(b, s, x);
+    }
+
+    fn add_particle<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        x: u64,
+        pop: &Population,
+    ) -> Result<()> {
+        while x > self.m {
+            self.reserve_m(2 * self.m, pop.memory_budget)?;
+            self.extend_buckets(kernel, 2 * self.m)?;
+            self.double_m();
+        }
+        self.insert(x);
+        Ok(())
+    }
+
+    fn rereference(&mut self, pop: &Population) {
+        self.qmax = ((1u64 << 60) / pop.n0.max(1)).min(1 << 53);
+        self.requantise();
+        self.rates_stale = true;
+    }
+
     fn rate_now(&self) -> Option<f64> {
         if self.stale() {
             return None;
