@@ -361,6 +361,16 @@ fn evaluate_check(
                 format!("Euler expectation at Δt = {}", plan.options.dt()),
             )
         }
+        Reference::Named(n) if n == "sectional" => {
+            let t = check
+                .t
+                .ok_or_else(|| format!("case {name}: sectional needs t"))?;
+            (
+                super::validate_sectional::reference(plan, &o, t)
+                    .map_err(|e| format!("case {name}: {e}"))?,
+                "sectional (fixed pivot)".into(),
+            )
+        }
         Reference::Named(n) => return Err(format!("case {name}: unknown reference {n:?}")),
         Reference::Run { run } => {
             let mut ov = overrides.to_vec();
@@ -461,7 +471,8 @@ mod tests {
                     "osinsky2023",
                     "eibeck2000",
                     "maftei2016",
-                    "exact"
+                    "exact",
+                    "processes"
                 ]
                 .contains(&prefix),
                 "{}",
