@@ -504,3 +504,85 @@ fn split_runs_through_checkpoints_keep_their_bits() {
         assert_eq!(whole.books(), copy.books());
     }
 }
+
+/// Any real number, the hostile ones often.
+fn hostile() -> impl proptest::strategy::Strategy<Value = f64> {
+    use proptest::prelude::*;
+    prop_oneof![
+        1 => Just(f64::NAN),
+        1 => Just(f64::INFINITY),
+        1 => Just(-1.0),
+        1 => Just(0.0),
+        1 => Just(1e300),
+        1 => Just(f64::MIN_POSITIVE),
+        1 => any::<f64>(),
+        6 => 0.0f64..3.0,
+    ]
+}
+
+proptest::proptest! {
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(96))]
+
+    /// Arbitrary process parameters on every scheme that takes them: a constructor or
+    /// `set_processes` refuses, or the sim runs a short step under a work limit; a
+    /// checkpoint with one byte changed restores or is refused with the sim unchanged.
+    #[test]
+    fn processes_never_panic(
+        which in 0usize..9,
+        rate in hostile(),
+        kind in 0usize..3,
+        p1 in hostile(),
+        p2 in hostile(),
+        c in hostile(),
+        p in hostile(),
+        g in hostile(),
+        q in hostile(),
+        t in hostile(),
+        flip in proptest::prelude::any::<usize>(),
+        value in proptest::prelude::any::<u8>(),
+    ) {
+        let id = process_schemes()[which % process_schemes().len()];
+        let sizes = match kind {
+            0 => Distribution::Monodisperse { size: p1 },
+            1 => Distribution::Exponential { mean: p1 },
+            _ => Distribution::Lognormal { median: p1, gsd: p2 },
+        };
+        let mut procs = Processes::default();
+        if let Ok(s) = Source::new(rate, sizes) {
+            procs = procs.with_source(s);
+        }
+        if let Ok(r) = procs.clone().with_removal(c, p) {
+            procs = r;
+        }
+        if let Ok(r) = procs.clone().with_growth(g, q) {
+            procs = r;
+        }
+        let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[30, 5], 30.0);
+        let before = common::state_bits(&*s);
+        if s.set_processes(Some(procs)).is_err() {
+            proptest::prop_assert_eq!(common::state_bits(&*s), before);
+            return Ok(());
+        }
+        let mut g = rng(1);
+        let t = if t.is_finite() { t.clamp(-1.0, 3.0) } else { t };
+        let _ = s.advance_within(t, &mut coagula_core::scheme::Budget::work(100_000), &mut g);
+        // whatever was refused on the way, the books still count the particles
+        if let Some(b) = s.books() {
+            proptest::prop_assert_eq!(b.current_number(), s.particles());
+        }
+        let mut buf = vec![0u8; 1 << 20];
+        let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
+        s.save_checkpoint(None, &mut w);
+        let n = w.finish().unwrap();
+        buf[flip % n] = value;
+        let kept = common::state_bits(&*s);
+        let books = s.books();
+        if s.restore_checkpoint(&buf[..n]).is_err() {
+            proptest::prop_assert_eq!(common::state_bits(&*s), kept);
+            proptest::prop_assert_eq!(s.books(), books);
+        } else {
+            let t2 = s.time() + 0.05;
+            let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(100_000), &mut g);
+        }
+    }
+}
