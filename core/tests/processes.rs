@@ -113,6 +113,17 @@ fn tally(s: &common::Sim) -> (u64, f64) {
     }
 }
 
+/// The checkpoint envelope of `s`, in a buffer of the size it needs.
+fn checkpoint(s: &common::Sim) -> Vec<u8> {
+    let mut w = coagula_core::checkpoint::Writer::new(&mut []);
+    s.save_checkpoint(None, &mut w);
+    let mut buf = vec![0u8; w.needed()];
+    let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
+    s.save_checkpoint(None, &mut w);
+    w.finish().unwrap();
+    buf
+}
+
 fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
 }
@@ -464,10 +475,8 @@ fn split_runs_through_checkpoints_keep_their_bits() {
         let mut h = rng(5);
         for t in [0.3, 1.1, 2.5] {
             split.advance_to(t, &mut h).unwrap();
-            let mut buf = vec![0u8; 1 << 20];
-            let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
-            split.save_checkpoint(None, &mut w);
-            let len = w.finish().unwrap();
+            let buf = checkpoint(&*split);
+            let len = buf.len();
             let mut fresh = make();
             fresh.restore_checkpoint(&buf[..len]).unwrap();
             // a sim without processes refuses it, and is unchanged
@@ -521,7 +530,7 @@ fn hostile() -> impl proptest::strategy::Strategy<Value = f64> {
 }
 
 proptest::proptest! {
-    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(96))]
+    #![proptest_config(proptest::prelude::ProptestConfig::with_cases(64))]
 
     /// Arbitrary process parameters on every scheme that takes them: a constructor or
     /// `set_processes` refuses, or the sim runs a short step under a work limit; a
@@ -565,15 +574,13 @@ proptest::proptest! {
         }
         let mut g = rng(1);
         let t = if t.is_finite() { t.clamp(-1.0, 3.0) } else { t };
-        let _ = s.advance_within(t, &mut coagula_core::scheme::Budget::work(100_000), &mut g);
+        let _ = s.advance_within(t, &mut coagula_core::scheme::Budget::work(20_000), &mut g);
         // whatever was refused on the way, the books still count the particles
         if let Some(b) = s.books() {
             proptest::prop_assert_eq!(b.current_number(), s.particles());
         }
-        let mut buf = vec![0u8; 1 << 20];
-        let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
-        s.save_checkpoint(None, &mut w);
-        let n = w.finish().unwrap();
+        let mut buf = checkpoint(&*s);
+        let n = buf.len();
         buf[flip % n] = value;
         let kept = common::state_bits(&*s);
         let books = s.books();
@@ -582,7 +589,7 @@ proptest::proptest! {
             proptest::prop_assert_eq!(s.books(), books);
         } else {
             let t2 = s.time() + 0.05;
-            let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(100_000), &mut g);
+            let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(20_000), &mut g);
         }
     }
 }
