@@ -432,7 +432,8 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
         rng: &mut G,
     ) -> Option<(u64, (usize, u64))> {
         let counts = self.n.iter().copied().enumerate().skip(1);
-        loop {
+        // (bounded as the slot engine's draw)
+        for _ in 0..crate::random::MAX_TRIES {
             let b =
                 crate::scheme::lowrank::edit::pick_bucket(counts.clone(), n, by_mass, self.m, rng)?;
             // a bucket's particles fill its slots 0..n_b: a uniform one
@@ -442,6 +443,7 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
                 return Some((x, (b, s)));
             }
         }
+        None
     }
 
     fn remove_particle(&mut self, (b, s): (usize, u64), _x: u64) {

@@ -154,7 +154,8 @@ pub trait ProposalEngine<const R: usize>: Sized {
     const EDITS: bool = false;
 
     /// A particle drawn uniformly (`by_mass`: in proportion to its size) from the `n`
-    /// particles, its size and where it is; `None` without particles.
+    /// particles, its size and where it is; `None` without particles (or when a
+    /// degenerate random stream rejects `MAX_TRIES` draws in a row: no event).
     fn draw_particle<G: Rng + ?Sized>(
         &self,
         _by_mass: bool,

@@ -121,21 +121,24 @@ impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> 
             .enumerate()
             .skip(1)
             .map(|(b, bk)| (b, bk.n));
-        loop {
+        // (bounded: a degenerate random stream cannot hang the call; a real one passes
+        // MAX_TRIES rejections in a row with probability below 2^-400)
+        for _ in 0..crate::random::MAX_TRIES {
             let b =
                 crate::scheme::lowrank::edit::pick_bucket(counts.clone(), n, by_mass, self.m, rng)?;
             // a uniform slot of the bucket, an empty one drawn again: a uniform particle
             let bk = &self.buckets[b];
-            let (s, x) = loop {
+            let Some((s, x)) = (0..crate::random::MAX_TRIES).find_map(|_| {
                 let s = below(rng, bk.slots);
-                if let Some(x) = self.occupant(b, s) {
-                    break (s, x);
-                }
+                self.occupant(b, s).map(|x| (s, x))
+            }) else {
+                continue;
             };
             if !by_mass || crate::scheme::lowrank::edit::keep_by_mass(b, x, self.m, rng) {
                 return Some((x, (b, s)));
             }
         }
+        None
     }
 
     fn remove_particle(&mut self, (b, s): (usize, u64), x: u64) {
