@@ -8,6 +8,8 @@
 //!
 //! Modules:
 //! * [`checkpoint`] — save and restore a scheme's state into a caller buffer;
+//! * [`classes`] — host coupling on size classes: projection onto a grid keeping number
+//!   and mass (fixed pivot), populations from class numbers, per-class source terms;
 //! * [`kernel`] — coagulation kernels with their bounds, fragmentation kernels;
 //! * [`exact`] — exact solutions used as validation targets;
 //! * [`initial`] — initial states every front end draws the same way;
@@ -42,6 +44,7 @@ extern crate alloc;
 extern crate std;
 
 pub mod checkpoint;
+pub mod classes;
 pub mod error;
 pub mod exact;
 pub mod initial;

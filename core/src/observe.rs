@@ -82,6 +82,11 @@ pub trait Observe {
         }
     }
 
+    /// Every particle (or occupied size) as `(size, number per unit volume)`: the
+    /// weighted point measure of the module docs, whose sums are the moments and
+    /// concentrations (what [`crate::classes::Classes::project`] takes).
+    fn points(&self, f: &mut dyn FnMut(f64, f64));
+
     /// The gel-mass estimate, where the scheme defines one (size-count schemes: the
     /// largest cluster's mass per volume, Eibeck & Wagner eq. 6.15); `None` otherwise.
     fn gel_mass(&self) -> Option<f64>;

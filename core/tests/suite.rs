@@ -8,6 +8,8 @@ mod common;
 
 #[path = "checkpoint.rs"]
 mod checkpoint;
+#[path = "classes.rs"]
+mod classes;
 #[path = "conformance.rs"]
 mod conformance;
 #[path = "count_schemes.rs"]

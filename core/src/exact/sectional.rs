@@ -83,26 +83,17 @@ pub struct Books {
     pub lost_mass: f64,
 }
 
-/// The split of size `v` over the pivots `x`.
+/// The split of size `v` over the pivots `x` ([`crate::classes::place`]; below the
+/// first pivot: all to it).
 fn split_of(x: &[f64], v: f64) -> Split {
-    let m = x.len();
-    if v > x[m - 1] {
-        return Split {
+    use crate::classes::Place;
+    match crate::classes::place(x, v) {
+        Place::Below => Split { to: 0, eta: 1.0 },
+        Place::Above => Split {
             to: usize::MAX,
             eta: 0.0,
-        };
-    }
-    if v <= x[0] {
-        return Split { to: 0, eta: 1.0 };
-    }
-    // the last pivot not above v
-    let i = x.partition_point(|&p| p <= v) - 1;
-    if i + 1 == m {
-        return Split { to: i, eta: 1.0 };
-    }
-    Split {
-        to: i,
-        eta: (x[i + 1] - v) / (x[i + 1] - x[i]),
+        },
+        Place::Between { to, eta } => Split { to, eta },
     }
 }
 
@@ -157,20 +148,10 @@ impl<K: CoagulationKernel> Sectional<K> {
     /// A solution on pivots `x` (ascending, finite, > 0; at most [`MAX_PIVOTS`]) with
     /// no particles, under `kernel`.
     pub fn new(kernel: K, x: Vec<f64>) -> Result<Self> {
-        if x.is_empty() || x.len() > MAX_PIVOTS {
+        if x.len() > MAX_PIVOTS {
             return Err(too_many());
         }
-        for w in x.windows(2) {
-            if w[1] <= w[0] || w[1].is_nan() {
-                return Err(Error::OutOfRange {
-                    name: "pivot (ascending)",
-                    value: w[1],
-                    range: "(previous pivot, inf)",
-                });
-            }
-        }
-        crate::error::positive("first pivot", x[0])?;
-        finite("last pivot", x[x.len() - 1])?;
+        crate::classes::check_pivots(&x)?;
         let m = x.len();
         let pairs = m * (m + 1) / 2;
         let (mut rate, mut split) = (Vec::new(), Vec::new());

@@ -569,6 +569,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn concentration(&self, a: f64, b: f64) -> f64 {
         MassFlow::concentration(self, a, b)
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        let w = self.mass / self.n as f64;
+        for &x in self.sizes() {
+            f(x, w / x);
+        }
+    }
     /// None: the scheme keeps every particle (no gel leaves the system).
     fn gel_mass(&self) -> Option<f64> {
         None

@@ -364,6 +364,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let w = 1.0 / self.volume;
         crate::observe::sum_concentration(self.store.sizes().iter().map(|&y| (y, w)), a, b)
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        let w = 1.0 / self.volume;
+        for &x in self.store.sizes() {
+            f(x, w);
+        }
+    }
     /// The largest cluster's mass over V (E–W 6.15).
     fn gel_mass(&self) -> Option<f64> {
         Some(self.store.sizes().iter().copied().fold(0.0, f64::max) / self.volume)

@@ -514,6 +514,10 @@ impl<K: CoagulationKernel> crate::observe::Observe for DsaCounts<K> {
             b,
         )
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        let w = 1.0 / self.pop.volume;
+        self.for_each_count(&mut |s, c| f(s as f64, c as f64 * w));
+    }
     /// The largest cluster's mass over V (E–W 6.15).
     fn gel_mass(&self) -> Option<f64> {
         Some(self.largest() as f64 / self.pop.volume)

@@ -395,6 +395,12 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         let w = self.mass / self.n0 as f64;
         crate::observe::sum_concentration(self.store.sizes().iter().map(|&x| (x, w / x)), a, b)
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        let w = self.mass / self.n0 as f64;
+        for &x in self.store.sizes() {
+            f(x, w / x);
+        }
+    }
     /// `M1 (1 − n/N)`: the mass of the particles that left past `b_N` (E–W 6.14).
     fn gel_mass(&self) -> Option<f64> {
         Some(self.mass * (1.0 - self.store.len() as f64 / self.n0 as f64))

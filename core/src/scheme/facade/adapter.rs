@@ -194,6 +194,9 @@ impl<E, S: Observe, K, F> Observe for Boxed<E, S, K, F> {
     fn number_density(&self, x: f64) -> f64 {
         self.s.number_density(x)
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        self.s.points(f)
+    }
     fn gel_mass(&self) -> Option<f64> {
         self.s.gel_mass()
     }

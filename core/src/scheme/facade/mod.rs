@@ -17,6 +17,7 @@
 mod adapter;
 mod driven;
 mod envelope;
+mod host;
 mod model;
 mod options;
 mod reach;
@@ -346,4 +347,33 @@ pub trait Simulation<K, F, G: ?Sized>: Observe + Send {
     /// An exact copy in memory the library owns (a sim in caller workspace included):
     /// the two continue identically and independently.
     fn duplicate(&self) -> Result<Box<dyn Simulation<K, F, G>>>;
+    /// Projects the population onto a host's size classes keeping number and mass
+    /// ([`Classes::project`](crate::classes::Classes::project) over
+    /// [`points`](Observe::points)): `numbers` gets the numbers per unit volume at the
+    /// pivots; what lies outside the grid is returned.
+    fn project(
+        &self,
+        classes: &crate::classes::Classes,
+        numbers: &mut [f64],
+    ) -> Result<crate::classes::Outside> {
+        classes.project(|f| self.points(f), numbers)
+    }
+    /// Replaces the population by the class numbers per unit volume `numbers` at the
+    /// pivots of `classes` (see [`crate::classes`]): size-count and size schemes get
+    /// `N_i V` particles of size `x_i` (integer pivots for integer sizes), rounded
+    /// without bias with draws from `rng`; the mass-flow schemes keep their particle
+    /// number and place it on the classes' mass by systematic sampling, with the
+    /// classes' total mass. Processes' books start afresh as after `set_pairs`.
+    /// Temperature and gas states: `Unsupported`. On error nothing changes.
+    fn set_classes(
+        &mut self,
+        classes: &crate::classes::Classes,
+        numbers: &[f64],
+        rng: &mut G,
+    ) -> Result<()>
+    where
+        G: Rng,
+    {
+        host::set_classes(self, classes, numbers, rng)
+    }
 }

@@ -311,6 +311,9 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> Observe for AutoBucke
     fn number_density(&self, x: f64) -> f64 {
         either!(&self.engine, s => s.number_density(x))
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        either!(&self.engine, s => s.points(f))
+    }
     fn gel_mass(&self) -> Option<f64> {
         either!(&self.engine, s => s.gel_mass())
     }

@@ -624,6 +624,12 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> crate::observe::Obser
         let w = 1.0 / self.volume;
         crate::observe::sum_concentration(self.p.sizes.iter().map(|&y| (y, w)), a, b)
     }
+    fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+        let w = 1.0 / self.volume;
+        for &x in &self.p.sizes {
+            f(x, w);
+        }
+    }
     /// The largest cluster's mass over V (E–W 6.15).
     fn gel_mass(&self) -> Option<f64> {
         Some(self.p.sizes.iter().copied().fold(0.0, f64::max) / self.volume)

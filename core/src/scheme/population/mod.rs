@@ -222,6 +222,10 @@ macro_rules! observe_counts {
             fn concentration(&self, a: f64, b: f64) -> f64 {
                 crate::observe::concentration_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self), a, b)
             }
+            fn points(&self, f: &mut dyn FnMut(f64, f64)) {
+                let w = 1.0 / <$ty>::volume(self);
+                self.for_each_count(&mut |s, c| f(s as f64, c as f64 * w));
+            }
             fn gel_mass(&self) -> Option<f64> {
                 Some(crate::observe::largest_of_pairs(|f| self.for_each_count(f), <$ty>::volume(self)))
             }
