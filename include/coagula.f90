@@ -574,6 +574,27 @@ module coagula
        type(c_ptr), value :: sim
        type(coag_books), intent(inout) :: out     ! struct_size set
      end function
+     integer(c_int32_t) function coag_sim_project(sim, pivots, len, numbers, outside) bind(c, name="coag_sim_project")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), intent(in) :: pivots(*)
+       integer(c_size_t), value :: len
+       real(c_double), intent(out) :: numbers(*)
+       real(c_double), intent(out) :: outside(4)  ! N_below, M_below, N_above, M_above
+     end function
+     integer(c_int32_t) function coag_sim_set_classes(sim, pivots, numbers, len) bind(c, name="coag_sim_set_classes")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), intent(in) :: pivots(*), numbers(*)
+       integer(c_size_t), value :: len
+     end function
+     integer(c_int32_t) function coag_class_rates(before, after, len, dt, out) bind(c, name="coag_class_rates")
+       import
+       real(c_double), intent(in) :: before(*), after(*)
+       integer(c_size_t), value :: len
+       real(c_double), value :: dt
+       real(c_double), intent(out) :: out(*)
+     end function
      ! ------------------------------------------------------------ the library
      type(c_ptr) function coag_version() bind(c, name="coag_version")
        import

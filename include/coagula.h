@@ -1461,6 +1461,48 @@ int32_t coag_sim_checkpoint(const coag_sim *sim, uint8_t *buf, size_t len, size_
 int32_t coag_sim_restore(coag_sim *sim, const uint8_t *buf, size_t len);
 
 /*
+ Projects the sim's population onto the `len` pivots (finite, > 0, strictly
+ ascending): `numbers[i]` gets the number per unit volume at `pivots[i]`, each
+ particle split between the two pivots around it so that number and mass are kept
+ (fixed pivot, Kumar & Ramkrishna 1996). What lies below the first pivot or above
+ the last is not classed: `outside` (NULL or 4 doubles) gets its number and mass per
+ unit volume, below then above (`{N_below, M_below, N_above, M_above}`). On error
+ nothing is written.
+
+ # Safety
+ `sim` NULL or live; `pivots` and `numbers` valid for `len` doubles each; `outside`
+ NULL or valid for 4 doubles.
+ */
+int32_t coag_sim_project(const coag_sim *sim, const double *pivots, size_t len, double *numbers, double *outside);
+
+/*
+ Replaces the sim's population by `numbers[i]` particles per unit volume at
+ `pivots[i]` (`len` of each; pivots finite, > 0, strictly ascending; numbers
+ finite, ≥ 0). Size-count schemes (integer pivots) and size schemes get
+ `numbers[i] × volume` particles of size `pivots[i]`, the fraction rounded up with
+ its own probability (draws from the sim's random stream or its host callback), so
+ each class's expected count is exact; the mass-flow schemes keep their particle
+ number and place it on the classes' mass, with that total mass. The processes'
+ books start afresh. Temperature and gas sims: `COAG_UNSUPPORTED`. Errors leave the
+ sim unchanged.
+
+ # Safety
+ `sim` NULL or live; `pivots` and `numbers` valid for `len` doubles each.
+ */
+int32_t coag_sim_set_classes(coag_sim *sim, const double *pivots, const double *numbers, size_t len);
+
+/*
+ The change per class over a step as rates a host's transport equation adds:
+ `out[i] = (after[i] − before[i]) / dt` for `len` classes (`dt` finite, > 0), with
+ `before` and `after` from `coag_sim_project` around the step. `out` may be
+ `before` or `after`. On error nothing is written.
+
+ # Safety
+ `before`, `after` and `out` valid for `len` doubles each.
+ */
+int32_t coag_class_rates(const double *before, const double *after, size_t len, double dt, double *out);
+
+/*
  Sets the sim's particle source: `rate` particles per unit volume and time (finite,
  ≥ 0), sizes of `kind` (`COAG_SOURCE_*`) with parameters `p1`, `p2` (unused ones
  ignored). Processes run on the finite-N schemes with coagulation alone (lowrank,

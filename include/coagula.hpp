@@ -11,6 +11,7 @@
 #ifndef COAGULA_HPP
 #define COAGULA_HPP
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
@@ -55,6 +56,17 @@ inline void check(std::int32_t status) {
 
 /// The library version.
 inline std::string version() { return coag_version(); }
+
+/// The change per class over a step, (after - before) / dt: a host's source terms.
+inline std::vector<double> class_rates(const std::vector<double> &before, const std::vector<double> &after,
+                                       double dt) {
+    if (after.size() != before.size()) {
+        throw Error(COAG_INVALID_ARGUMENT, "class_rates: before and after differ in length");
+    }
+    std::vector<double> out(before.size());
+    check(coag_class_rates(before.data(), after.data(), before.size(), dt, out.data()));
+    return out;
+}
 
 namespace detail {
 inline std::string str(const char *p) { return p ? std::string(p) : std::string(); }
@@ -615,6 +627,22 @@ class Sim {
         b.struct_size = sizeof b;
         check(coag_sim_books(s_.get(), &b));
         return b;
+    }
+
+    /// The population on a host's size classes (number and mass kept); the returned
+    /// array is {N_below, M_below, N_above, M_above}, what lies outside the pivots.
+    std::array<double, 4> project(const std::vector<double> &pivots, std::vector<double> &numbers) const {
+        numbers.resize(pivots.size());
+        std::array<double, 4> outside{};
+        check(coag_sim_project(s_.get(), pivots.data(), pivots.size(), numbers.data(), outside.data()));
+        return outside;
+    }
+    /// Replaces the population by class numbers per unit volume at the pivots.
+    void set_classes(const std::vector<double> &pivots, const std::vector<double> &numbers) {
+        if (numbers.size() != pivots.size()) {
+            throw Error(COAG_INVALID_ARGUMENT, "set_classes: as many numbers as pivots");
+        }
+        check(coag_sim_set_classes(s_.get(), pivots.data(), numbers.data(), pivots.size()));
     }
 
     coag_sim *get() noexcept { return s_.get(); }

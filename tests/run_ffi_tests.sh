@@ -23,7 +23,7 @@ printf '#include "coagula.h"\n#include "coagula.h"\nint main(void) { return 0; }
 gcc -std=c89 -pedantic -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/header89.o"
 g++ -x c++ -std=c++11 -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/headerxx.o"
 
-for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes; do
+for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes test_classes; do
     gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
         "tests/c/$t.c" "$lib" $libs -o "$out/$t"
     "$out/$t"
@@ -48,7 +48,7 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 # checks, smaller work limits and fewer crafted checkpoints in test_hostile: the same
 # code paths). Two at a time (COAG_VALGRIND_JOBS): memcheck runs one thread per program.
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes"
+    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes test_classes"
     for t in $vg_tests; do
         gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"

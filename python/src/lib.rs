@@ -15,6 +15,7 @@ mod initial;
 mod kernel;
 mod langevin;
 mod process;
+mod report;
 mod scenario;
 mod sim;
 

@@ -7,13 +7,15 @@
 use crate::arrays::{counts_arg, reals_arg};
 use crate::initial::Initial;
 use crate::kernel::{PyCoag, PyFrag, coagulation_of, fragmentation_of, model_of};
+use crate::report::Report;
 use crate::{CoagulaError, py_err};
 use coagula_core::checkpoint::Writer;
+use coagula_core::classes::Classes;
 use coagula_core::random::{Generator, generator};
 use coagula_core::scheme::facade::{
     Blank, KEYS, Kind, Options, SchemeId, Simulation as Facade, State, Value, peek_stream,
 };
-use coagula_core::scheme::{StepReport, registry};
+use coagula_core::scheme::registry;
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -79,127 +81,6 @@ pub(crate) fn options_of(kw: Option<&Bound<'_, PyDict>>) -> PyResult<Options> {
         o.set(spec.name, value).map_err(py_err)?;
     }
     Ok(o)
-}
-
-/// What a call did (or every call so far: `Simulation.totals`): its fields are
-/// attributes, and it reads like a dict (`report["events"]`, `dict(report)`).
-#[pyclass(module = "coagula", name = "StepReport", frozen)]
-#[derive(Clone, Debug)]
-pub struct Report(StepReport);
-
-/// The report's fields, in order.
-const FIELDS: [&str; 10] = [
-    "time",
-    "events",
-    "proposals",
-    "rejections",
-    "bound_violations",
-    "clipped",
-    "doublings",
-    "removed",
-    "bounces",
-    "interrupted",
-];
-
-impl Report {
-    fn field<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
-        let r = &self.0;
-        Ok(match name {
-            "time" => r.time.into_pyobject(py)?.into_any(),
-            "events" => r.events.into_pyobject(py)?.into_any(),
-            "proposals" => r.proposals.into_pyobject(py)?.into_any(),
-            "rejections" => r.rejections.into_pyobject(py)?.into_any(),
-            "bound_violations" => r.bound_violations.into_pyobject(py)?.into_any(),
-            "clipped" => r.clipped.into_pyobject(py)?.into_any(),
-            "doublings" => r.doublings.into_pyobject(py)?.into_any(),
-            "removed" => r.removed.into_pyobject(py)?.into_any(),
-            "bounces" => r.bounces.into_pyobject(py)?.into_any(),
-            "interrupted" => r.interrupted.into_pyobject(py)?.to_owned().into_any(),
-            _ => {
-                return Err(pyo3::exceptions::PyKeyError::new_err(format!(
-                    "{name}: a step report has {}",
-                    FIELDS.join(", ")
-                )));
-            }
-        })
-    }
-}
-
-#[pymethods]
-impl Report {
-    /// The time reached.
-    #[getter]
-    fn time(&self) -> f64 {
-        self.0.time
-    }
-    /// Coagulation (and break-up) events.
-    #[getter]
-    fn events(&self) -> u64 {
-        self.0.events
-    }
-    /// Proposals drawn (event-driven schemes).
-    #[getter]
-    fn proposals(&self) -> u64 {
-        self.0.proposals
-    }
-    /// Proposals rejected.
-    #[getter]
-    fn rejections(&self) -> u64 {
-        self.0.rejections
-    }
-    /// Proposals whose rate exceeded the bound (counted, or an error when strict).
-    #[getter]
-    fn bound_violations(&self) -> u64 {
-        self.0.bound_violations
-    }
-    /// Probabilities clipped to 1 (time-stepped schemes).
-    #[getter]
-    fn clipped(&self) -> u64 {
-        self.0.clipped
-    }
-    /// Particle doublings.
-    #[getter]
-    fn doublings(&self) -> u64 {
-        self.0.doublings
-    }
-    /// Particles removed.
-    #[getter]
-    fn removed(&self) -> u64 {
-        self.0.removed
-    }
-    /// Collisions that bounced (temperature and gas schemes).
-    #[getter]
-    fn bounces(&self) -> u64 {
-        self.0.bounces
-    }
-    /// Whether a work limit or Ctrl-C stopped the call before its time.
-    #[getter]
-    fn interrupted(&self) -> bool {
-        self.0.interrupted
-    }
-    fn __getitem__<'py>(&self, py: Python<'py>, key: &str) -> PyResult<Bound<'py, PyAny>> {
-        self.field(py, key)
-    }
-    fn keys(&self) -> Vec<&'static str> {
-        FIELDS.to_vec()
-    }
-    fn __len__(&self) -> usize {
-        FIELDS.len()
-    }
-    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
-        other.cast::<Report>().is_ok_and(|o| o.get().0 == self.0)
-    }
-    /// The fields as a dict.
-    fn as_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let d = PyDict::new(py);
-        for f in FIELDS {
-            d.set_item(f, self.field(py, f)?)?;
-        }
-        Ok(d)
-    }
-    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
-        Ok(format!("coagula.StepReport({})", self.as_dict(py)?.repr()?))
-    }
 }
 
 /// One population simulation of any registry scheme (`coagula.schemes()` lists them
@@ -612,6 +493,49 @@ impl Sim {
             .map_err(py_err)
     }
 
+    /// The population on a host's size classes: numbers per unit volume at `pivots`
+    /// (ascending, > 0), each particle split between the two pivots around it keeping
+    /// number and mass (fixed pivot, Kumar & Ramkrishna 1996); returns the numbers and
+    /// a dict of what lies outside the grid (`below_number`, `below_mass`,
+    /// `above_number`, `above_mass`).
+    fn project<'py>(
+        &self,
+        py: Python<'py>,
+        pivots: &Bound<'py, PyAny>,
+    ) -> PyResult<(Bound<'py, PyArray1<f64>>, Bound<'py, PyDict>)> {
+        let classes = Classes::new(&reals_arg("pivots", pivots)?).map_err(py_err)?;
+        let mut n = vec![0.0; classes.len()];
+        let out = self
+            .with(|c| c.sim.project(&classes, &mut n))?
+            .map_err(py_err)?;
+        let d = PyDict::new(py);
+        d.set_item("below_number", out.below_number)?;
+        d.set_item("below_mass", out.below_mass)?;
+        d.set_item("above_number", out.above_number)?;
+        d.set_item("above_mass", out.above_mass)?;
+        Ok((PyArray1::from_vec(py, n), d))
+    }
+
+    /// Replaces the population by `numbers` per unit volume at `pivots` (the inverse of
+    /// `project`): `numbers[i] × volume` particles of size `pivots[i]` (integer pivots
+    /// on an integer-size scheme), rounded without bias with draws from the sim's own
+    /// stream; a mass-flow scheme keeps its particle number and takes the classes'
+    /// mass. On error the sim is unchanged.
+    fn set_classes(&self, pivots: &Bound<'_, PyAny>, numbers: &Bound<'_, PyAny>) -> PyResult<()> {
+        let classes = Classes::new(&reals_arg("pivots", pivots)?).map_err(py_err)?;
+        let n = reals_arg("numbers", numbers)?;
+        self.with(|c| {
+            // (the stream moves on only when the population was replaced)
+            let mut rng = c.rng.clone();
+            let r = c.sim.set_classes(&classes, &n, &mut rng);
+            if r.is_ok() {
+                c.rng = rng;
+            }
+            r
+        })?
+        .map_err(py_err)
+    }
+
     /// Replaces the coagulation kernel.
     fn set_kernel(&self, py: Python<'_>, kernel: &Bound<'_, PyAny>) -> PyResult<()> {
         let k = coagulation_of(kernel, Some(self.scheme))?;
@@ -769,7 +693,23 @@ fn _simulation(
     Ok(sim)
 }
 
+/// `class_rates(before, after, dt)`: the change per class over a step,
+/// `(after − before) / dt`, as the source terms of a host's transport equation.
+#[pyfunction]
+fn class_rates<'py>(
+    py: Python<'py>,
+    before: &Bound<'py, PyAny>,
+    after: &Bound<'py, PyAny>,
+    dt: f64,
+) -> PyResult<Bound<'py, PyArray1<f64>>> {
+    let (b, a) = (reals_arg("before", before)?, reals_arg("after", after)?);
+    let mut out = vec![0.0; b.len()];
+    coagula_core::classes::rates(&b, &a, dt, &mut out).map_err(py_err)?;
+    Ok(PyArray1::from_vec(py, out))
+}
+
 pub(crate) fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(class_rates, m)?)?;
     m.add_class::<Sim>()?;
     m.add_class::<Report>()?;
     m.add_function(wrap_pyfunction!(_simulation, m)?)?;

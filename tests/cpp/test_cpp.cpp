@@ -578,6 +578,25 @@ void test_processes() {
     CHECK(code_of([&] { sim.set_removal(1.0, 3.0); }) == COAG_INVALID_ARGUMENT, "removal exponent 3");
     sim.clear_processes();
     CHECK(code_of([&] { sim.books(); }) == COAG_UNSUPPORTED, "no books without processes");
+    // host classes: number and mass kept; built back within one particle per class
+    std::vector<double> x{1, 2, 4, 8, 16, 64, 1024}, cn, back;
+    auto out = sim.project(x, cn);
+    double nn = out[0] + out[2], mm = out[1] + out[3];
+    for (std::size_t i = 0; i < x.size(); i++) {
+        nn += cn[i];
+        mm += cn[i] * x[i];
+    }
+    CHECK(std::fabs(nn - sim.moment(0.0)) < 1e-12 * nn, "classes: the number");
+    CHECK(std::fabs(mm - sim.moment(1.0)) < 1e-12 * mm, "classes: the mass");
+    double v = static_cast<double>(sim.particle_count()) / sim.moment(0.0);
+    sim.set_classes(x, cn);
+    sim.project(x, back);
+    bool within = true;
+    for (std::size_t i = 0; i < x.size(); i++) within &= std::fabs(back[i] - cn[i]) * v <= 1.0 + 1e-9;
+    CHECK(within, "classes: within one particle");
+    auto r = coagula::class_rates(cn, back, 0.5);
+    CHECK(r[0] == (back[0] - cn[0]) / 0.5, "classes: rates");
+    CHECK(code_of([&] { sim.set_classes(x, {1.0}); }) == COAG_INVALID_ARGUMENT, "classes: lengths");
 }
 
 void test_gas() {

@@ -539,7 +539,7 @@ contains
     type(c_ptr) :: k, o, sim
     type(coag_books) :: b
     integer(c_int64_t) :: n
-    real(c_double) :: m0, m1, v
+    real(c_double) :: m0, m1, v, x(7), cn(7), cn2(7), rates(7), outside(4)
     k = kernel("constant", [1.0_c_double])
     o = seeded(3, 0)
     call ok(coag_sim_new_counts(cs("lowrank"), k, c_null_ptr, o, [1000_c_int64_t], 1_c_size_t, &
@@ -564,6 +564,22 @@ contains
     call check(b%injected_number > 0 .and. b%removed_number > 0 .and. b%grown_mass > 0, "every process acted")
     call ok(coag_sim_clear_processes(sim))
     call expect(coag_sim_books(sim, b), COAG_UNSUPPORTED, "no books without processes")
+    ! host classes: the projection keeps number and mass; a population built back has
+    ! each class within one particle; rates are the change over the step
+    x = [1.0_c_double, 2.0_c_double, 4.0_c_double, 8.0_c_double, 16.0_c_double, 64.0_c_double, 1024.0_c_double]
+    call ok(coag_sim_project(sim, x, 7_c_size_t, cn, outside))
+    call ok(coag_sim_moment(sim, 0.0_c_double, m0))
+    call ok(coag_sim_moment(sim, 1.0_c_double, m1))
+    call check(abs(sum(cn) + outside(1) + outside(3) - m0) < 1e-12_c_double * m0, "classes: the number")
+    call check(abs(sum(cn * x) + outside(2) + outside(4) - m1) < 1e-12_c_double * m1, "classes: the mass")
+    call ok(coag_sim_set_classes(sim, x, cn, 7_c_size_t))
+    call ok(coag_sim_project(sim, x, 7_c_size_t, cn2, outside))
+    call check(maxval(abs(cn2 - cn)) * v <= 1.0_c_double + 1e-9_c_double, "classes: within one particle")
+    call ok(coag_class_rates(cn, cn2, 7_c_size_t, 0.5_c_double, rates))
+    call check(abs(rates(1) - (cn2(1) - cn(1)) / 0.5_c_double) < 1e-15_c_double, "classes: rates")
+    call expect(coag_class_rates(cn, cn2, 7_c_size_t, 0.0_c_double, rates), COAG_INVALID_ARGUMENT, "rates: dt 0")
+    x(3) = x(2)
+    call expect(coag_sim_set_classes(sim, x, cn, 7_c_size_t), COAG_INVALID_ARGUMENT, "classes: pivots not ascending")
     call coag_sim_free(sim)
     call coag_kernel_free(k)
   end subroutine test_processes

@@ -6,12 +6,14 @@
 
 mod advance;
 mod checkpoint;
+mod classes;
 mod process;
 mod read;
 mod write;
 
 pub use advance::*;
 pub use checkpoint::*;
+pub use classes::*;
 pub use process::*;
 pub use read::*;
 pub use write::*;
