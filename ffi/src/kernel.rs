@@ -448,29 +448,3 @@ pub unsafe extern "C" fn coag_fragmentation_free(frag: *mut coag_fragmentation) 
         drop(unsafe { Box::from_raw(frag) });
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    extern "C" fn one(_x: f64, _y: f64, _ud: *mut c_void) -> f64 {
-        1.0
-    }
-
-    /// A built-in kernel's monotone factors reach the engine through the C handle (its
-    /// buckets bounded from their ends); a C callback's never claim it.
-    #[test]
-    fn monotone_factors_pass_on_for_built_in_kernels_only() {
-        assert!(Kernel::Builtin(Coagulation::free_molecular()).monotone_factors());
-        let user = coag_user_kernel {
-            rate: Some(one),
-            majorant: None,
-            rank: 0,
-            factors: None,
-            low_rank_exact: 0,
-            sup: None,
-            user_data: core::ptr::null_mut(),
-        };
-        assert!(!Kernel::User(user).monotone_factors());
-    }
-}
