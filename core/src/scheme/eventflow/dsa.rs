@@ -183,6 +183,50 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         self.replace(sizes)
     }
 
+    /// A particle drawn uniformly: its size and index, for
+    /// [`remove_drawn`](Self::remove_drawn) (the processes' single-particle edits).
+    pub fn draw_particle<G: Rng + ?Sized>(&self, rng: &mut G) -> Option<(f64, u64)> {
+        let n = self.store.len();
+        if n == 0 {
+            return None;
+        }
+        let i = crate::random::below(rng, n as u64) as usize;
+        Some((self.store.size(i), i as u64))
+    }
+
+    /// Removes the particle of size `x` a draw returned `index` for (nothing changed
+    /// since: else an error, nothing removed); O(log N). The next proposal is drawn
+    /// afresh.
+    pub fn remove_drawn(&mut self, x: f64, index: u64) -> Result<()> {
+        let i = usize::try_from(index)
+            .ok()
+            .filter(|&i| i < self.store.len() && self.store.size(i) == x)
+            .ok_or(Error::IndexOutOfRange {
+                name: "drawn particle (of that size)",
+                index,
+                limit: self.store.len() as u64,
+            })?;
+        self.store.swap_remove(i);
+        self.pending = None;
+        Ok(())
+    }
+
+    /// Adds a particle of size `x` (finite, > 0, within the capacity; on error nothing
+    /// changed); O(log N). The next proposal is drawn afresh.
+    pub fn add_particle(&mut self, x: f64) -> Result<()> {
+        crate::error::positive("size", x)?;
+        let w = self.weights(x)?;
+        if self.store.len() == self.store.capacity() {
+            return Err(Error::Capacity {
+                name: "particles (the workspace's capacity)",
+                capacity: self.store.capacity(),
+            });
+        }
+        self.store.push(x, w);
+        self.pending = None;
+        Ok(())
+    }
+
     /// Replaces the coagulation kernel (it needs a product majorant).
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {
         for &y in self.store.sizes() {

@@ -331,6 +331,25 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     fn set_time(&mut self, t: f64) -> Result<()> {
         Dsa::set_time(self, t)
     }
+    fn edits(&self) -> bool {
+        true
+    }
+    fn draw_particle<G: rand_core::Rng + ?Sized>(
+        &self,
+        by_mass: bool,
+        rng: &mut G,
+    ) -> Option<(f64, u64)> {
+        if by_mass {
+            return None;
+        }
+        Dsa::draw_particle(self, rng)
+    }
+    fn remove_drawn(&mut self, x: f64, handle: u64) -> Result<()> {
+        Dsa::remove_drawn(self, x, handle)
+    }
+    fn add_particle(&mut self, x: f64) -> Result<()> {
+        Dsa::add_particle(self, x)
+    }
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
         Err(Error::Unsupported {
             what: "mass: direct simulation's mass is its sizes over its volume (set its sizes instead)",

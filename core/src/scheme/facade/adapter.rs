@@ -87,24 +87,30 @@ pub trait Controls<K, F> {
     /// Turns particle doubling on or off (off while processes run); a scheme that never
     /// doubles ignores it.
     fn set_doubling(&mut self, _on: bool) {}
-    /// Whether the scheme edits single integer-size particles in O(1) after an
-    /// O(buckets) draw (processes then need no state replacement).
+    /// Whether the scheme edits single particles cheaply (an O(buckets) or O(1) draw,
+    /// an O(1) or O(log N) edit): processes then need no state replacement.
     fn edits(&self) -> bool {
+        false
+    }
+    /// Whether [`draw_particle`](Self::draw_particle) draws by mass too (not only
+    /// uniformly).
+    fn draws_by_mass(&self) -> bool {
         false
     }
     /// A particle drawn uniformly (`by_mass`: in proportion to its size): its size and
     /// a handle for [`remove_drawn`](Self::remove_drawn) (schemes that edit).
-    fn draw_particle<G: Rng + ?Sized>(&self, _by_mass: bool, _rng: &mut G) -> Option<(u64, u64)> {
+    fn draw_particle<G: Rng + ?Sized>(&self, _by_mass: bool, _rng: &mut G) -> Option<(f64, u64)> {
         None
     }
     /// Removes the particle a draw returned (schemes that edit).
-    fn remove_drawn(&mut self, _x: u64, _handle: u64) -> Result<()> {
+    fn remove_drawn(&mut self, _x: f64, _handle: u64) -> Result<()> {
         Err(Error::Unsupported {
             what: "single-particle edits on this scheme",
         })
     }
-    /// Adds a particle of integer size `x` (schemes that edit).
-    fn add_particle(&mut self, _x: u64) -> Result<()> {
+    /// Adds a particle of size `x` (an integer on an integer-size scheme; schemes that
+    /// edit).
+    fn add_particle(&mut self, _x: f64) -> Result<()> {
         Err(Error::Unsupported {
             what: "single-particle edits on this scheme",
         })
@@ -481,18 +487,22 @@ macro_rules! count_controls {
                     let _ = $edits;
                     <$ty>::edits(self)
                 }
+                fn draws_by_mass(&self) -> bool {
+                    true
+                }
                 fn draw_particle<G: rand_core::Rng + ?Sized>(
                     &self,
                     by_mass: bool,
                     rng: &mut G,
-                ) -> Option<(u64, u64)> {
-                    <$ty>::draw_particle(self, by_mass, rng)
+                ) -> Option<(f64, u64)> {
+                    <$ty>::draw_particle(self, by_mass, rng).map(|(x, h)| (x as f64, h))
                 }
-                fn remove_drawn(&mut self, x: u64, handle: u64) -> $crate::error::Result<()> {
-                    <$ty>::remove_drawn(self, x, handle)
+                // (the driver passes integer sizes to an integer-size scheme)
+                fn remove_drawn(&mut self, x: f64, handle: u64) -> $crate::error::Result<()> {
+                    <$ty>::remove_drawn(self, x as u64, handle)
                 }
-                fn add_particle(&mut self, x: u64) -> $crate::error::Result<()> {
-                    <$ty>::add_particle(self, x)
+                fn add_particle(&mut self, x: f64) -> $crate::error::Result<()> {
+                    <$ty>::add_particle(self, x as u64)
                 }
             )?
             $(

@@ -13,9 +13,9 @@
 //! The candidate is kept across calls and in checkpoints, so that a run split at any
 //! times gives the bits of an unbroken one.
 //!
-//! Cost: a process event reads and replaces the state (`O(occupied sizes)` on counts,
-//! `O(N)` on sizes); a scheme's own O(log) insert and remove is the next step
-//! (`docs/design/processes.md`).
+//! Cost: on a scheme that edits single particles ([`Controls::edits`]: lowrank's
+//! engines, direct simulation) a process event is a draw and an edit; elsewhere it
+//! reads and replaces the state (`O(occupied sizes)` on counts, `O(N)` on sizes).
 
 use super::{Controls, State};
 use crate::checkpoint::{Reader, Writer};
@@ -270,10 +270,23 @@ impl Driver {
         }
     }
 
-    /// Whether the scheme edits single particles (integer sizes): then a process
-    /// event costs a draw over the buckets, not a state replacement.
+    /// Whether the scheme edits single particles: then a process event costs a draw
+    /// and an edit, not a state replacement. On integer sizes every process has its
+    /// bound (`x^p ≤ 1` or `≤ x` on sizes ≥ 1); on real sizes only a size-independent
+    /// removal does (sizes may be below 1), and only a scheme that draws by mass
+    /// takes a removal or growth at a positive power.
     fn fast<K, F, S: Controls<K, F>>(&self, s: &S) -> bool {
-        self.integer && s.edits()
+        if !s.edits() {
+            return false;
+        }
+        let by_mass = [&self.procs.removal, &self.procs.growth]
+            .into_iter()
+            .flatten()
+            .any(|p| p.exponent > 0.0);
+        if self.integer {
+            return !by_mass || s.draws_by_mass();
+        }
+        self.procs.growth.is_none() && self.procs.removal.is_none_or(|p| p.exponent == 0.0)
     }
 
     /// The bound of the edited path: `S V`, and for removal and growth `c N` (exponent
@@ -302,8 +315,8 @@ impl Driver {
         let src = self.source_rate(s.volume());
         if u < src {
             let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
-            let x = source.draw(true, rng);
-            s.add_particle(x as u64)?;
+            let x = source.draw(self.integer, rng);
+            s.add_particle(x)?;
             self.books.injected_number += 1;
             self.books.injected_mass += x;
             return Ok(());
@@ -318,10 +331,9 @@ impl Driver {
                 u -= w;
                 continue;
             }
-            let Some((x, h)) = s.draw_particle(by_mass, rng) else {
+            let Some((xf, h)) = s.draw_particle(by_mass, rng) else {
                 return Ok(());
             };
-            let xf = x as f64;
             // the rate over its bound: x^p ≤ 1, or x^p / x ≤ 1
             let keep = if by_mass {
                 p.at(xf) / (p.coefficient * xf)
@@ -331,11 +343,11 @@ impl Driver {
             if open_unit(rng) >= keep {
                 return Ok(());
             }
-            s.remove_drawn(x, h)?;
+            s.remove_drawn(xf, h)?;
             if grow {
-                if let Err(e) = s.add_particle(x + 1) {
+                if let Err(e) = s.add_particle(xf + 1.0) {
                     // (back as it was: a size that was there fits)
-                    s.add_particle(x)?;
+                    s.add_particle(xf)?;
                     return Err(e);
                 }
                 self.books.grown_mass += 1.0;
