@@ -555,6 +555,13 @@ module coagula
        integer(c_int32_t), value :: kind          ! COAG_SOURCE_*
        real(c_double), value :: p1, p2
      end function
+     integer(c_int32_t) function coag_sim_set_source_sizes(sim, rate, sizes, len) bind(c, name="coag_sim_set_source_sizes")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), value :: rate
+       real(c_double), intent(in) :: sizes(*)
+       integer(c_size_t), value :: len
+     end function
      integer(c_int32_t) function coag_sim_set_removal(sim, coefficient, exponent) bind(c, name="coag_sim_set_removal")
        import
        type(c_ptr), value :: sim

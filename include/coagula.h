@@ -1516,6 +1516,18 @@ int32_t coag_class_rates(const double *before, const double *after, size_t len, 
 int32_t coag_sim_set_source(coag_sim *sim, double rate, int32_t kind, double p1, double p2);
 
 /*
+ Sets the sim's particle source with listed sizes: `rate` particles per unit volume
+ and time, each of a size drawn uniformly from the `len` sizes (at least 2, each
+ finite and > 0; rounded to integers ≥ 1 on an integer-size scheme). A mixture: an
+ emission and a background inflow as one source, a size listed twice drawn twice as
+ often. As `coag_sim_set_source` otherwise.
+
+ # Safety
+ `sim` NULL or live; `sizes` valid for `len` doubles.
+ */
+int32_t coag_sim_set_source_sizes(coag_sim *sim, double rate, const double *sizes, size_t len);
+
+/*
  Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
  ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
  sedimentation at a power of size. Dilution with a background population is this and

@@ -614,6 +614,10 @@ class Sim {
     void set_source(double rate, std::int32_t kind, double p1, double p2 = 0.0) {
         check(coag_sim_set_source(s_.get(), rate, kind, p1, p2));
     }
+    /// A source drawing its sizes uniformly from a list (a mixture).
+    void set_source_sizes(double rate, const std::vector<double> &sizes) {
+        check(coag_sim_set_source_sizes(s_.get(), rate, sizes.data(), sizes.size()));
+    }
     void set_removal(double coefficient, double exponent) {
         check(coag_sim_set_removal(s_.get(), coefficient, exponent));
     }

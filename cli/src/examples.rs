@@ -32,6 +32,10 @@ pub const EXAMPLES: &[(&str, &str)] = &[
         include_str!("../../examples/osinsky2023-table3-linear.toml"),
     ),
     (
+        "partmc-emission-dilution.toml",
+        include_str!("../../examples/partmc-emission-dilution.toml"),
+    ),
+    (
         "processes-source-dilution.toml",
         include_str!("../../examples/processes-source-dilution.toml"),
     ),

@@ -22,9 +22,9 @@ fn number(d: &Bound<'_, PyDict>, key: &str) -> PyResult<Option<f64>> {
 fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
     for k in d.keys() {
         let k: String = k.extract()?;
-        if !["rate", "kind", "size", "mean", "median", "gsd"].contains(&k.as_str()) {
+        if !["rate", "kind", "size", "mean", "median", "gsd", "sizes"].contains(&k.as_str()) {
             return Err(PyValueError::new_err(format!(
-                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd)"
+                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd, sizes)"
             )));
         }
     }
@@ -48,9 +48,15 @@ fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
             median: need("median")?,
             gsd: need("gsd")?,
         },
+        "sizes" => {
+            let v = d
+                .get_item("sizes")?
+                .ok_or_else(|| PyValueError::new_err("source: missing \"sizes\""))?;
+            Distribution::Sizes(crate::arrays::reals_arg("source[\"sizes\"]", &v)?)
+        }
         k => {
             return Err(PyValueError::new_err(format!(
-                "source: kind {k:?} (monodisperse, exponential or lognormal)"
+                "source: kind {k:?} (monodisperse, exponential, lognormal or sizes)"
             )));
         }
     };
@@ -109,6 +115,10 @@ pub(crate) fn processes_dict<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bo
                 q.set_item("kind", "lognormal")?;
                 q.set_item("median", *median)?;
                 q.set_item("gsd", *gsd)?;
+            }
+            Distribution::Sizes(x) => {
+                q.set_item("kind", "sizes")?;
+                q.set_item("sizes", x.clone())?;
             }
             _ => {
                 return Err(PyValueError::new_err(

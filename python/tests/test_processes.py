@@ -92,3 +92,22 @@ def test_a_scenario_with_a_source_and_a_sink_meets_its_closed_form():
     # the suite's threshold (1e-6 per comparison) in standard errors: hw / t_{0.975, 7}
     se = hw / scipy.stats.t.ppf(0.975, 7)
     assert np.all(np.abs(mean - exact) < z_max(8) * se)
+
+
+def test_a_listed_source_round_trips_and_pickles():
+    import pickle
+
+    sim = Simulation("dsa", Kernel("constant"), Initial.sizes(np.ones(500), 1.0), capacity=4000, seed=2)
+    sim.set_processes(source={"rate": 0.5, "kind": "sizes", "sizes": [1.0, 2.5, 2.5]}, removal=0.1)
+    assert sim.processes["source"] == {"rate": 0.5, "kind": "sizes", "sizes": [1.0, 2.5, 2.5]}
+    sim.advance_to(2.0)
+    copy = pickle.loads(pickle.dumps(sim))
+    sim.advance_to(4.0)
+    copy.advance_to(4.0)
+    assert sim.save() == copy.save()
+    sizes = set(np.unique(sim.sizes()))
+    assert {2.5} <= sizes
+    with pytest.raises(ValueError):
+        sim.set_processes(source={"rate": 0.5, "kind": "sizes"})
+    with pytest.raises(ValueError):
+        sim.set_processes(source={"rate": 0.5, "kind": "sizes", "sizes": [1.0, -2.0]})

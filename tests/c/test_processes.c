@@ -107,6 +107,12 @@ int main(void) {
     EXPECT(coag_sim_set_source(ls, -1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(ls, 1.0, COAG_SOURCE_LOGNORMAL, 1.0, 0.5), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(NULL, 1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_NULL_PARAMETER);
+    double listed[3] = {1.0, 2.5, 2.5};
+    OK(coag_sim_set_source_sizes(ls, 0.5, listed, 3));
+    listed[1] = NAN;
+    EXPECT(coag_sim_set_source_sizes(ls, 0.5, listed, 3), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_source_sizes(ls, 0.5, NULL, 3), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_set_source_sizes(ls, 0.5, listed, 1), COAG_BUFFER_TOO_SMALL);
     EXPECT(coag_sim_books(ls, NULL), COAG_NULL_PARAMETER);
     coag_books small;
     small.struct_size = 4;

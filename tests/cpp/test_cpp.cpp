@@ -578,6 +578,9 @@ void test_processes() {
     CHECK(code_of([&] { sim.set_removal(1.0, 3.0); }) == COAG_INVALID_ARGUMENT, "removal exponent 3");
     sim.clear_processes();
     CHECK(code_of([&] { sim.books(); }) == COAG_UNSUPPORTED, "no books without processes");
+    sim.set_source_sizes(0.3, {1.0, 4.0});
+    CHECK(code_of([&] { sim.set_source_sizes(0.3, {1.0}); }) == COAG_BUFFER_TOO_SMALL, "a listed source of one size");
+    sim.clear_processes();
     // host classes: number and mass kept; built back within one particle per class
     std::vector<double> x{1, 2, 4, 8, 16, 64, 1024}, cn, back;
     auto out = sim.project(x, cn);

@@ -562,6 +562,9 @@ contains
     call check(abs(b%initial_mass + b%injected_mass - b%removed_mass + b%grown_mass - m1 * v) < 1e-9_c_double * m1 * v, &
          "books: the mass")
     call check(b%injected_number > 0 .and. b%removed_number > 0 .and. b%grown_mass > 0, "every process acted")
+    call ok(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, 3.0_c_double], 2_c_size_t))
+    call expect(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, -3.0_c_double], 2_c_size_t), &
+         COAG_INVALID_ARGUMENT, "a listed source with a negative size")
     call ok(coag_sim_clear_processes(sim))
     call expect(coag_sim_books(sim, b), COAG_UNSUPPORTED, "no books without processes")
     ! host classes: the projection keeps number and mass; a population built back has

@@ -22,7 +22,9 @@ pub struct SourceSpec {
     /// Particles per unit volume and time (≥ 0).
     pub rate: f64,
     /// Their sizes: `monodisperse` (nucleation; `size`, default 1), `exponential`
-    /// (`mean`) or `lognormal` (`median`, `gsd`).
+    /// (`mean`), `lognormal` (`median`, `gsd`) or `sizes` (drawn uniformly from the
+    /// list `sizes`: a mixture, e.g. an emission and a background inflow, a size listed
+    /// twice drawn twice as often).
     pub kind: InitKind,
     /// Monodisperse size.
     pub size: Option<f64>,
@@ -32,6 +34,8 @@ pub struct SourceSpec {
     pub median: Option<f64>,
     /// Log-normal geometric standard deviation (> 1).
     pub gsd: Option<f64>,
+    /// The list of a `sizes` source (at least 2 entries).
+    pub sizes: Option<Vec<f64>>,
 }
 
 /// `[sink]`: removal at `rate · x^exponent` per particle (dilution and outflow at
@@ -73,7 +77,28 @@ pub(super) fn of(
         let need = |key: &str, v: Option<f64>| {
             v.ok_or_else(|| src.at(&format!("source.{key}"), "missing"))
         };
+        if q.kind != InitKind::Sizes && q.sizes.is_some() {
+            return Err(src.at(
+                "source.sizes",
+                "not used here (only a `sizes` source lists its sizes)",
+            ));
+        }
         let sizes = match q.kind {
+            InitKind::Sizes => {
+                for (key, v) in [
+                    ("size", q.size),
+                    ("mean", q.mean),
+                    ("median", q.median),
+                    ("gsd", q.gsd),
+                ] {
+                    not(key, v, "a `sizes` source lists its sizes")?;
+                }
+                let list = q
+                    .sizes
+                    .as_ref()
+                    .ok_or_else(|| src.at("source.sizes", "missing"))?;
+                Distribution::Sizes(list.iter().map(|x| x / unit).collect())
+            }
             InitKind::Monodisperse => {
                 not("mean", q.mean, "a monodisperse source has a size")?;
                 not("median", q.median, "a monodisperse source has a size")?;
@@ -98,10 +123,10 @@ pub(super) fn of(
                     gsd: need("gsd", q.gsd)?,
                 }
             }
-            InitKind::Sizes | InitKind::Counts => {
+            InitKind::Counts => {
                 return Err(src.at(
                     "source.kind",
-                    "a source draws its sizes from monodisperse, exponential or lognormal",
+                    "a source draws its sizes from monodisperse, exponential, lognormal or sizes",
                 ));
             }
         };
@@ -147,8 +172,8 @@ pub(super) fn of(
 }
 
 /// The closed form of a scenario with processes, where one holds: the constant kernel
-/// from a monodisperse start with a monodisperse source, removal at a constant rate and
-/// linear growth (`coagula_core::exact::Balance`), in the scenario's units.
+/// from a monodisperse start with a monodisperse or listed source, removal at a constant
+/// rate and linear growth (`coagula_core::exact::Balance`), in the scenario's units.
 pub(super) fn exact(plan: &Plan) -> Option<ExactRef> {
     let s = &plan.scenario;
     let x0 = match plan.dist {
@@ -158,9 +183,26 @@ pub(super) fn exact(plan: &Plan) -> Option<ExactRef> {
     if plan.kernel_name != "constant" || !plan.units.is_empty() || s.fragmentation.is_some() {
         return None;
     }
-    let (rate, size) = match &s.source {
-        None => (0.0, 1.0),
-        Some(q) if q.kind == InitKind::Monodisperse => (q.rate, q.size.unwrap_or(1.0)),
+    let (rate, size, list) = match &s.source {
+        None => (0.0, 1.0, None),
+        Some(q) if q.kind == InitKind::Monodisperse => (q.rate, q.size.unwrap_or(1.0), None),
+        // (an integer-size scheme rounds listed sizes that are not integers: no closed
+        // form then)
+        Some(q) if q.kind == InitKind::Sizes => {
+            let integer = plan
+                .scheme
+                .inits
+                .contains(&coagula_core::scheme::facade::InitKind::Counts);
+            let list = q.sizes.as_deref()?;
+            if integer
+                && list
+                    .iter()
+                    .any(|&x| x / plan.size_unit != (x / plan.size_unit).round())
+            {
+                return None;
+            }
+            (q.rate, 1.0, Some(list))
+        }
         Some(_) => return None,
     };
     let removal = match &s.sink {
@@ -183,6 +225,10 @@ pub(super) fn exact(plan: &Plan) -> Option<ExactRef> {
         growth,
     )
     .ok()?;
+    let b = match list {
+        Some(l) => b.with_source_sizes(l).ok()?,
+        None => b,
+    };
     Some(ExactRef {
         solution: Exact::balance(b),
         c0: 1.0,

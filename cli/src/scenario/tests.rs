@@ -349,12 +349,46 @@ fn processes_tables() {
         (&["source.kind=\"counts\""][..], "source.kind"),
         (&["source.rate=-1"][..], "source"),
         (&["source.mean=2.0"][..], "source.mean"),
+        (&["source.sizes=[1.0, 2.0]"][..], "source.sizes"),
+        (&["source.kind=\"sizes\""][..], "source.size"),
+        (
+            &["source.kind=\"sizes\"", "source.size=1.0"][..],
+            "source.size",
+        ),
     ] {
         let e = plan(ov, &[])
             .err()
             .unwrap_or_else(|| panic!("{ov:?} accepted"));
         assert!(e.message.contains(key), "{ov:?}: {}", e.message);
     }
+    // a listed source: drawn uniformly from the list, its closed form with the list's
+    // mean and mean square; not on an integer scheme when a size is not an integer
+    let p = plan(
+        &["source.kind=\"sizes\"", "source.sizes=[1.0, 3.0, 3.0]"],
+        &["source.size"],
+    )
+    .unwrap();
+    match p.processes.unwrap().source.unwrap().sizes() {
+        coagula_core::initial::Distribution::Sizes(x) => assert_eq!(x, &[1.0, 3.0, 3.0]),
+        d => panic!("{d:?}"),
+    }
+    // M1 = S μ1/λ + (1 − S μ1/λ) e^{−λt}, μ1 = 7/3
+    let m1 = p
+        .exact
+        .unwrap()
+        .value(&Observable::Moment(1.0), 4.0)
+        .unwrap();
+    let q = 0.5 * 7.0 / 3.0 / 0.25;
+    assert!(
+        (m1 - (q + (1.0 - q) * (-1.0f64).exp())).abs() < 1e-12,
+        "{m1}"
+    );
+    let p = plan(
+        &["source.kind=\"sizes\"", "source.sizes=[1.5, 3.0]"],
+        &["source.size"],
+    )
+    .unwrap();
+    assert!(p.exact.is_none());
     let old = base
         .replace("reference = ", "source = ")
         .replace("[source]", "[inflow]");

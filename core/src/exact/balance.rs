@@ -5,11 +5,16 @@
 //! at λ per particle and growth `dx/dt = g x`:
 //!
 //! * `M0' = S − k0 M0²/2 − λ M0`, a Riccati equation with constant coefficients: with
-//!   `m± = (−λ ± √(λ² + 2 k0 S))/k0` and `γ = √(λ² + 2 k0 S)`,
+//!   `m± = (−λ ± √(λ² + 2 k0 S))/k0` and `γ = √(λ² + 2 k0 S)` (`m₊` evaluated as
+//!   `2S/(λ + γ)`, which keeps its digits when `k0 S ≪ λ²`),
 //!   `M0 = (m₊ − A m₋ e^{−γt})/(1 − A e^{−γt})`, `A = (M0(0) − m₊)/(M0(0) − m₋)`
 //!   (at S = λ = 0 the pure-coagulation `M0(0)/(1 + k0 M0(0) t/2)`);
 //! * `M1' = S xs − (λ − g) M1` (coagulation keeps mass);
-//! * without growth `M2' = k0 M1² + S xs² − λ M2`, integrated in closed form below.
+//! * without growth `M2' = k0 M1² + S ⟨xs²⟩ − λ M2`, integrated in closed form below.
+//!
+//! The injected sizes may be a mixture (a list drawn uniformly, as PartMC's emission
+//! with a background inflow): `xs` is then their mean and `⟨xs²⟩` their mean square
+//! ([`Balance::with_source_sizes`]).
 //!
 //! On integer sizes growth is monomer attachment at rate `g i`; the mean of that chain
 //! follows `M1' = g M1` exactly, and M0 does not see it (the constant kernel does not
@@ -27,8 +32,10 @@ pub struct Balance {
     pub start: [f64; 3],
     /// The source rate per unit volume.
     pub source: f64,
-    /// The injected particles' size.
+    /// The injected particles' size (their mean, for a mixture).
     pub size: f64,
+    /// Their mean square size (`size²` for one size).
+    pub size_square: f64,
     /// The removal rate per particle.
     pub removal: f64,
     /// The linear growth rate (`dx/dt = g x`).
@@ -68,9 +75,32 @@ impl Balance {
             start,
             source,
             size,
+            size_square: size * size,
             removal,
             growth,
         })
+    }
+
+    /// The injected sizes drawn uniformly from `sizes` (each finite and > 0, at least
+    /// one): their mean and mean square replace the one size.
+    pub fn with_source_sizes(mut self, sizes: &[f64]) -> Result<Self> {
+        if sizes.is_empty() {
+            return Err(Error::BufferLength {
+                name: "source sizes",
+                expected: 1,
+                got: 0,
+            });
+        }
+        let (mut m1, mut m2) = (0.0, 0.0);
+        for &x in sizes {
+            crate::error::positive("source size", x)?;
+            m1 += x;
+            m2 += x * x;
+        }
+        let n = sizes.len() as f64;
+        self.size = m1 / n;
+        self.size_square = m2 / n;
+        Ok(self)
     }
 
     /// `M_m(t)` for m = 0, 1 and (without growth) 2.
@@ -92,13 +122,13 @@ impl Balance {
                     } else {
                         k * m10 * m10 * t
                     };
-                    return Ok(m20 + coag + s * x * x * t);
+                    return Ok(m20 + coag + s * self.size_square * t);
                 }
                 // M1 = a + b e^{−λs}; ∫0^t e^{λs}(k M1² + S x²) ds
                 let a = s * x / l;
                 let b = self.start[1] - a;
                 let el = exp(-l * t);
-                let integral = (k * a * a + s * x * x) * expm1(l * t) / l
+                let integral = (k * a * a + s * self.size_square) * expm1(l * t) / l
                     + 2.0 * k * a * b * t
                     + k * b * b * (-expm1(-l * t)) / l;
                 Ok(el * (m20 + integral))
@@ -115,7 +145,8 @@ impl Balance {
         if gamma == 0.0 {
             return u0 / (1.0 + 0.5 * k * u0 * t);
         }
-        let (mp, mm) = ((gamma - l) / k, (-gamma - l) / k);
+        // (m₊ = (γ − λ)/k0 without the cancellation of γ − λ when k0 S ≪ λ²)
+        let (mp, mm) = (2.0 * s / (gamma + l), (-gamma - l) / k);
         let a = (u0 - mp) / (u0 - mm);
         let e = a * exp(-gamma * t);
         (mp - mm * e) / (1.0 - e)
@@ -179,7 +210,36 @@ mod tests {
             }
         }
         assert!(Balance::new(0.0, [1.0; 3], 1.0, 1.0, 0.0, 0.0).is_err());
+        assert!(
+            Balance::new(1.0, [1.0; 3], 1.0, 1.0, 0.0, 0.0)
+                .unwrap()
+                .with_source_sizes(&[])
+                .is_err()
+        );
         assert!(Balance::new(1.0, [1.0; 3], -1.0, 1.0, 0.0, 0.0).is_err());
         assert!(Balance::new(1.0, [1.0; 3], 1.0, 0.0, 0.0, 0.0).is_err());
+    }
+
+    /// PartMC's emission-and-dilution test in its own units (1e9 m^-3, s, the initial
+    /// particle's volume): a mixture source, dilution and a kernel so small that the
+    /// moments are those without coagulation, `M = S/λ + (M(0) − S/λ) e^{−λt}` with
+    /// the source's mean (square) size — which a cancelling `m₊ = (γ − λ)/k0` lost.
+    #[test]
+    fn a_mixture_source_with_dilution_and_a_negligible_kernel() {
+        let sizes = [7.8817, 35.947, 35.947];
+        let (s, l, t) = (4.5e-5, 3e-5, 86_400.0);
+        let b = Balance::new(1e-12, [1.0, 1.0, 1.0], s, 1.0, l, 0.0)
+            .unwrap()
+            .with_source_sizes(&sizes)
+            .unwrap();
+        let mean = sizes.iter().sum::<f64>() / 3.0;
+        let square = sizes.iter().map(|x| x * x).sum::<f64>() / 3.0;
+        let e = exp(-l * t);
+        for (m, q) in [(0, s), (1, s * mean), (2, s * square)] {
+            let free = q / l + (1.0 - q / l) * e;
+            let got = b.moment(m, t).unwrap();
+            // coagulation changes M0 by about k0 M0² t / 2 ≈ 1e-7 of it
+            assert!((got / free - 1.0).abs() < 1e-6, "M{m}: {got} vs {free}");
+        }
     }
 }

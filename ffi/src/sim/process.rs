@@ -91,6 +91,31 @@ pub unsafe extern "C" fn coag_sim_set_source(
     })
 }
 
+/// Sets the sim's particle source with listed sizes: `rate` particles per unit volume
+/// and time, each of a size drawn uniformly from the `len` sizes (at least 2, each
+/// finite and > 0; rounded to integers ≥ 1 on an integer-size scheme). A mixture: an
+/// emission and a background inflow as one source, a size listed twice drawn twice as
+/// often. As `coag_sim_set_source` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live; `sizes` valid for `len` doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_source_sizes(
+    sim: *mut coag_sim,
+    rate: f64,
+    sizes: *const f64,
+    len: usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live / readable by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let x = unsafe { crate::util::slice(sizes, len, "sizes") }?;
+        let p = current(s).with_source(Source::new(rate, Distribution::Sizes(x.to_vec()))?);
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
 /// Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
 /// ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
 /// sedimentation at a power of size. Dilution with a background population is this and
