@@ -525,6 +525,21 @@ impl<K: CoagulationKernel, F, const R: usize, const W: usize> Controls<K, F>
     fn set_doubling(&mut self, on: bool) {
         LowRankSizes::set_doubling(self, on)
     }
+    fn edits(&self) -> bool {
+        true
+    }
+    fn draw_particle<G: Rng + ?Sized>(&self, by_mass: bool, rng: &mut G) -> Option<(f64, u64)> {
+        if by_mass {
+            return None;
+        }
+        LowRankSizes::draw_particle(self, rng)
+    }
+    fn remove_drawn(&mut self, x: f64, handle: u64) -> Result<()> {
+        LowRankSizes::remove_drawn(self, x, handle)
+    }
+    fn add_particle(&mut self, x: f64) -> Result<()> {
+        LowRankSizes::add_particle(self, x)
+    }
 }
 
 impl<K, F, TK, E> Controls<K, F> for LowRankMc<Temperatures<TK>, 3, E, Collide>

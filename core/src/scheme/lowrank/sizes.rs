@@ -67,6 +67,8 @@ use crate::scheme::{Budget, Pending, Scheme, StepReport, check_target, check_tim
 use alloc::vec::Vec;
 use rand_core::Rng;
 
+mod edit;
+
 /// A size's bucket key: its exponent field and the top `SUB_BITS` bits of its mantissa.
 #[inline(always)]
 fn key(y: f64) -> u32 {
@@ -457,16 +459,7 @@ impl<K: CoagulationKernel, const R: usize, const W: usize> LowRankSizes<K, R, W>
         self.enter(i, bz, &f);
         // particle j leaves; the last particle takes its index
         self.leave(j);
-        let last = self.p.sizes.len() - 1;
-        if j != last {
-            let (y, pos) = (self.p.sizes[last], self.p.at[last]);
-            self.p.sizes[j] = y;
-            self.p.at[j] = pos;
-            let b = self.bucket_of(y);
-            self.p.buckets[b].list[pos as usize] = j as u32;
-        }
-        self.p.sizes.pop();
-        self.p.at.pop();
+        self.take_last_into(j);
         Ok(())
     }
 
