@@ -602,6 +602,53 @@ module coagula
        real(c_double), value :: dt
        real(c_double), intent(out) :: out(*)
      end function
+     ! ------------------------------------------------------------ the sectional reference
+     integer(c_int32_t) function coag_sectional_new(kernel, pivots, len, out) bind(c, name="coag_sectional_new")
+       import
+       type(c_ptr), value :: kernel
+       real(c_double), intent(in) :: pivots(*)
+       integer(c_size_t), value :: len
+       type(c_ptr), intent(out) :: out
+     end function
+     subroutine coag_sectional_free(s) bind(c, name="coag_sectional_free")
+       import
+       type(c_ptr), value :: s
+     end subroutine
+     integer(c_int32_t) function coag_sectional_set_processes(s, source_rate, source_size, removal_coefficient, &
+          removal_exponent, growth_coefficient, growth_exponent) bind(c, name="coag_sectional_set_processes")
+       import
+       type(c_ptr), value :: s
+       real(c_double), value :: source_rate, source_size, removal_coefficient, removal_exponent
+       real(c_double), value :: growth_coefficient, growth_exponent
+     end function
+     integer(c_int32_t) function coag_sectional_set_numbers(s, numbers, len) bind(c, name="coag_sectional_set_numbers")
+       import
+       type(c_ptr), value :: s
+       real(c_double), intent(in) :: numbers(*)
+       integer(c_size_t), value :: len
+     end function
+     integer(c_int32_t) function coag_sectional_add(s, size, number) bind(c, name="coag_sectional_add")
+       import
+       type(c_ptr), value :: s
+       real(c_double), value :: size, number
+     end function
+     integer(c_int32_t) function coag_sectional_advance_to(s, t, dt) bind(c, name="coag_sectional_advance_to")
+       import
+       type(c_ptr), value :: s
+       real(c_double), value :: t, dt
+     end function
+     integer(c_int32_t) function coag_sectional_numbers(s, out, len) bind(c, name="coag_sectional_numbers")
+       import
+       type(c_ptr), value :: s
+       real(c_double), intent(out) :: out(*)
+       integer(c_size_t), value :: len
+     end function
+     integer(c_int32_t) function coag_sectional_moment(s, order, moment, time) bind(c, name="coag_sectional_moment")
+       import
+       type(c_ptr), value :: s
+       real(c_double), value :: order
+       real(c_double), intent(out) :: moment, time
+     end function
      ! ------------------------------------------------------------ the library
      type(c_ptr) function coag_version() bind(c, name="coag_version")
        import

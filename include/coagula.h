@@ -326,6 +326,11 @@ typedef struct coag_langevin coag_langevin;
 typedef struct coag_options coag_options;
 
 /*
+ Opaque sectional solution handle (`coag_sectional` in C).
+ */
+typedef struct coag_sectional coag_sectional;
+
+/*
  Opaque simulation handle (`coag_sim` in C).
  */
 typedef struct coag_sim coag_sim;
@@ -1232,6 +1237,82 @@ int32_t coag_builtin_param(size_t index, size_t param, coag_param_info *out, siz
  `out` must be NULL or valid for writing `size` bytes.
  */
 int32_t coag_step_report_init(coag_step_report *out, size_t size);
+
+/*
+ A sectional solution on the `len` pivots (finite, > 0, strictly ascending; at most
+ 4096) under the coagulation kernel `kernel`, with no particles, at t = 0. Free it
+ with `coag_sectional_free`.
+
+ # Safety
+ `kernel` NULL or live; `pivots` valid for `len` doubles; `out` NULL or writable.
+ */
+int32_t coag_sectional_new(const coag_kernel *kernel, const double *pivots, size_t len, coag_sectional **out);
+
+/*
+ Frees a sectional solution (NULL is a no-op).
+
+ # Safety
+ `s` NULL or from `coag_sectional_new`, freed once.
+ */
+void coag_sectional_free(coag_sectional *s);
+
+/*
+ Sets the processes beside coagulation: a source of `source_rate` particles per unit
+ volume and time at size `source_size` (rate 0: none), removal at
+ `removal_coefficient · x^removal_exponent` and growth `dx/dt = growth_coefficient ·
+ x^growth_exponent` (coefficients 0: none), evaluated at the pivots. Replaces any set
+ before; on error nothing changes.
+
+ # Safety
+ `s` NULL or live.
+ */
+int32_t coag_sectional_set_processes(coag_sectional *s, double source_rate, double source_size, double removal_coefficient, double removal_exponent, double growth_coefficient, double growth_exponent);
+
+/*
+ Replaces the numbers per unit volume at the pivots (`len` of them, each finite and
+ ≥ 0); on error nothing changes.
+
+ # Safety
+ `s` NULL or live; `numbers` valid for `len` doubles.
+ */
+int32_t coag_sectional_set_numbers(coag_sectional *s, const double *numbers, size_t len);
+
+/*
+ Adds `number` particles per unit volume of size `size`, split between the two
+ pivots around it keeping number and mass (past the last pivot: refused).
+
+ # Safety
+ `s` NULL or live.
+ */
+int32_t coag_sectional_add(coag_sectional *s, double size, double number);
+
+/*
+ Integrates to time `t` (not before the current time) by RK4 with steps of at most
+ `dt` (finite, > 0). A step whose numbers turn negative or not finite is an error
+ (lower `dt`); on error nothing changes.
+
+ # Safety
+ `s` NULL or live.
+ */
+int32_t coag_sectional_advance_to(coag_sectional *s, double t, double dt);
+
+/*
+ Writes the numbers per unit volume at the pivots into `out` (`len` = the number of
+ pivots).
+
+ # Safety
+ `s` NULL or live; `out` valid for `len` doubles.
+ */
+int32_t coag_sectional_numbers(const coag_sectional *s, double *out, size_t len);
+
+/*
+ The moment `Σ x_i^order N_i` per unit volume, and the time, of a sectional solution
+ (either output may be NULL).
+
+ # Safety
+ `s` NULL or live; `moment` and `time` NULL or writable.
+ */
+int32_t coag_sectional_moment(const coag_sectional *s, double order, double *moment, double *time);
 
 /*
  A sim of registry scheme `scheme` (`coag_scheme_*` list the names and what each

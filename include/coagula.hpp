@@ -804,6 +804,49 @@ class Langevin {
     std::unique_ptr<coag_langevin, detail::LangevinFree> h_;
 };
 
+/// Core's sectional reference (fixed pivot, Kumar & Ramkrishna 1996) on a host's
+/// pivots: coagulation with a source at one size, removal and growth at powers of size.
+class Sectional {
+  public:
+    Sectional(const Kernel &k, const std::vector<double> &pivots) {
+        coag_sectional *s = nullptr;
+        check(coag_sectional_new(k.get(), pivots.data(), pivots.size(), &s));
+        s_.reset(s);
+        len_ = pivots.size();
+    }
+    void set_processes(double source_rate, double source_size, double removal_coefficient, double removal_exponent,
+                       double growth_coefficient, double growth_exponent) {
+        check(coag_sectional_set_processes(s_.get(), source_rate, source_size, removal_coefficient, removal_exponent,
+                                           growth_coefficient, growth_exponent));
+    }
+    void set_numbers(const std::vector<double> &n) { check(coag_sectional_set_numbers(s_.get(), n.data(), n.size())); }
+    void add(double size, double number) { check(coag_sectional_add(s_.get(), size, number)); }
+    void advance_to(double t, double dt) { check(coag_sectional_advance_to(s_.get(), t, dt)); }
+    std::vector<double> numbers() const {
+        std::vector<double> n(len_);
+        check(coag_sectional_numbers(s_.get(), n.data(), n.size()));
+        return n;
+    }
+    double moment(double order) const {
+        double m = 0.0;
+        check(coag_sectional_moment(s_.get(), order, &m, nullptr));
+        return m;
+    }
+    double time() const {
+        double t = 0.0;
+        check(coag_sectional_moment(s_.get(), 0.0, nullptr, &t));
+        return t;
+    }
+    coag_sectional *get() const noexcept { return s_.get(); }
+
+  private:
+    struct Free {
+        void operator()(coag_sectional *s) const noexcept { coag_sectional_free(s); }
+    };
+    std::unique_ptr<coag_sectional, Free> s_;
+    std::size_t len_ = 0;
+};
+
 /// The collision kernel from first hits (coag_first_hit_kernel); count = hits.
 inline Estimate first_hit_kernel(const coag_first_hits &p, std::uint64_t seed, std::uint64_t first_id = 0) {
     Estimate e{};

@@ -128,6 +128,29 @@ int main(void) {
     EXPECT(coag_class_rates(r0, r1, 3, 0.0, r), COAG_INVALID_ARGUMENT);
     EXPECT(coag_class_rates(r0, NULL, 3, 1.0, r), COAG_NULL_PARAMETER);
 
+    /* core's sectional reference: refusals leave it as it was */
+    coag_sectional *sec = NULL;
+    EXPECT(coag_sectional_new(NULL, x, NP, &sec), COAG_NULL_PARAMETER);
+    EXPECT(coag_sectional_new(k, x, NP, NULL), COAG_NULL_PARAMETER);
+    EXPECT(coag_sectional_new(k, down, NP, &sec), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_new(k, x, 0, &sec), COAG_BUFFER_TOO_SMALL);
+    OK(coag_sectional_new(k, x, NP, &sec));
+    OK(coag_sectional_add(sec, 1.0, 1.0));
+    EXPECT(coag_sectional_add(sec, 1e9, 1.0), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_add(sec, 1.0, NAN), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_set_numbers(sec, bad, NP), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_set_numbers(sec, n, NP - 1), COAG_BUFFER_TOO_SMALL);
+    EXPECT(coag_sectional_set_processes(sec, -1.0, 1.0, 0.0, 0.0, 0.0, 0.0), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_set_processes(sec, 1.0, 1.0, NAN, 0.0, 0.0, 0.0), COAG_INVALID_RATE);
+    EXPECT(coag_sectional_advance_to(sec, 1.0, 0.0), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sectional_advance_to(NULL, 1.0, 0.1), COAG_NULL_PARAMETER);
+    double m = -1.0, tt = -1.0;
+    EXPECT(coag_sectional_moment(sec, NAN, &m, &tt), COAG_INVALID_ARGUMENT);
+    OK(coag_sectional_moment(sec, 1.0, &m, &tt));
+    CHECK(m == 1.0 && tt == 0.0, "refusals left the sectional solution as it was");
+    coag_sectional_free(sec);
+    coag_sectional_free(NULL);
+
     coag_sim_free(b);
     coag_sim_free(a);
     coag_kernel_free(k);

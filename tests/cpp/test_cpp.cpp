@@ -600,6 +600,20 @@ void test_processes() {
     auto r = coagula::class_rates(cn, back, 0.5);
     CHECK(r[0] == (back[0] - cn[0]) / 0.5, "classes: rates");
     CHECK(code_of([&] { sim.set_classes(x, {1.0}); }) == COAG_INVALID_ARGUMENT, "classes: lengths");
+    // core's sectional reference: M0 = 2 / (2 + t) for the constant kernel from monomers
+    std::vector<double> piv;
+    for (int i = 1; i <= 64; i++) piv.push_back(i);
+    coagula::Sectional sec(k, piv);
+    sec.add(1.0, 1.0);
+    sec.advance_to(1.0, 1e-3);
+    CHECK(std::fabs(sec.moment(0.0) - 2.0 / 3.0) < 1e-10 && sec.time() == 1.0, "sectional: M0");
+    sec.set_processes(0.5, 1.0, 0.25, 0.0, 0.0, 0.0);
+    sec.advance_to(3.0, 1e-3);
+    CHECK(std::fabs(sec.moment(1.0) - (2.0 - std::exp(-0.5))) < 1e-8, "sectional: M1 with a source and dilution");
+    auto nums = sec.numbers();
+    CHECK(nums.size() == piv.size(), "sectional: numbers");
+    CHECK(code_of([&] { sec.set_numbers({1.0}); }) == COAG_BUFFER_TOO_SMALL, "sectional: numbers' length");
+    CHECK(code_of([&] { sec.advance_to(1.0, 1e-3); }) == COAG_TIME_BACKWARDS, "sectional: backwards");
 }
 
 void test_gas() {

@@ -23,6 +23,7 @@ program test_fortran
   call test_temperature()
   call test_gas()
   call test_processes()
+  call test_sectional()
   call test_langevin()
   print '(a, i0, a, i0, a)', "test_fortran: ", nchecks - nfail, " passed, ", nfail, " failed"
   if (nfail /= 0) stop 1
@@ -586,6 +587,42 @@ contains
     call coag_sim_free(sim)
     call coag_kernel_free(k)
   end subroutine test_processes
+
+  ! core's sectional reference: the constant kernel's M0 = 2/(2 + t) from monomers (the
+  ! grid reaches far past the sizes present), then a monomer source and dilution
+  ! (M1' = S - lambda M1, closed form); refusals
+  subroutine test_sectional()
+    type(c_ptr) :: k, s
+    real(c_double) :: x(64), n(64), m0, m1, t
+    integer :: i
+    k = kernel("constant", [1.0_c_double])
+    do i = 1, 64
+      x(i) = real(i, c_double)
+    end do
+    call ok(coag_sectional_new(k, x, 64_c_size_t, s))
+    n = 0.0_c_double
+    n(1) = 1.0_c_double
+    call ok(coag_sectional_set_numbers(s, n, 64_c_size_t))
+    call ok(coag_sectional_advance_to(s, 1.0_c_double, 1e-3_c_double))
+    call ok(coag_sectional_moment(s, 0.0_c_double, m0, t))
+    call check(abs(m0 - 2.0_c_double / 3.0_c_double) < 1e-10_c_double .and. abs(t - 1.0_c_double) < 1e-15_c_double, "sectional: M0")
+    call ok(coag_sectional_moment(s, 1.0_c_double, m1, t))
+    call check(abs(m1 - 1.0_c_double) < 1e-12_c_double, "sectional: M1 kept")
+    call ok(coag_sectional_set_processes(s, 0.5_c_double, 1.0_c_double, 0.25_c_double, 0.0_c_double, &
+         0.0_c_double, 0.0_c_double))
+    call ok(coag_sectional_add(s, 1.5_c_double, 0.0_c_double))
+    call ok(coag_sectional_advance_to(s, 3.0_c_double, 1e-3_c_double))
+    call ok(coag_sectional_moment(s, 1.0_c_double, m1, t))
+    call check(abs(m1 - (2.0_c_double - exp(-0.5_c_double))) < 1e-8_c_double, "sectional: M1 with a source and dilution")
+    call ok(coag_sectional_numbers(s, n, 64_c_size_t))
+    call check(abs(sum(n * x) - m1) < 1e-12_c_double, "sectional: numbers")
+    call expect(coag_sectional_numbers(s, n, 63_c_size_t), COAG_BUFFER_TOO_SMALL, "sectional: numbers' length")
+    call expect(coag_sectional_advance_to(s, 1.0_c_double, 1e-3_c_double), COAG_TIME_BACKWARDS, "sectional: backwards")
+    x(3) = x(2)
+    call coag_sectional_free(s)
+    call expect(coag_sectional_new(k, x, 64_c_size_t, s), COAG_INVALID_ARGUMENT, "sectional: pivots not ascending")
+    call coag_kernel_free(k)
+  end subroutine test_sectional
 
   subroutine test_gas()
     character(len=10), parameter :: names(4) = [character(len=10) :: "momentum-x", "momentum-y", "momentum-z", "energy"]
