@@ -34,6 +34,12 @@ gcc -std=c11 -O2 -fopenmp -Wall -Wextra -Werror -I"$root/include" examples/c/cel
     -o "$out/cells"
 "$out/cells" 500 1000 2 | tail -n 2
 
+# the worked plug-flow host: its books balance exactly and its cells meet core's
+# sectional reference (exit status 0)
+gcc -std=c11 -O2 -Wall -Wextra -Wpedantic -Werror -I"$root/include" examples/c/plug_flow.c "$lib" $libs \
+    -o "$out/plug_flow"
+"$out/plug_flow" | tail -n 8
+
 g++ -std=c++17 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
     tests/cpp/test_cpp.cpp "$lib" $libs -o "$out/test_cpp"
 "$out/test_cpp"
