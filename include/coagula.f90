@@ -562,6 +562,13 @@ module coagula
        real(c_double), intent(in) :: sizes(*)
        integer(c_size_t), value :: len
      end function
+     integer(c_int32_t) function coag_sim_set_source_schedule(sim, times, rates, len) &
+          bind(c, name="coag_sim_set_source_schedule")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), intent(in) :: times(*), rates(*)
+       integer(c_size_t), value :: len
+     end function
      integer(c_int32_t) function coag_sim_set_removal(sim, coefficient, exponent) bind(c, name="coag_sim_set_removal")
        import
        type(c_ptr), value :: sim

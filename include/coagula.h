@@ -1609,6 +1609,20 @@ int32_t coag_sim_set_source(coag_sim *sim, double rate, int32_t kind, double p1,
 int32_t coag_sim_set_source_sizes(coag_sim *sim, double rate, const double *sizes, size_t len);
 
 /*
+ Gives the sim's source a piecewise-constant rate: `rates[k]` particles per unit
+ volume and time from `times[k]` to `times[k + 1]`, the last rate after the last
+ time, the rate it was set with before the first (`len` of each; times finite, ≥ 0,
+ strictly ascending; rates finite, ≥ 0). Exact: a candidate drawn with one piece's
+ bound that would pass a change is void there and drawn afresh. Set a source first
+ (`coag_sim_set_source` or `_set_source_sizes`; else `COAG_INVALID_ARGUMENT`). As
+ `coag_sim_set_source` otherwise.
+
+ # Safety
+ `sim` NULL or live; `times` and `rates` valid for `len` doubles each.
+ */
+int32_t coag_sim_set_source_schedule(coag_sim *sim, const double *times, const double *rates, size_t len);
+
+/*
  Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
  ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
  sedimentation at a power of size. Dilution with a background population is this and

@@ -618,6 +618,13 @@ class Sim {
     void set_source_sizes(double rate, const std::vector<double> &sizes) {
         check(coag_sim_set_source_sizes(s_.get(), rate, sizes.data(), sizes.size()));
     }
+    /// The source's rate as a piecewise-constant schedule (set a source first).
+    void set_source_schedule(const std::vector<double> &times, const std::vector<double> &rates) {
+        if (times.size() != rates.size()) {
+            throw Error(COAG_INVALID_ARGUMENT, "set_source_schedule: as many rates as times");
+        }
+        check(coag_sim_set_source_schedule(s_.get(), times.data(), rates.data(), times.size()));
+    }
     void set_removal(double coefficient, double exponent) {
         check(coag_sim_set_removal(s_.get(), coefficient, exponent));
     }

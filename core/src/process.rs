@@ -9,7 +9,9 @@
 //!
 //! * **source** — particles arrive at rate `S V` (S per unit volume and time), each
 //!   with a size drawn from a [`Distribution`] (nucleation: monodisperse; emission: any
-//!   of them). On integer sizes a continuous distribution's draw is rounded to the
+//!   of them). S may follow a piecewise-constant schedule `S(t)`
+//!   ([`Source::with_schedule`]): the thinning bound then holds until the next change,
+//!   where the candidate is drawn afresh (an exponential's residual is exponential). On integer sizes a continuous distribution's draw is rounded to the
 //!   nearest integer, at least 1 (as [`counts_on_grid`](crate::initial::counts_on_grid)
 //!   puts a continuous start on the grid: say so where it matters);
 //! * **removal** — each particle leaves at rate `λ(x) = c x^p` (dilution and outflow:
@@ -56,6 +58,7 @@
 use crate::error::{Error, Result};
 use crate::initial::Distribution;
 use crate::random::open_unit;
+use alloc::vec::Vec;
 use rand_core::Rng;
 
 /// The largest exponent of a removal or growth rate (see the module docs).
@@ -87,12 +90,19 @@ fn rate(name: &'static str, c: f64) -> Result<f64> {
     }
 }
 
-/// Particles injected at `rate` per unit volume and time with sizes from `sizes`.
+/// Particles injected at `rate` per unit volume and time with sizes from `sizes`, or at
+/// a piecewise-constant rate `S(t)` ([`with_schedule`](Source::with_schedule)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Source {
     rate: f64,
     sizes: Distribution,
+    /// `(t_k, S_k)`: `S(t) = S_k` on `[t_k, t_{k+1})`, the last one after; `rate`
+    /// before `t_0`. Empty: the constant `rate`.
+    schedule: Vec<(f64, f64)>,
 }
+
+/// Largest number of pieces of a source's schedule.
+pub const MAX_SCHEDULE: usize = 1 << 20;
 
 impl Source {
     /// A source of `rate` particles per unit volume and time (finite, ≥ 0) with sizes
@@ -106,12 +116,69 @@ impl Source {
             }
             d => d.check()?,
         }
-        Ok(Source { rate, sizes })
+        Ok(Source {
+            rate,
+            sizes,
+            schedule: Vec::new(),
+        })
     }
 
-    /// Particles per unit volume and time.
+    /// The rate as a piecewise-constant function of time: `rates[k]` from `times[k]` to
+    /// `times[k + 1]`, the last rate after the last time, the source's own rate before
+    /// the first. Times finite, ≥ 0 and strictly ascending; rates as `new`'s; 1 to
+    /// [`MAX_SCHEDULE`] pieces, as many times as rates.
+    pub fn with_schedule(mut self, times: &[f64], rates: &[f64]) -> Result<Self> {
+        if times.len() != rates.len() || times.is_empty() || times.len() > MAX_SCHEDULE {
+            return Err(Error::BufferLength {
+                name: "source schedule (as many times as rates, 1 to 2^20)",
+                expected: times.len().clamp(1, MAX_SCHEDULE),
+                got: rates.len(),
+            });
+        }
+        let mut last = -1.0;
+        for &t in times {
+            if !(t.is_finite() && t >= 0.0 && t > last) {
+                return Err(Error::OutOfRange {
+                    name: "source schedule time (finite, ≥ 0, strictly ascending)",
+                    value: t,
+                    range: "(previous time, inf)",
+                });
+            }
+            last = t;
+        }
+        let mut schedule = Vec::new();
+        crate::memory::try_reserve(&mut schedule, times.len())?;
+        for (&t, &r) in times.iter().zip(rates) {
+            schedule.push((t, self::rate("source rate", r)?));
+        }
+        self.schedule = schedule;
+        Ok(self)
+    }
+
+    /// Particles per unit volume and time: the constant rate, or with a schedule the
+    /// rate before its first time.
     pub fn rate(&self) -> f64 {
         self.rate
+    }
+
+    /// The schedule's `(time, rate)` pieces (empty: a constant rate).
+    pub fn schedule(&self) -> &[(f64, f64)] {
+        &self.schedule
+    }
+
+    /// The rate at time `t`.
+    pub fn rate_at(&self, t: f64) -> f64 {
+        // the last piece that starts at or before t
+        match self.schedule.partition_point(|p| p.0 <= t) {
+            0 => self.rate,
+            k => self.schedule[k - 1].1,
+        }
+    }
+
+    /// The first time after `t` at which the rate changes (`inf`: never).
+    pub fn next_change(&self, t: f64) -> f64 {
+        let k = self.schedule.partition_point(|p| p.0 <= t);
+        self.schedule.get(k).map_or(f64::INFINITY, |p| p.0)
     }
 
     /// The size distribution.
@@ -317,5 +384,47 @@ impl Books {
             });
         }
         Ok(b)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_schedule_is_piecewise_constant_and_checked() {
+        let s = Source::new(0.3, Distribution::Monodisperse { size: 1.0 })
+            .unwrap()
+            .with_schedule(&[0.5, 2.0], &[1.0, 0.0])
+            .unwrap();
+        for (t, r, next) in [
+            (0.0, 0.3, 0.5),
+            (0.49, 0.3, 0.5),
+            (0.5, 1.0, 2.0),
+            (1.9, 1.0, 2.0),
+            (2.0, 0.0, f64::INFINITY),
+            (9.0, 0.0, f64::INFINITY),
+        ] {
+            assert_eq!(s.rate_at(t), r, "{t}");
+            assert_eq!(s.next_change(t), next, "{t}");
+        }
+        let base = Source::new(0.3, Distribution::Monodisperse { size: 1.0 }).unwrap();
+        assert_eq!(base.rate_at(5.0), 0.3);
+        assert_eq!(base.next_change(5.0), f64::INFINITY);
+        for (times, rates) in [
+            (&[][..], &[][..]),
+            (&[1.0][..], &[1.0, 2.0][..]),
+            (&[1.0, 1.0][..], &[1.0, 2.0][..]),
+            (&[2.0, 1.0][..], &[1.0, 2.0][..]),
+            (&[-1.0][..], &[1.0][..]),
+            (&[f64::NAN][..], &[1.0][..]),
+            (&[1.0][..], &[-1.0][..]),
+            (&[1.0][..], &[f64::INFINITY][..]),
+        ] {
+            assert!(
+                base.clone().with_schedule(times, rates).is_err(),
+                "{times:?} {rates:?}"
+            );
+        }
     }
 }

@@ -165,6 +165,14 @@ fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
             "background dilution",
             Processes::dilution(0.2, 0.5, Distribution::Exponential { mean: 2.0 }).unwrap(),
         ),
+        (
+            "scheduled source",
+            Processes::default().with_source(
+                monomers(0.2)
+                    .with_schedule(&[0.5, 1.3, 2.0], &[1.0, 0.0, 0.6])
+                    .unwrap(),
+            ),
+        ),
     ];
     if integer {
         v.push((
@@ -352,11 +360,23 @@ fn growth_alone_follows_the_attachment_chain() {
 /// removal λ N (no particle doubling: it is off while processes run), a birth–death
 /// chain on N solved by uniformisation; returns E[N/V] at `times`.
 fn source_sink_reference(s: f64, lambda: f64, n_start: u64, v: f64, times: &[f64]) -> Vec<f64> {
+    scheduled_reference(&[(0.0, s)], lambda, n_start, v, times)
+}
+
+/// As [`source_sink_reference`] with a source rate `pieces[k].1` from time
+/// `pieces[k].0` on (0 before the first).
+fn scheduled_reference(
+    pieces: &[(f64, f64)],
+    lambda: f64,
+    n_start: u64,
+    v: f64,
+    times: &[f64],
+) -> Vec<f64> {
     const NMAX: usize = 160;
+    let s_max = pieces.iter().map(|p| p.1).fold(0.0, f64::max);
     let rate_down = |n: usize| (n * n.saturating_sub(1)) as f64 / (2.0 * v) + lambda * n as f64;
-    let rate_up = |n: usize| if n < NMAX { s * v } else { 0.0 };
     let big = (0..=NMAX)
-        .map(|n| rate_down(n) + rate_up(n))
+        .map(|n| rate_down(n) + s_max * v)
         .fold(0.0, f64::max)
         * 1.01;
     let mut p = vec![0.0; NMAX + 1];
@@ -366,7 +386,12 @@ fn source_sink_reference(s: f64, lambda: f64, n_start: u64, v: f64, times: &[f64
     for &t in times {
         // in pieces of a ≤ 20 expected jumps (no underflow of e^{-a})
         while now < t {
-            let dt = (t - now).min(20.0 / big);
+            // (within one piece of the schedule)
+            let k = pieces.partition_point(|p| p.0 <= now);
+            let s = if k == 0 { 0.0 } else { pieces[k - 1].1 };
+            let until = pieces.get(k).map_or(f64::INFINITY, |p| p.0);
+            let rate_up = |n: usize| if n < NMAX { s * v } else { 0.0 };
+            let dt = (t - now).min(20.0 / big).min(until - now);
             let a = big * dt;
             let mut term = p.clone();
             let mut weight = (-a).exp();
@@ -450,6 +475,54 @@ fn a_source_and_a_sink_follow_the_finite_n_master_equation() {
     assert!(failures.is_empty(), "{failures}");
 }
 
+/// A source that follows a schedule (on, off, on at another rate) with a sink, against
+/// the same finite-N chain run piece by piece, on every scheme that takes processes: a
+/// candidate that ran past a change with the old rate's bound (or a change missed)
+/// moves E[N/V] by many standard errors.
+#[test]
+fn a_scheduled_source_follows_the_finite_n_master_equation() {
+    let (lambda, n0, v0) = (0.5, 16u64, 16.0);
+    let (times_s, rates_s) = ([0.2, 0.7, 1.5], [2.0, 0.0, 0.8]);
+    let pieces: Vec<(f64, f64)> = [(0.0, 0.3)]
+        .into_iter()
+        .chain(times_s.iter().copied().zip(rates_s))
+        .collect();
+    let times = [0.7, 1.5, 2.5];
+    let exact = scheduled_reference(&pieces, lambda, n0, v0, &times);
+    let reps = 3000u64;
+    let z_max = common::z_max(reps);
+    let mut failures = String::new();
+    for (k, id) in process_schemes().into_iter().enumerate() {
+        let mut number = vec![Replicas::new(); times.len()];
+        for r in 0..reps {
+            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[n0], v0);
+            let src = monomers(0.3).with_schedule(&times_s, &rates_s).unwrap();
+            let p = Processes::default()
+                .with_source(src)
+                .with_removal(lambda, 0.0)
+                .unwrap();
+            s.set_processes(Some(p)).unwrap();
+            let mut g = rng(0x5ced << 32 | (k as u64) << 24 | r);
+            for (i, &t) in times.iter().enumerate() {
+                s.advance_to(t, &mut g).unwrap();
+                number[i].push(s.particles() as f64 / s.volume());
+            }
+        }
+        for (i, &t) in times.iter().enumerate() {
+            let z = (number[i].mean() - exact[i]) / number[i].std_error();
+            if z.abs() > z_max {
+                failures += &format!(
+                    "{} t = {t}: E[N/V] {:.5} vs exact {:.5} (z = {z:.2})\n",
+                    id.label(),
+                    number[i].mean(),
+                    exact[i]
+                );
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
 /// A run split at any times, through a checkpoint into a fresh sim, gives the bits of an
 /// unbroken one (the pending candidate and the books travel in the envelope); a
 /// checkpoint with processes is refused by a sim without them, and the other way round.
@@ -458,6 +531,13 @@ fn split_runs_through_checkpoints_keep_their_bits() {
     for id in process_schemes() {
         let integer = id.inits.contains(&InitKind::Counts);
         let p = Processes::dilution(0.3, 0.5, Distribution::Monodisperse { size: 1.0 }).unwrap();
+        // (the inflow follows a schedule: splits at one of its changes and between)
+        let inflow = p.source.clone().unwrap();
+        let p = p.with_source(
+            inflow
+                .with_schedule(&[0.3, 1.0, 2.6], &[0.0, 0.4, 0.1])
+                .unwrap(),
+        );
         let p = if integer {
             p.with_growth(0.1, 1.0).unwrap()
         } else {

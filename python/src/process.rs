@@ -22,9 +22,13 @@ fn number(d: &Bound<'_, PyDict>, key: &str) -> PyResult<Option<f64>> {
 fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
     for k in d.keys() {
         let k: String = k.extract()?;
-        if !["rate", "kind", "size", "mean", "median", "gsd", "sizes"].contains(&k.as_str()) {
+        if ![
+            "rate", "kind", "size", "mean", "median", "gsd", "sizes", "times", "rates",
+        ]
+        .contains(&k.as_str())
+        {
             return Err(PyValueError::new_err(format!(
-                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd, sizes)"
+                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd, sizes, times, rates)"
             )));
         }
     }
@@ -60,7 +64,18 @@ fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
             )));
         }
     };
-    Source::new(rate, sizes).map_err(py_err)
+    let source = Source::new(rate, sizes).map_err(py_err)?;
+    match (d.get_item("times")?, d.get_item("rates")?) {
+        (None, None) => Ok(source),
+        (Some(t), Some(r)) => {
+            let t = crate::arrays::reals_arg("source[\"times\"]", &t)?;
+            let r = crate::arrays::reals_arg("source[\"rates\"]", &r)?;
+            source.with_schedule(&t, &r).map_err(py_err)
+        }
+        _ => Err(PyValueError::new_err(
+            "source: a schedule takes both \"times\" and \"rates\"",
+        )),
+    }
 }
 
 fn power_of(what: &str, v: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
@@ -125,6 +140,11 @@ pub(crate) fn processes_dict<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bo
                     "source: a distribution Python cannot name",
                 ));
             }
+        }
+        if !s.schedule().is_empty() {
+            let (t, r): (Vec<f64>, Vec<f64>) = s.schedule().iter().copied().unzip();
+            q.set_item("times", t)?;
+            q.set_item("rates", r)?;
         }
         d.set_item("source", q)?;
     }

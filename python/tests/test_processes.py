@@ -111,3 +111,23 @@ def test_a_listed_source_round_trips_and_pickles():
         sim.set_processes(source={"rate": 0.5, "kind": "sizes"})
     with pytest.raises(ValueError):
         sim.set_processes(source={"rate": 0.5, "kind": "sizes", "sizes": [1.0, -2.0]})
+
+
+def test_a_scheduled_source_switches_on_and_off():
+    sim = Simulation("lowrank", Kernel("constant"), Initial.monodisperse(1, particles=1000), seed=4)
+    src = {"rate": 0.0, "kind": "monodisperse", "size": 1.0, "times": [1.0, 2.0], "rates": [3.0, 0.0]}
+    sim.set_processes(source=src)
+    assert sim.processes["source"]["times"] == [1.0, 2.0]
+    sim.advance_to(1.0)
+    assert sim.books["injected_number"] == 0
+    sim.advance_to(2.0)
+    on = sim.books["injected_number"]
+    # 3 per unit volume and time in volume 1000 over one time unit: 3000 ± 55
+    assert abs(on - 3000) < 6 * 55
+    sim.advance_to(5.0)
+    assert sim.books["injected_number"] == on
+    copy = pickle.loads(pickle.dumps(sim))
+    assert copy.processes == sim.processes
+    for bad in [{"times": [1.0]}, {"times": [2.0, 1.0], "rates": [1.0, 1.0]}, {"times": [1.0], "rates": [-1.0]}]:
+        with pytest.raises(ValueError):
+            sim.set_processes(source={"rate": 0.1, **bad})

@@ -107,6 +107,32 @@ int main(void) {
     EXPECT(coag_sim_set_source(ls, -1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(ls, 1.0, COAG_SOURCE_LOGNORMAL, 1.0, 0.5), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(NULL, 1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_NULL_PARAMETER);
+    {
+        /* a schedule: off until t = 1, then on; before a source is set: refused */
+        coag_sim *q = make("lowrank", 0);
+        double st[2] = {1.0, 2.0}, sr[2] = {0.0, 0.5};
+        EXPECT(coag_sim_set_source_schedule(q, st, sr, 2), COAG_INVALID_ARGUMENT);
+        OK(coag_sim_set_source(q, 5.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0));
+        OK(coag_sim_set_source_schedule(q, st, sr, 2));
+        OK(coag_sim_advance_to(q, 1.0, NULL));
+        coag_books qb;
+        memset(&qb, 0, sizeof qb);
+        qb.struct_size = sizeof qb;
+        OK(coag_sim_books(q, &qb));
+        CHECK(qb.injected_number > 1000, "the rate before the schedule's first time: %llu",
+              (unsigned long long)qb.injected_number);
+        uint64_t before = qb.injected_number;
+        double late[2] = {1.0, 9.0}, off[2] = {0.0, 0.0};
+        OK(coag_sim_set_source_schedule(q, late, off, 2));
+        OK(coag_sim_advance_to(q, 3.0, NULL));
+        OK(coag_sim_books(q, &qb));
+        CHECK(qb.injected_number == 0, "a schedule that is off: nothing injected (%llu, %llu before)",
+              (unsigned long long)qb.injected_number, (unsigned long long)before);
+        sr[0] = NAN;
+        EXPECT(coag_sim_set_source_schedule(q, st, sr, 2), COAG_INVALID_ARGUMENT);
+        EXPECT(coag_sim_set_source_schedule(q, st, NULL, 2), COAG_NULL_PARAMETER);
+        coag_sim_free(q);
+    }
     double listed[3] = {1.0, 2.5, 2.5};
     OK(coag_sim_set_source_sizes(ls, 0.5, listed, 3));
     listed[1] = NAN;

@@ -579,6 +579,8 @@ void test_processes() {
     sim.clear_processes();
     CHECK(code_of([&] { sim.books(); }) == COAG_UNSUPPORTED, "no books without processes");
     sim.set_source_sizes(0.3, {1.0, 4.0});
+    sim.set_source_schedule({3.0, 5.0}, {0.0, 0.2});
+    CHECK(code_of([&] { sim.set_source_schedule({3.0}, {0.0, 0.2}); }) == COAG_INVALID_ARGUMENT, "schedule lengths");
     CHECK(code_of([&] { sim.set_source_sizes(0.3, {1.0}); }) == COAG_BUFFER_TOO_SMALL, "a listed source of one size");
     sim.clear_processes();
     // host classes: number and mass kept; built back within one particle per class

@@ -564,6 +564,9 @@ contains
          "books: the mass")
     call check(b%injected_number > 0 .and. b%removed_number > 0 .and. b%grown_mass > 0, "every process acted")
     call ok(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, 3.0_c_double], 2_c_size_t))
+    call ok(coag_sim_set_source_schedule(sim, [3.0_c_double, 4.0_c_double], [0.0_c_double, 1.0_c_double], 2_c_size_t))
+    call expect(coag_sim_set_source_schedule(sim, [4.0_c_double, 3.0_c_double], [0.0_c_double, 1.0_c_double], &
+         2_c_size_t), COAG_INVALID_ARGUMENT, "a schedule going back in time")
     call expect(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, -3.0_c_double], 2_c_size_t), &
          COAG_INVALID_ARGUMENT, "a listed source with a negative size")
     call ok(coag_sim_clear_processes(sim))

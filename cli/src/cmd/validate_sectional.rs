@@ -92,8 +92,10 @@ fn solve(
     let mut sec = Sectional::new(kernel, grid).map_err(|e| e.to_string())?;
     sec.add_at(x0, plan.c0).map_err(|e| e.to_string())?;
     if let Some(q) = &s.source {
-        if q.kind != InitKind::Monodisperse {
-            return Err("the sectional reference takes a monodisperse source".into());
+        if q.kind != InitKind::Monodisperse || q.times.is_some() {
+            return Err(
+                "the sectional reference takes a monodisperse source at a constant rate".into(),
+            );
         }
         sec = sec
             .with_source(q.rate, q.size.unwrap_or(1.0))

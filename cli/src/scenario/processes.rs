@@ -36,6 +36,11 @@ pub struct SourceSpec {
     pub gsd: Option<f64>,
     /// The list of a `sizes` source (at least 2 entries).
     pub sizes: Option<Vec<f64>>,
+    /// A piecewise-constant rate: `rates[k]` from `times[k]` on (`rate` before the
+    /// first time).
+    pub times: Option<Vec<f64>>,
+    /// The rates of the schedule, one per time.
+    pub rates: Option<Vec<f64>>,
 }
 
 /// `[sink]`: removal at `rate · x^exponent` per particle (dilution and outflow at
@@ -131,6 +136,18 @@ pub(super) fn of(
             }
         };
         let inflow = Inflow::new(q.rate, sizes).map_err(|e| src.at("source", e))?;
+        let inflow = match (&q.times, &q.rates) {
+            (None, None) => inflow,
+            (Some(t), Some(r)) => inflow
+                .with_schedule(t, r)
+                .map_err(|e| src.at("source.times", e))?,
+            (None, Some(_)) => {
+                return Err(src.at("source.times", "missing (a schedule takes times and rates)"));
+            }
+            (Some(_), None) => {
+                return Err(src.at("source.rates", "missing (a schedule takes times and rates)"));
+            }
+        };
         p = p.with_source(inflow);
     }
     if let Some(k) = &s.sink {
@@ -185,6 +202,8 @@ pub(super) fn exact(plan: &Plan) -> Option<ExactRef> {
     }
     let (rate, size, list) = match &s.source {
         None => (0.0, 1.0, None),
+        // (a scheduled source has no closed form here)
+        Some(q) if q.times.is_some() => return None,
         Some(q) if q.kind == InitKind::Monodisperse => (q.rate, q.size.unwrap_or(1.0), None),
         // (an integer-size scheme rounds listed sizes that are not integers: no closed
         // form then)

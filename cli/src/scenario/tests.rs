@@ -389,6 +389,27 @@ fn processes_tables() {
     )
     .unwrap();
     assert!(p.exact.is_none());
+    // a schedule: S(t) piecewise, no closed form; times and rates come together
+    let p = plan(&["source.times=[1.0, 2.0]", "source.rates=[0.0, 3.0]"], &[]).unwrap();
+    let q = p.processes.unwrap().source.unwrap();
+    assert_eq!(
+        (q.rate_at(0.5), q.rate_at(1.5), q.rate_at(2.5)),
+        (0.5, 0.0, 3.0)
+    );
+    assert!(p.exact.is_none());
+    for (ov, key) in [
+        (&["source.times=[1.0]"][..], "source.rates"),
+        (&["source.rates=[1.0]"][..], "source.times"),
+        (
+            &["source.times=[2.0, 1.0]", "source.rates=[1.0, 1.0]"][..],
+            "source.times",
+        ),
+    ] {
+        let e = plan(ov, &[])
+            .err()
+            .unwrap_or_else(|| panic!("{ov:?} accepted"));
+        assert!(e.message.contains(key), "{ov:?}: {}", e.message);
+    }
     let old = base
         .replace("reference = ", "source = ")
         .replace("[source]", "[inflow]");

@@ -116,6 +116,41 @@ pub unsafe extern "C" fn coag_sim_set_source_sizes(
     })
 }
 
+/// Gives the sim's source a piecewise-constant rate: `rates[k]` particles per unit
+/// volume and time from `times[k]` to `times[k + 1]`, the last rate after the last
+/// time, the rate it was set with before the first (`len` of each; times finite, ≥ 0,
+/// strictly ascending; rates finite, ≥ 0). Exact: a candidate drawn with one piece's
+/// bound that would pass a change is void there and drawn afresh. Set a source first
+/// (`coag_sim_set_source` or `_set_source_sizes`; else `COAG_INVALID_ARGUMENT`). As
+/// `coag_sim_set_source` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live; `times` and `rates` valid for `len` doubles each.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_source_schedule(
+    sim: *mut coag_sim,
+    times: *const f64,
+    rates: *const f64,
+    len: usize,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live / readable by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let t = unsafe { crate::util::slice(times, len, "times") }?;
+        let r = unsafe { crate::util::slice(rates, len, "rates") }?;
+        let mut p = current(s);
+        let Some(source) = p.source.take() else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "schedule: the sim has no source (set one first)".to_string(),
+            );
+        };
+        p.source = Some(source.with_schedule(t, r)?);
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
 /// Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
 /// ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
 /// sedimentation at a power of size. Dilution with a background population is this and

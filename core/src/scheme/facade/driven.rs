@@ -31,6 +31,10 @@ use rand_core::Rng;
 /// Words of the checkpoint record: fingerprint, candidate (3), books (9).
 const RECORD: usize = 13;
 
+/// The bound of a void candidate: the next change of a scheduled source's rate, where
+/// the candidate is drawn afresh and nothing happens.
+const VOID: f64 = -1.0;
+
 /// The processes of one sim, their books and the pending candidate.
 #[derive(Clone, Debug)]
 pub(crate) struct Driver {
@@ -165,16 +169,20 @@ impl Driver {
         self.pending = None;
     }
 
-    fn source_rate(&self, volume: f64) -> f64 {
+    /// The source's rate in the sim's volume at time `t`.
+    fn source_rate(&self, volume: f64, t: f64) -> f64 {
         self.procs
             .source
             .as_ref()
-            .map_or(0.0, |s| s.rate() * volume)
+            .map_or(0.0, |s| s.rate_at(t) * volume)
     }
 
     /// The total process rate of the state.
-    fn rate<K, F, S: Controls<K, F> + Observe>(&self, s: &S) -> Result<(f64, Option<Held>)> {
-        let mut r = self.source_rate(s.volume());
+    fn rate<K, F, S: Scheme + Controls<K, F> + Observe>(
+        &self,
+        s: &S,
+    ) -> Result<(f64, Option<Held>)> {
+        let mut r = self.source_rate(s.volume(), s.time());
         if self.procs.removal.is_none() && self.procs.growth.is_none() {
             return Ok((r, None));
         }
@@ -215,11 +223,20 @@ impl Driver {
                         self.rate(s)?.0
                     };
                     let r = crate::error::finite("total process rate", r)?;
+                    let now = s.time();
                     let at = if r > 0.0 {
-                        s.time() + Ziggurat::new().sample(rng) / r
+                        now + Ziggurat::new().sample(rng) / r
                     } else {
                         f64::INFINITY
                     };
+                    // the bound holds until a scheduled source changes its rate: a
+                    // candidate past that is void there, and drawn afresh
+                    let change = self
+                        .procs
+                        .source
+                        .as_ref()
+                        .map_or(f64::INFINITY, |q| q.next_change(now));
+                    let (at, r) = if at > change { (change, VOID) } else { (at, r) };
                     self.pending = Some((at, r));
                     (at, r)
                 }
@@ -254,6 +271,15 @@ impl Driver {
             if at > t {
                 out.time = s.time();
                 return Ok(out);
+            }
+            if bound == VOID {
+                // a scheduled rate changes here: the candidate is drawn afresh
+                self.pending = None;
+                out.time = s.time();
+                if at >= t {
+                    return Ok(out);
+                }
+                continue;
             }
             // the candidate at `at`, where the scheme stands
             if !budget.take(1) {
@@ -292,9 +318,9 @@ impl Driver {
     /// The bound of the edited path: `S V`, and for removal and growth `c N` (exponent
     /// ≤ 0: `c x^p ≤ c` on sizes ≥ 1) or `c M1` (exponent in (0, 1]: `c x^p ≤ c x`);
     /// merging keeps M1 and lowers N, so it holds until the next process event.
-    fn bound_fast<K, F, S: Controls<K, F> + Observe>(&self, s: &S) -> f64 {
+    fn bound_fast<K, F, S: Scheme + Controls<K, F> + Observe>(&self, s: &S) -> f64 {
         let (n, m) = (s.particles() as f64, self.books.current_mass());
-        let mut r = self.source_rate(s.volume());
+        let mut r = self.source_rate(s.volume(), s.time());
         for p in [&self.procs.removal, &self.procs.growth]
             .into_iter()
             .flatten()
@@ -308,11 +334,11 @@ impl Driver {
     /// by mass, accepted with its rate over the component's bound per particle.
     fn candidate_fast<K, F, S, G>(&mut self, s: &mut S, bound: f64, rng: &mut G) -> Result<()>
     where
-        S: Controls<K, F> + Observe,
+        S: Scheme + Controls<K, F> + Observe,
         G: Rng + ?Sized,
     {
         let mut u = open_unit(rng) * bound;
-        let src = self.source_rate(s.volume());
+        let src = self.source_rate(s.volume(), s.time());
         if u < src {
             let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
             let x = source.draw(self.integer, rng);
@@ -364,14 +390,14 @@ impl Driver {
     /// the candidate stays pending).
     fn candidate<K, F, S, G>(&mut self, s: &mut S, bound: f64, rng: &mut G) -> Result<()>
     where
-        S: Controls<K, F> + Observe,
+        S: Scheme + Controls<K, F> + Observe,
         G: Rng + ?Sized,
     {
         if self.fast(s) {
             return self.candidate_fast(s, bound, rng);
         }
         let mut u = open_unit(rng) * bound;
-        let src = self.source_rate(s.volume());
+        let src = self.source_rate(s.volume(), s.time());
         let event = if u < src {
             let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
             Some((Event::Inject(source.draw(self.integer, rng)), None))
@@ -536,7 +562,9 @@ impl Driver {
             }
             1 => {
                 let (at, b) = (r.f64()?, r.f64()?);
-                if !(at.is_finite() || at == f64::INFINITY) || !(b.is_finite() && b >= 0.0) {
+                if !(at.is_finite() || at == f64::INFINITY)
+                    || !(b == VOID || (b.is_finite() && b >= 0.0))
+                {
                     return Err(bad("a process candidate that is not a time"));
                 }
                 Some((at, b))
@@ -560,6 +588,14 @@ fn fingerprint(p: &Processes) -> u64 {
     if let Some(s) = &p.source {
         words.push(1);
         words.push(s.rate().to_bits());
+        if !s.schedule().is_empty() {
+            words.push(5);
+            words.push(crate::checkpoint::fingerprint(
+                s.schedule()
+                    .iter()
+                    .flat_map(|&(t, r)| [t.to_bits(), r.to_bits()]),
+            ));
+        }
         match s.sizes() {
             D::Monodisperse { size } => words.extend([1, size.to_bits()]),
             D::Exponential { mean } => words.extend([2, mean.to_bits()]),
