@@ -786,6 +786,13 @@ typedef struct {
 typedef uint64_t (*coag_rng_callback)(void *user_data);
 
 /*
+ A host's rate per particle as a function of size: `rate(x, user_data)`, at most the
+ bound given with it at every size (a value above it is `COAG_INVALID_RATE` from the
+ advance that met it, the state as before the event).
+ */
+typedef double (*coag_rate_callback)(double x, void *user_data);
+
+/*
  The books of a sim's processes (see `coag_sim_books`). The caller sets
  `struct_size` to `sizeof(coag_books)`.
  */
@@ -1643,6 +1650,30 @@ int32_t coag_sim_set_removal(coag_sim *sim, double coefficient, double exponent)
  `sim` NULL or live.
  */
 int32_t coag_sim_set_growth(coag_sim *sim, double coefficient, double exponent);
+
+/*
+ Sets a host's removal rate per particle, `rate(x, user_data)` (NULL: none), at most
+ `bound` (finite, > 0) at every size, beside `coag_sim_set_removal`'s power (the two
+ add up). `tag` names the function in checkpoints: a checkpoint restores only into a
+ sim whose callback has the same tag and bound. The thinning draws a particle
+ uniformly and keeps it with `rate(x)/bound`, so the run is exact for any rate
+ within the bound. The callback and `user_data` must stay valid while set and must
+ not call back into this sim (`COAG_REENTRANT`). As `coag_sim_set_source` otherwise.
+
+ # Safety
+ `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+ */
+int32_t coag_sim_set_removal_callback(coag_sim *sim, coag_rate_callback rate, void *user_data, double bound, uint64_t tag);
+
+/*
+ Sets a host's growth rate, monomers per unit time at size i, `rate(i, user_data)`
+ (NULL: none), at most `bound` at every size, beside `coag_sim_set_growth`'s power;
+ integer-size schemes only. As `coag_sim_set_removal_callback` otherwise.
+
+ # Safety
+ `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+ */
+int32_t coag_sim_set_growth_callback(coag_sim *sim, coag_rate_callback rate, void *user_data, double bound, uint64_t tag);
 
 /*
  Removes every process (and the books).

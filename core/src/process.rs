@@ -58,6 +58,7 @@
 use crate::error::{Error, Result};
 use crate::initial::Distribution;
 use crate::random::open_unit;
+use alloc::sync::Arc;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
@@ -239,6 +240,87 @@ impl Power {
     }
 }
 
+/// A rate per particle that a host gives as a function of size, with a bound over
+/// every size (a removal or growth law that is no power of size; as a user kernel
+/// declares its majorant). The thinning draws against `bound` per particle and accepts
+/// with `f(x) / bound`; a value above the bound, negative or NaN is an error
+/// ([`Error::BoundExceeded`], [`Error::InvalidRate`]) that leaves the state as it was.
+/// `tag` names the function in checkpoints (a checkpoint restores only into a sim with
+/// the same tag and bound: the function itself cannot be compared).
+#[derive(Clone)]
+pub struct UserRate {
+    f: Arc<dyn Fn(f64) -> f64 + Send + Sync>,
+    bound: f64,
+    tag: u64,
+}
+
+impl UserRate {
+    /// The rate `f(x)` per particle, at most `bound` (finite, > 0) at every size.
+    pub fn new(
+        f: impl Fn(f64) -> f64 + Send + Sync + 'static,
+        bound: f64,
+        tag: u64,
+    ) -> Result<Self> {
+        if !(bound.is_finite() && bound > 0.0 && bound <= 1e300) {
+            return Err(Error::OutOfRange {
+                name: "bound of a user rate",
+                value: bound,
+                range: "(0, 1e300]",
+            });
+        }
+        Ok(UserRate {
+            f: Arc::new(f),
+            bound,
+            tag,
+        })
+    }
+
+    /// The bound per particle.
+    pub fn bound(&self) -> f64 {
+        self.bound
+    }
+
+    /// The tag.
+    pub fn tag(&self) -> u64 {
+        self.tag
+    }
+
+    /// The rate at size `x`, checked against the bound.
+    pub fn at(&self, x: f64) -> Result<f64> {
+        let v = (self.f)(x);
+        if !(v >= 0.0 && v.is_finite()) {
+            return Err(Error::InvalidRate {
+                name: "user rate (removal or growth)",
+                value: v,
+            });
+        }
+        if v > self.bound {
+            return Err(Error::BoundExceeded {
+                name: "user rate above its declared bound",
+                rate: v,
+                bound: self.bound,
+            });
+        }
+        Ok(v)
+    }
+}
+
+impl PartialEq for UserRate {
+    /// The same function (the same allocation), bound and tag.
+    fn eq(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.f, &other.f) && self.bound == other.bound && self.tag == other.tag
+    }
+}
+
+impl core::fmt::Debug for UserRate {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("UserRate")
+            .field("bound", &self.bound)
+            .field("tag", &self.tag)
+            .finish_non_exhaustive()
+    }
+}
+
 /// The processes of a population beside coagulation (any of them may be absent).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Processes {
@@ -248,6 +330,10 @@ pub struct Processes {
     pub removal: Option<Power>,
     /// Growth by monomer attachment, `G(i) = g i^q` (integer sizes).
     pub growth: Option<Power>,
+    /// A host's removal rate per particle (beside `removal`: the two add up).
+    pub user_removal: Option<UserRate>,
+    /// A host's growth rate, monomers per unit time (integer sizes; beside `growth`).
+    pub user_growth: Option<UserRate>,
 }
 
 impl Processes {
@@ -278,9 +364,30 @@ impl Processes {
             .with_source(Source::new(inflow, sizes)?))
     }
 
+    /// With a host's removal rate per particle.
+    pub fn with_user_removal(mut self, rate: UserRate) -> Self {
+        self.user_removal = Some(rate);
+        self
+    }
+
+    /// With a host's growth rate (monomers per unit time; integer sizes).
+    pub fn with_user_growth(mut self, rate: UserRate) -> Self {
+        self.user_growth = Some(rate);
+        self
+    }
+
     /// Whether there is no process at all.
     pub fn is_empty(&self) -> bool {
-        self.source.is_none() && self.removal.is_none() && self.growth.is_none()
+        self.source.is_none()
+            && self.removal.is_none()
+            && self.growth.is_none()
+            && self.user_removal.is_none()
+            && self.user_growth.is_none()
+    }
+
+    /// Whether any particle grows.
+    pub fn grows(&self) -> bool {
+        self.growth.is_some() || self.user_growth.is_some()
     }
 }
 

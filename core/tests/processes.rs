@@ -10,7 +10,7 @@ use coagula_core::Error;
 use coagula_core::initial::Distribution;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
-use coagula_core::process::{Books, Processes, Source};
+use coagula_core::process::{Books, Processes, Source, UserRate};
 use coagula_core::scheme::facade::{BucketMode, Init, InitKind, Model, Options, SchemeId, State};
 use coagula_core::scheme::registry;
 use rand_pcg::Pcg64Mcg;
@@ -166,6 +166,11 @@ fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
             Processes::dilution(0.2, 0.5, Distribution::Exponential { mean: 2.0 }).unwrap(),
         ),
         (
+            "user removal",
+            Processes::default()
+                .with_user_removal(UserRate::new(|x: f64| 0.4 / (1.0 + x), 0.4, 1).unwrap()),
+        ),
+        (
             "scheduled source",
             Processes::default().with_source(
                 monomers(0.2)
@@ -182,6 +187,12 @@ fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
         v.push((
             "linear growth",
             Processes::default().with_growth(0.1, 1.0).unwrap(),
+        ));
+        v.push((
+            "user growth and removal",
+            Processes::default()
+                .with_user_growth(UserRate::new(|x: f64| 0.3 * x / (1.0 + x), 0.3, 2).unwrap())
+                .with_user_removal(UserRate::new(|x: f64| 0.2 / x, 0.2, 3).unwrap()),
         ));
         v.push((
             "all",
@@ -475,34 +486,24 @@ fn a_source_and_a_sink_follow_the_finite_n_master_equation() {
     assert!(failures.is_empty(), "{failures}");
 }
 
-/// A source that follows a schedule (on, off, on at another rate) with a sink, against
-/// the same finite-N chain run piece by piece, on every scheme that takes processes: a
-/// candidate that ran past a change with the old rate's bound (or a change missed)
-/// moves E[N/V] by many standard errors.
-#[test]
-fn a_scheduled_source_follows_the_finite_n_master_equation() {
-    let (lambda, n0, v0) = (0.5, 16u64, 16.0);
-    let (times_s, rates_s) = ([0.2, 0.7, 1.5], [2.0, 0.0, 0.8]);
-    let pieces: Vec<(f64, f64)> = [(0.0, 0.3)]
-        .into_iter()
-        .chain(times_s.iter().copied().zip(rates_s))
-        .collect();
-    let times = [0.7, 1.5, 2.5];
-    let exact = scheduled_reference(&pieces, lambda, n0, v0, &times);
-    let reps = 3000u64;
+/// Failures of E[N/V] against `exact` at `times` over `reps` replicas of every scheme
+/// that takes processes, from N0 = V = 16 under the constant kernel with the processes
+/// `procs()` (replica r of variant k on the generator `seed | k << 32 | r`).
+fn chain_failures(
+    procs: impl Fn() -> Processes,
+    times: &[f64],
+    exact: &[f64],
+    reps: u64,
+    seed: u64,
+) -> String {
     let z_max = common::z_max(reps);
     let mut failures = String::new();
     for (k, id) in process_schemes().into_iter().enumerate() {
         let mut number = vec![Replicas::new(); times.len()];
         for r in 0..reps {
-            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[n0], v0);
-            let src = monomers(0.3).with_schedule(&times_s, &rates_s).unwrap();
-            let p = Processes::default()
-                .with_source(src)
-                .with_removal(lambda, 0.0)
-                .unwrap();
-            s.set_processes(Some(p)).unwrap();
-            let mut g = rng(0x5ced << 32 | (k as u64) << 24 | r);
+            let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[16], 16.0);
+            s.set_processes(Some(procs())).unwrap();
+            let mut g = rng(seed | (k as u64) << 32 | r);
             for (i, &t) in times.iter().enumerate() {
                 s.advance_to(t, &mut g).unwrap();
                 number[i].push(s.particles() as f64 / s.volume());
@@ -520,6 +521,66 @@ fn a_scheduled_source_follows_the_finite_n_master_equation() {
             }
         }
     }
+    failures
+}
+
+/// A host's rates against the exact laws of their powers: a constant user removal
+/// drawn against a bound four times its value follows the same finite-N chain as
+/// `with_removal` (a source and a sink, N0 = V = 16); a user rate above its bound is an
+/// error that leaves the state as before the event.
+#[test]
+fn user_rates_follow_the_finite_n_master_equation() {
+    let (s_rate, lambda) = (1.0, 0.5);
+    let times = [0.5, 2.0];
+    let exact = source_sink_reference(s_rate, lambda, 16, 16.0, &times);
+    let procs = || {
+        Processes::default()
+            .with_source(monomers(s_rate))
+            .with_user_removal(UserRate::new(move |_| lambda, 4.0 * lambda, 9).unwrap())
+    };
+    let failures = chain_failures(procs, &times, &exact, 3000, 0x05e4 << 40);
+    for id in process_schemes() {
+        // a rate above its bound: an error, the state as it was
+        let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[16], 16.0);
+        let p = Processes::default().with_user_removal(UserRate::new(|_| 2.0, 1.0, 9).unwrap());
+        s.set_processes(Some(p)).unwrap();
+        let mut g = rng(1);
+        let e = s.advance_to(50.0, &mut g).unwrap_err();
+        assert!(
+            matches!(e, coagula_core::Error::BoundExceeded { .. }),
+            "{}: {e}",
+            id.label()
+        );
+        let (before, t) = (common::state_bits(&*s), s.time());
+        assert!(s.advance_to(60.0, &mut g).is_err(), "{}", id.label());
+        assert_eq!(s.time(), t, "{}", id.label());
+        assert_eq!(common::state_bits(&*s), before, "{}", id.label());
+    }
+    assert!(failures.is_empty(), "{failures}");
+}
+
+/// A source that follows a schedule (on, off, on at another rate) with a sink, against
+/// the same finite-N chain run piece by piece, on every scheme that takes processes: a
+/// candidate that ran past a change with the old rate's bound (or a change missed)
+/// moves E[N/V] by many standard errors.
+#[test]
+fn a_scheduled_source_follows_the_finite_n_master_equation() {
+    let lambda = 0.5;
+    let (times_s, rates_s) = ([0.2, 0.7, 1.5], [2.0, 0.0, 0.8]);
+    let pieces: Vec<(f64, f64)> = [(0.0, 0.3)]
+        .into_iter()
+        .chain(times_s.iter().copied().zip(rates_s))
+        .collect();
+    let times = [0.7, 1.5, 2.5];
+    let exact = scheduled_reference(&pieces, lambda, 16, 16.0, &times);
+    let procs = || {
+        let src = monomers(0.3).with_schedule(&times_s, &rates_s).unwrap();
+        Processes::default()
+            .with_source(src)
+            .with_removal(lambda, 0.0)
+            .unwrap()
+    };
+    let failures = chain_failures(procs, &times, &exact, 3000, 0x5ced << 40);
     assert!(failures.is_empty(), "{failures}");
 }
 

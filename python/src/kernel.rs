@@ -76,7 +76,7 @@ pub(crate) fn with_raised(py: Python<'_>, e: PyErr, what: &str) -> PyErr {
 
 /// Calls `f(args)` with the interpreter attached and reads a float; NaN (which core
 /// refuses as a rate) when it raises or returns something else, the exception kept.
-fn call_f64<'py, A>(f: &Py<PyAny>, raised: &Raised, args: A) -> f64
+pub(crate) fn call_f64<'py, A>(f: &Py<PyAny>, raised: &Raised, args: A) -> f64
 where
     A: for<'a> pyo3::call::PyCallArgs<'a>,
 {

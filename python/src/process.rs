@@ -5,7 +5,7 @@
 
 use crate::py_err;
 use coagula_core::initial::Distribution;
-use coagula_core::process::{Books, Processes, Source};
+use coagula_core::process::{Books, Processes, Source, UserRate};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
@@ -83,8 +83,40 @@ fn power_of(what: &str, v: &Bound<'_, PyAny>) -> PyResult<(f64, f64)> {
         return Ok((c, 0.0));
     }
     v.extract::<(f64, f64)>().map_err(|_| {
-        PyValueError::new_err(format!("{what}: a coefficient or (coefficient, exponent)"))
+        PyValueError::new_err(format!(
+            "{what}: a coefficient, (coefficient, exponent) or {{\"rate\": callable, \"bound\": b}}"
+        ))
     })
+}
+
+/// A removal or growth rate given as `{"rate": callable, "bound": b}`: the callable of
+/// a size, called with the interpreter attached (an exception it raises stops the call
+/// that invoked it and is raised there), at most `b` at every size.
+fn user_rate_of(what: &str, d: &Bound<'_, PyDict>) -> PyResult<UserRate> {
+    for k in d.keys() {
+        let k: String = k.extract()?;
+        if k != "rate" && k != "bound" {
+            return Err(PyValueError::new_err(format!(
+                "{what}: unknown key {k:?} (rate, bound)"
+            )));
+        }
+    }
+    let f = d
+        .get_item("rate")?
+        .filter(|f| f.is_callable())
+        .ok_or_else(|| PyValueError::new_err(format!("{what}: \"rate\" a callable of the size")))?
+        .unbind();
+    let bound: f64 = d
+        .get_item("bound")?
+        .ok_or_else(|| PyValueError::new_err(format!("{what}: missing \"bound\"")))?
+        .extract()
+        .map_err(|_| PyValueError::new_err(format!("{what}: \"bound\" a number")))?;
+    UserRate::new(
+        move |x| crate::kernel::call_f64(&f, &crate::kernel::Raised, (x,)),
+        bound,
+        0,
+    )
+    .map_err(py_err)
 }
 
 /// The processes of `set_processes`' arguments (`None` when all are absent).
@@ -101,12 +133,20 @@ pub(crate) fn processes_of(
         p = p.with_source(source_of(d)?);
     }
     if let Some(r) = removal {
-        let (c, e) = power_of("removal", r)?;
-        p = p.with_removal(c, e).map_err(py_err)?;
+        if let Ok(d) = r.cast::<PyDict>() {
+            p = p.with_user_removal(user_rate_of("removal", d)?);
+        } else {
+            let (c, e) = power_of("removal", r)?;
+            p = p.with_removal(c, e).map_err(py_err)?;
+        }
     }
     if let Some(g) = growth {
-        let (c, e) = power_of("growth", g)?;
-        p = p.with_growth(c, e).map_err(py_err)?;
+        if let Ok(d) = g.cast::<PyDict>() {
+            p = p.with_user_growth(user_rate_of("growth", d)?);
+        } else {
+            let (c, e) = power_of("growth", g)?;
+            p = p.with_growth(c, e).map_err(py_err)?;
+        }
     }
     Ok((!p.is_empty()).then_some(p))
 }

@@ -32,6 +32,10 @@ pub(crate) type Columns<'py, A, B> = PyResult<(Bound<'py, A>, Bound<'py, B>)>;
 struct Cell {
     sim: Box<Dyn>,
     rng: Generator,
+    /// The `{"rate": callable, "bound": b}` dicts of a user removal and growth, as
+    /// given (core keeps the functions, not the Python objects): for `processes` and
+    /// pickling.
+    user: [Option<Py<PyAny>>; 2],
 }
 
 /// Core's options from keyword arguments (`memory_budget=…` is core's
@@ -158,7 +162,11 @@ impl Sim {
             None => PyDict::new(py),
         };
         Ok(Sim {
-            cell: Mutex::new(Cell { sim, rng }),
+            cell: Mutex::new(Cell {
+                sim,
+                rng,
+                user: [None, None],
+            }),
             scheme: id,
             kernel: kernel.clone().unbind(),
             frag: frag.map_or_else(|| py.None(), |f| f.clone().unbind()),
@@ -276,7 +284,7 @@ impl Sim {
     ) -> PyResult<Report> {
         let (out, signal, raised) = py.detach(|| -> PyResult<_> {
             let mut cell = self.lock()?;
-            let Cell { sim, rng } = &mut *cell;
+            let Cell { sim, rng, .. } = &mut *cell;
             let (out, signal) =
                 crate::with_signals(work_limit, |budget| sim.advance_within(t, budget, rng));
             Ok((out, signal, crate::kernel::take_raised()))
@@ -573,15 +581,36 @@ impl Sim {
         growth: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
         let p = crate::process::processes_of(source, removal, growth)?;
-        self.with(|c| c.sim.set_processes(p))?.map_err(py_err)
+        let user = [removal, growth].map(|a| {
+            a.filter(|a| a.cast::<PyDict>().is_ok())
+                .map(|a| a.clone().unbind())
+        });
+        self.with(|c| {
+            c.sim.set_processes(p)?;
+            c.user = user;
+            Ok(())
+        })?
+        .map_err(py_err)
     }
 
     /// The processes set, as `set_processes`' keyword arguments (None: none).
     #[getter]
     fn processes<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
-        let p = self.with(|c| c.sim.processes().cloned())?;
-        p.map(|p| crate::process::processes_dict(py, &p))
-            .transpose()
+        let (p, user) = self.with(|c| {
+            let user = [0, 1].map(|i| c.user[i].as_ref().map(|u| u.clone_ref(py)));
+            (c.sim.processes().cloned(), user)
+        })?;
+        let Some(p) = p else { return Ok(None) };
+        let d = crate::process::processes_dict(py, &p)?;
+        for (key, (u, set)) in ["removal", "growth"].into_iter().zip(
+            user.into_iter()
+                .zip([p.user_removal.is_some(), p.user_growth.is_some()]),
+        ) {
+            if let (Some(u), true) = (u, set) {
+                d.set_item(key, u)?;
+            }
+        }
+        Ok(Some(d))
     }
 
     /// The processes' books (None without processes): what was injected, removed and
@@ -613,11 +642,16 @@ impl Sim {
 
     /// An exact copy: the two continue identically and independently.
     fn clone(&self, py: Python<'_>) -> PyResult<Sim> {
-        let (sim, rng) = self
-            .with(|c| c.sim.duplicate().map(|s| (s, c.rng.clone())))?
+        let (sim, rng, user) = self
+            .with(|c| {
+                c.sim.duplicate().map(|s| {
+                    let user = [0, 1].map(|i| c.user[i].as_ref().map(|u| u.clone_ref(py)));
+                    (s, c.rng.clone(), user)
+                })
+            })?
             .map_err(py_err)?;
         Ok(Sim {
-            cell: Mutex::new(Cell { sim, rng }),
+            cell: Mutex::new(Cell { sim, rng, user }),
             scheme: self.scheme,
             kernel: self.kernel.clone_ref(py),
             frag: self.frag.clone_ref(py),
@@ -687,7 +721,13 @@ fn _simulation(
         let get = |k| p.get_item(k);
         let (s, r, g) = (get("source")?, get("removal")?, get("growth")?);
         let p = crate::process::processes_of(s.as_ref(), r.as_ref(), g.as_ref())?;
-        sim.with(|c| c.sim.set_processes(p))?.map_err(py_err)?;
+        let user = [r, g].map(|a| a.filter(|a| a.cast::<PyDict>().is_ok()).map(|a| a.unbind()));
+        sim.with(|c| {
+            c.sim.set_processes(p)?;
+            c.user = user;
+            Ok(())
+        })?
+        .map_err(py_err)?;
     }
     sim.with(|c| Sim::restore_into(c, data))??;
     Ok(sim)

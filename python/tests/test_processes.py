@@ -131,3 +131,41 @@ def test_a_scheduled_source_switches_on_and_off():
     for bad in [{"times": [1.0]}, {"times": [2.0, 1.0], "rates": [1.0, 1.0]}, {"times": [1.0], "rates": [-1.0]}]:
         with pytest.raises(ValueError):
             sim.set_processes(source={"rate": 0.1, **bad})
+
+
+def _half_below_ten(x):
+    return 0.3 if x < 10 else 0.15
+
+
+def test_user_rates_run_within_their_bound_and_pickle():
+    sim = Simulation("lowrank", Kernel("constant"), Initial.monodisperse(1, particles=2000), seed=6)
+    sim.set_processes(removal={"rate": _half_below_ten, "bound": 0.5}, growth={"rate": _half_below_ten, "bound": 0.3})
+    assert sim.processes["removal"] == {"rate": _half_below_ten, "bound": 0.5}
+    sim.advance_to(1.0)
+    b = sim.books
+    assert b["removed_number"] > 0 and b["grown_mass"] > 0
+    copy = pickle.loads(pickle.dumps(sim))
+    sim.advance_to(2.0)
+    copy.advance_to(2.0)
+    assert sim.save() == copy.save()
+    # a rate above its bound: refused, the sim where it stood
+    sim.set_processes(removal={"rate": _half_below_ten, "bound": 0.1})
+    with pytest.raises(coagula.CoagulaError):
+        sim.advance_to(10.0)
+    # (the population and the clock stay; the random stream moves on, as after any
+    # refused event)
+    before = (sim.time, sim.counts().tobytes())
+    with pytest.raises(coagula.CoagulaError):
+        sim.advance_to(10.0)
+    assert (sim.time, sim.counts().tobytes()) == before
+    # a callable that raises: the exception is the cause
+    def boom(x):
+        raise RuntimeError("no rate here")
+
+    sim.set_processes(removal={"rate": boom, "bound": 1.0})
+    with pytest.raises(coagula.CoagulaError) as e:
+        sim.advance_to(20.0)
+    assert isinstance(e.value.__cause__, RuntimeError)
+    for bad in [{"rate": 1.0, "bound": 1.0}, {"rate": boom}, {"rate": boom, "bound": -1.0}, {"rate": boom, "bound": 1.0, "x": 1}]:
+        with pytest.raises(ValueError):
+            sim.set_processes(removal=bad)

@@ -22,6 +22,12 @@ static coag_sim *make(const char *scheme, int with_processes) {
     return sim;
 }
 
+/* a host's rate per particle: the double user_data points to */
+static double host_rate(double x, void *ud) {
+    (void)x;
+    return *(const double *)ud;
+}
+
 static size_t save(coag_sim *sim, uint8_t **out) {
     size_t len, written;
     OK(coag_sim_checkpoint_size(sim, &len));
@@ -131,6 +137,33 @@ int main(void) {
         sr[0] = NAN;
         EXPECT(coag_sim_set_source_schedule(q, st, sr, 2), COAG_INVALID_ARGUMENT);
         EXPECT(coag_sim_set_source_schedule(q, st, NULL, 2), COAG_NULL_PARAMETER);
+        coag_sim_free(q);
+    }
+    {
+        /* a host's removal rate, a quarter of its bound: the books balance; a rate
+         * above the bound refuses the advance and leaves the sim as it was */
+        coag_sim *q = make("lowrank", 1);
+        static double lam = 0.25;
+        OK(coag_sim_set_removal_callback(q, host_rate, &lam, 1.0, 11));
+        OK(coag_sim_advance_to(q, 2.0, NULL));
+        books_balance(q, "lowrank with a host removal");
+        /* (the host rate alone: a retry meets the same candidate) */
+        OK(coag_sim_clear_processes(q));
+        OK(coag_sim_set_removal_callback(q, host_rate, &lam, 0.2, 11));
+        coag_sim *copy;
+        OK(coag_sim_clone(q, &copy));
+        EXPECT(coag_sim_advance_to(q, 20.0, NULL), COAG_INVALID_RATE);
+        double tq;
+        OK(coag_sim_time(q, &tq));
+        EXPECT(coag_sim_advance_to(q, 30.0, NULL), COAG_INVALID_RATE);
+        double tq2;
+        OK(coag_sim_time(q, &tq2));
+        CHECK(tq2 == tq, "a refused event leaves the sim where it stood (%.17g, %.17g)", tq, tq2);
+        EXPECT(coag_sim_set_removal_callback(q, host_rate, &lam, NAN, 11), COAG_INVALID_ARGUMENT);
+        EXPECT(coag_sim_set_growth_callback(q, host_rate, &lam, 0.0, 11), COAG_INVALID_ARGUMENT);
+        OK(coag_sim_set_removal_callback(q, NULL, NULL, 1.0, 0));
+        OK(coag_sim_advance_to(q, 20.0, NULL));
+        coag_sim_free(copy);
         coag_sim_free(q);
     }
     double listed[3] = {1.0, 2.5, 2.5};

@@ -580,6 +580,14 @@ void test_processes() {
     CHECK(code_of([&] { sim.books(); }) == COAG_UNSUPPORTED, "no books without processes");
     sim.set_source_sizes(0.3, {1.0, 4.0});
     sim.set_source_schedule({3.0, 5.0}, {0.0, 0.2});
+    // a host's removal rate: within its bound it runs, above it the advance refuses
+    static double lam = 0.2;
+    auto rate = [](double, void *ud) -> double { return *static_cast<double *>(ud); };
+    sim.set_removal_callback(rate, &lam, 0.5, 3);
+    sim.advance_to(sim.time() + 0.5);
+    sim.set_removal_callback(rate, &lam, 0.1, 3);
+    CHECK(code_of([&] { sim.advance_to(sim.time() + 5.0); }) == COAG_INVALID_RATE, "a host rate above its bound");
+    sim.set_removal_callback(nullptr, nullptr, 1.0);
     CHECK(code_of([&] { sim.set_source_schedule({3.0}, {0.0, 0.2}); }) == COAG_INVALID_ARGUMENT, "schedule lengths");
     CHECK(code_of([&] { sim.set_source_sizes(0.3, {1.0}); }) == COAG_BUFFER_TOO_SMALL, "a listed source of one size");
     sim.clear_processes();

@@ -8,6 +8,15 @@ module test_callbacks
   implicit none
   integer(c_int32_t) :: reentry_status = COAG_OK   ! what a sim said to its own callback
 contains
+  ! a removal (or growth) rate per particle: k (user_data) below size 10, k/2 above
+  real(c_double) function size_rate(x, ud) bind(c)
+    real(c_double), value :: x
+    type(c_ptr), value :: ud
+    real(c_double), pointer :: k
+    call c_f_pointer(ud, k)
+    size_rate = k
+    if (x > 10) size_rate = k / 2
+  end function
   ! K = k (user_data), sizes checked positive (else an invalid rate)
   real(c_double) function user_rate(x, y, ud) bind(c)
     real(c_double), value :: x, y

@@ -541,6 +541,7 @@ contains
     type(coag_books) :: b
     integer(c_int64_t) :: n
     real(c_double) :: m0, m1, v, x(7), cn(7), cn2(7), rates(7), outside(4)
+    real(c_double), target :: rk = 0.3_c_double
     k = kernel("constant", [1.0_c_double])
     o = seeded(3, 0)
     call ok(coag_sim_new_counts(cs("lowrank"), k, c_null_ptr, o, [1000_c_int64_t], 1_c_size_t, &
@@ -565,6 +566,16 @@ contains
     call check(b%injected_number > 0 .and. b%removed_number > 0 .and. b%grown_mass > 0, "every process acted")
     call ok(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, 3.0_c_double], 2_c_size_t))
     call ok(coag_sim_set_source_schedule(sim, [3.0_c_double, 4.0_c_double], [0.0_c_double, 1.0_c_double], 2_c_size_t))
+    ! host rates: within their bound they run; a bound below the rate is an invalid rate
+    call ok(coag_sim_set_removal_callback(sim, c_funloc(size_rate), c_loc(rk), 0.5_c_double, 7_c_int64_t))
+    call ok(coag_sim_set_growth_callback(sim, c_funloc(size_rate), c_loc(rk), 0.5_c_double, 8_c_int64_t))
+    call ok(coag_sim_advance_to(sim, 2.5_c_double, c_null_ptr))
+    call ok(coag_sim_set_removal_callback(sim, c_funloc(size_rate), c_loc(rk), 0.1_c_double, 7_c_int64_t))
+    call expect(coag_sim_advance_to(sim, 3.0_c_double, c_null_ptr), COAG_INVALID_RATE, "a host rate above its bound")
+    call expect(coag_sim_set_growth_callback(sim, c_funloc(size_rate), c_loc(rk), -1.0_c_double, 8_c_int64_t), &
+         COAG_INVALID_ARGUMENT, "a negative bound")
+    call ok(coag_sim_set_removal_callback(sim, c_null_funptr, c_null_ptr, 1.0_c_double, 0_c_int64_t))
+    call ok(coag_sim_set_growth_callback(sim, c_null_funptr, c_null_ptr, 1.0_c_double, 0_c_int64_t))
     call expect(coag_sim_set_source_schedule(sim, [4.0_c_double, 3.0_c_double], [0.0_c_double, 1.0_c_double], &
          2_c_size_t), COAG_INVALID_ARGUMENT, "a schedule going back in time")
     call expect(coag_sim_set_source_sizes(sim, 0.5_c_double, [1.0_c_double, -3.0_c_double], 2_c_size_t), &

@@ -6,7 +6,8 @@ use super::coag_sim;
 use crate::status::{COAG_INVALID_ARGUMENT, COAG_UNSUPPORTED, fail, guard};
 use crate::util::{handle, handle_mut, write_sized};
 use coagula_core::initial::Distribution;
-use coagula_core::process::{Processes, Source};
+use coagula_core::process::{Processes, Source, UserRate};
+use std::ffi::c_void;
 
 /// A source's sizes: every particle of size `p1` (nucleation).
 pub const COAG_SOURCE_MONODISPERSE: i32 = 0;
@@ -193,6 +194,108 @@ pub unsafe extern "C" fn coag_sim_set_growth(
         s.sim.set_processes(Some(p))?;
         Ok(())
     })
+}
+
+/// A host's rate per particle as a function of size: `rate(x, user_data)`, at most the
+/// bound given with it at every size (a value above it is `COAG_INVALID_RATE` from the
+/// advance that met it, the state as before the event).
+pub type coag_rate_callback = Option<unsafe extern "C" fn(x: f64, user_data: *mut c_void) -> f64>;
+
+/// The callback's user data, moved into core's closure (the host keeps it valid and
+/// callable from the thread that advances the sim while it is set).
+struct HostData(*mut c_void);
+// SAFETY: the host's contract (above): core calls the function on the thread that
+// advances the sim, one call at a time.
+unsafe impl Send for HostData {}
+// SAFETY: as above.
+unsafe impl Sync for HostData {}
+
+fn user_rate(
+    rate: unsafe extern "C" fn(f64, *mut c_void) -> f64,
+    user_data: *mut c_void,
+    bound: f64,
+    tag: u64,
+) -> Result<UserRate, crate::status::Fail> {
+    let data = HostData(user_data);
+    Ok(UserRate::new(
+        move |x| {
+            let d = &data;
+            // SAFETY: the host's callback and data, valid while set (contract).
+            unsafe { rate(x, d.0) }
+        },
+        bound,
+        tag,
+    )?)
+}
+
+/// Sets a host's removal rate per particle, `rate(x, user_data)` (NULL: none), at most
+/// `bound` (finite, > 0) at every size, beside `coag_sim_set_removal`'s power (the two
+/// add up). `tag` names the function in checkpoints: a checkpoint restores only into a
+/// sim whose callback has the same tag and bound. The thinning draws a particle
+/// uniformly and keeps it with `rate(x)/bound`, so the run is exact for any rate
+/// within the bound. The callback and `user_data` must stay valid while set and must
+/// not call back into this sim (`COAG_REENTRANT`). As `coag_sim_set_source` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_removal_callback(
+    sim: *mut coag_sim,
+    rate: coag_rate_callback,
+    user_data: *mut c_void,
+    bound: f64,
+    tag: u64,
+) -> i32 {
+    // SAFETY: forwarded contract.
+    unsafe { set_user(sim, false, rate, user_data, bound, tag) }
+}
+
+/// A host's removal (`grow` false) or growth rate set on `sim`.
+///
+/// # Safety
+/// As the two setters'.
+unsafe fn set_user(
+    sim: *mut coag_sim,
+    grow: bool,
+    rate: coag_rate_callback,
+    user_data: *mut c_void,
+    bound: f64,
+    tag: u64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let mut p = current(s);
+        let r = match rate {
+            Some(f) => Some(user_rate(f, user_data, bound, tag)?),
+            None => None,
+        };
+        if grow {
+            p.user_growth = r;
+        } else {
+            p.user_removal = r;
+        }
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
+/// Sets a host's growth rate, monomers per unit time at size i, `rate(i, user_data)`
+/// (NULL: none), at most `bound` at every size, beside `coag_sim_set_growth`'s power;
+/// integer-size schemes only. As `coag_sim_set_removal_callback` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_growth_callback(
+    sim: *mut coag_sim,
+    rate: coag_rate_callback,
+    user_data: *mut c_void,
+    bound: f64,
+    tag: u64,
+) -> i32 {
+    // SAFETY: forwarded contract.
+    unsafe { set_user(sim, true, rate, user_data, bound, tag) }
 }
 
 /// Removes every process (and the books).

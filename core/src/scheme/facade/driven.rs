@@ -22,7 +22,7 @@ use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::memory::try_reserve;
 use crate::observe::Observe;
-use crate::process::{Books, Power, Processes};
+use crate::process::{Books, Power, Processes, UserRate};
 use crate::random::{Ziggurat, open_unit};
 use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::vec::Vec;
@@ -95,38 +95,74 @@ fn tally<K, F, S: Controls<K, F>>(s: &S) -> Result<(u64, f64)> {
     }
 }
 
-/// `Σ rate(x)` over the particles of `h`.
-fn total(h: &Held, rate: &Power) -> f64 {
-    match h {
-        Held::Counts(v) => v.iter().map(|&(i, n)| rate.at(i as f64) * n as f64).sum(),
-        Held::Sizes(x) => x.iter().map(|&y| rate.at(y)).sum(),
+/// A removal or growth law: a power of size, or a host's function with its bound.
+#[derive(Clone, Copy)]
+enum Rate<'a> {
+    Power(&'a Power),
+    User(&'a UserRate),
+}
+
+impl Rate<'_> {
+    fn at(&self, x: f64) -> Result<f64> {
+        match self {
+            Rate::Power(p) => Ok(p.at(x)),
+            Rate::User(u) => u.at(x),
+        }
     }
 }
 
-/// The particle (index into `h`) at `u ∈ [0, Σ rate)` of the cumulative rates.
-fn pick(h: &Held, rate: &Power, mut u: f64) -> usize {
-    let last = match h {
+/// The removal and growth laws of `p`, each with whether it grows.
+fn laws(p: &Processes) -> impl Iterator<Item = (Rate<'_>, bool)> {
+    let power = [(&p.removal, false), (&p.growth, true)]
+        .into_iter()
+        .filter_map(|(q, g)| q.as_ref().map(|q| (Rate::Power(q), g)));
+    let user = [(&p.user_removal, false), (&p.user_growth, true)]
+        .into_iter()
+        .filter_map(|(q, g)| q.as_ref().map(|q| (Rate::User(q), g)));
+    power.chain(user)
+}
+
+/// The rate per occupied entry `k` of `h` (counts times the rate per particle).
+fn weight(h: &Held, rate: Rate<'_>, k: usize) -> Result<f64> {
+    match h {
+        Held::Counts(v) => Ok(rate.at(v[k].0 as f64)? * v[k].1 as f64),
+        Held::Sizes(x) => rate.at(x[k]),
+    }
+}
+
+fn entries(h: &Held) -> usize {
+    match h {
         Held::Counts(v) => v.len(),
         Held::Sizes(x) => x.len(),
-    };
+    }
+}
+
+/// `Σ rate(x)` over the particles of `h`.
+fn total(h: &Held, rate: Rate<'_>) -> Result<f64> {
+    let mut sum = 0.0;
+    for k in 0..entries(h) {
+        sum += weight(h, rate, k)?;
+    }
+    Ok(sum)
+}
+
+/// The particle (index into `h`) at `u ∈ [0, Σ rate)` of the cumulative rates.
+fn pick(h: &Held, rate: Rate<'_>, mut u: f64) -> Result<usize> {
+    let last = entries(h);
     for k in 0..last {
-        let w = match h {
-            Held::Counts(v) => rate.at(v[k].0 as f64) * v[k].1 as f64,
-            Held::Sizes(x) => rate.at(x[k]),
-        };
+        let w = weight(h, rate, k)?;
         if u < w {
-            return k;
+            return Ok(k);
         }
         u -= w;
     }
     // rounding past the last: the last particle of positive rate
-    (0..last)
-        .rev()
-        .find(|&k| match h {
-            Held::Counts(v) => v[k].1 > 0 && rate.at(v[k].0 as f64) > 0.0,
-            Held::Sizes(x) => rate.at(x[k]) > 0.0,
-        })
-        .unwrap_or(0)
+    for k in (0..last).rev() {
+        if weight(h, rate, k)? > 0.0 {
+            return Ok(k);
+        }
+    }
+    Ok(0)
 }
 
 /// What a process event did.
@@ -183,15 +219,12 @@ impl Driver {
         s: &S,
     ) -> Result<(f64, Option<Held>)> {
         let mut r = self.source_rate(s.volume(), s.time());
-        if self.procs.removal.is_none() && self.procs.growth.is_none() {
+        if laws(&self.procs).next().is_none() {
             return Ok((r, None));
         }
         let h = held(s)?;
-        for p in [&self.procs.removal, &self.procs.growth]
-            .into_iter()
-            .flatten()
-        {
-            r += total(&h, p);
+        for (law, _) in laws(&self.procs) {
+            r += total(&h, law)?;
         }
         Ok((r, Some(h)))
     }
@@ -305,29 +338,35 @@ impl Driver {
         if !s.edits() {
             return false;
         }
-        let by_mass = [&self.procs.removal, &self.procs.growth]
-            .into_iter()
-            .flatten()
-            .any(|p| p.exponent > 0.0);
+        let by_mass =
+            laws(&self.procs).any(|(l, _)| matches!(l, Rate::Power(p) if p.exponent > 0.0));
         if self.integer {
             return !by_mass || s.draws_by_mass();
         }
-        self.procs.growth.is_none() && self.procs.removal.is_none_or(|p| p.exponent == 0.0)
+        // (a user rate has its bound at every size: uniform draws)
+        !self.procs.grows() && self.procs.removal.is_none_or(|p| p.exponent == 0.0)
     }
 
     /// The bound of the edited path: `S V`, and for removal and growth `c N` (exponent
-    /// ≤ 0: `c x^p ≤ c` on sizes ≥ 1) or `c M1` (exponent in (0, 1]: `c x^p ≤ c x`);
-    /// merging keeps M1 and lowers N, so it holds until the next process event.
+    /// ≤ 0: `c x^p ≤ c` on sizes ≥ 1) or `c M1` (exponent in (0, 1]: `c x^p ≤ c x`),
+    /// a user rate's bound times N; merging keeps M1 and lowers N, so it holds until
+    /// the next process event.
     fn bound_fast<K, F, S: Scheme + Controls<K, F> + Observe>(&self, s: &S) -> f64 {
-        let (n, m) = (s.particles() as f64, self.books.current_mass());
         let mut r = self.source_rate(s.volume(), s.time());
-        for p in [&self.procs.removal, &self.procs.growth]
-            .into_iter()
-            .flatten()
-        {
-            r += p.coefficient * if p.exponent <= 0.0 { n } else { m };
+        for (law, _) in laws(&self.procs) {
+            r += self.law_bound(s, law);
         }
         r
+    }
+
+    /// One law's share of the edited path's bound, and whether it draws by mass.
+    fn law_bound<K, F, S: Controls<K, F> + Observe>(&self, s: &S, law: Rate<'_>) -> f64 {
+        let (n, m) = (s.particles() as f64, self.books.current_mass());
+        match law {
+            Rate::Power(p) if p.exponent > 0.0 => p.coefficient * m,
+            Rate::Power(p) => p.coefficient * n,
+            Rate::User(u) => u.bound() * n,
+        }
     }
 
     /// The candidate on the edited path: a particle drawn uniformly (exponent ≤ 0) or
@@ -348,23 +387,22 @@ impl Driver {
             return Ok(());
         }
         u -= src;
-        let (n, m) = (s.particles() as f64, self.books.current_mass());
-        for (p, grow) in [(self.procs.removal, false), (self.procs.growth, true)] {
-            let Some(p) = p else { continue };
-            let by_mass = p.exponent > 0.0;
-            let w = p.coefficient * if by_mass { m } else { n };
+        let procs = self.procs.clone();
+        for (law, grow) in laws(&procs) {
+            let w = self.law_bound(s, law);
             if u >= w {
                 u -= w;
                 continue;
             }
+            let by_mass = matches!(law, Rate::Power(p) if p.exponent > 0.0);
             let Some((xf, h)) = s.draw_particle(by_mass, rng) else {
                 return Ok(());
             };
-            // the rate over its bound: x^p ≤ 1, or x^p / x ≤ 1
-            let keep = if by_mass {
-                p.at(xf) / (p.coefficient * xf)
-            } else {
-                p.at(xf) / p.coefficient
+            // the rate over its bound: x^p ≤ 1, x^p / x ≤ 1, or f(x) / bound ≤ 1
+            let keep = match law {
+                Rate::Power(p) if by_mass => p.at(xf) / (p.coefficient * xf),
+                Rate::Power(p) => p.at(xf) / p.coefficient,
+                Rate::User(q) => q.at(xf)? / q.bound(),
             };
             if open_unit(rng) >= keep {
                 return Ok(());
@@ -406,11 +444,10 @@ impl Driver {
             let (_, h) = self.rate(s)?;
             let mut chosen = None;
             if let Some(h) = h {
-                for (p, grow) in [(&self.procs.removal, false), (&self.procs.growth, true)] {
-                    let Some(p) = p else { continue };
-                    let w = total(&h, p);
+                for (law, grow) in laws(&self.procs) {
+                    let w = total(&h, law)?;
                     if u < w {
-                        let k = pick(&h, p, u);
+                        let k = pick(&h, law, u)?;
                         chosen = Some(if grow {
                             Event::Grow(k)
                         } else {
@@ -615,6 +652,12 @@ fn fingerprint(p: &Processes) -> u64 {
     for (tag, q) in [(2, &p.removal), (3, &p.growth)] {
         if let Some(q) = q {
             words.extend([tag, q.coefficient.to_bits(), q.exponent.to_bits()]);
+        }
+    }
+    // a host's function is known by its tag and bound
+    for (tag, q) in [(6, &p.user_removal), (7, &p.user_growth)] {
+        if let Some(q) = q {
+            words.extend([tag, q.tag(), q.bound().to_bits()]);
         }
     }
     crate::checkpoint::fingerprint(words)

@@ -162,7 +162,7 @@ impl SchemeInfo {
                 what: "processes beside coagulation on this scheme (they run on the finite-N schemes: lowrank, lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes, dsa)",
             });
         }
-        if p.growth.is_some() && !self.inits.contains(&InitKind::Counts) {
+        if p.grows() && !self.inits.contains(&InitKind::Counts) {
             return Err(crate::Error::Unsupported {
                 what: "growth on a scheme over real sizes (growth by monomer attachment runs on the integer-size schemes: lowrank)",
             });
