@@ -23,11 +23,52 @@ printf '#include "coagula.h"\n#include "coagula.h"\nint main(void) { return 0; }
 gcc -std=c89 -pedantic -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/header89.o"
 g++ -x c++ -std=c++11 -Wall -Wextra -Werror -I"$root/include" -c "$out/header.c" -o "$out/headerxx.o"
 
-for t in test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes test_classes; do
+# the C tests, longest first (the runs go two at a time: see run_all)
+c_tests="test_hostile test_dsmc test_temperature test_review test_schemes test_langevin test_processes test_classes test_misuse test_regressions test_cells"
+
+jobs_max=${COAG_TEST_JOBS:-2}
+case $jobs_max in
+    '' | *[!0-9]* | 0) echo "COAG_TEST_JOBS=$jobs_max: not a positive integer, using 2"; jobs_max=2 ;;
+esac
+
+# run_all PREFIX COMMAND...: runs COMMAND $out/PREFIX$t for every C test, jobs_max at a
+# time, each one's output kept and printed in the list's order (all of it on failure);
+# exits 1 when any failed
+run_all() {
+    local prefix=$1
+    shift
+    for t in $c_tests; do
+        while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+        (
+            rc=0
+            "$@" "$out/$prefix$t" || rc=$?
+            echo "$rc" > "$out/$prefix$t.rc"
+        ) > "$out/$prefix$t.log" 2>&1 &
+    done
+    wait
+    local failed=""
+    for t in $c_tests; do
+        local rc
+        rc=$(cat "$out/$prefix$t.rc" 2>/dev/null || echo "no status")
+        if [ "$rc" = 0 ]; then
+            tail -n 1 "$out/$prefix$t.log"
+        else
+            cat "$out/$prefix$t.log"
+            echo "$prefix$t: exit status $rc"
+            failed="$failed $t"
+        fi
+    done
+    if [ -n "$failed" ]; then
+        echo "failed:$failed"
+        exit 1
+    fi
+}
+
+for t in $c_tests; do
     gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
         "tests/c/$t.c" "$lib" $libs -o "$out/$t"
-    "$out/$t"
 done
+run_all ""
 
 # the many-cells host example (OpenMP), small: it runs and its cells evolve
 gcc -std=c11 -O2 -fopenmp -Wall -Wextra -Werror -I"$root/include" examples/c/cells.c "$lib" $libs \
@@ -50,42 +91,15 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 
 # The C tests again without sanitizers, under valgrind's memcheck (leaks, uninitialised
 # reads, invalid accesses the sanitizers' instrumentation does not see in the Rust
-# library), in their quick mode (COAG_TEST_QUICK: fewer particles in the statistical
-# checks, smaller work limits and fewer crafted checkpoints in test_hostile: the same
-# code paths). Two at a time (COAG_VALGRIND_JOBS): memcheck runs one thread per program.
+# library), in their quick mode (COAG_TEST_QUICK: fewer particles and replicas in the
+# statistical checks, at the thresholds of their degrees of freedom; smaller work limits
+# and fewer crafted checkpoints in test_hostile: the same code paths). Two at a time
+# (COAG_TEST_JOBS): memcheck runs one thread per program.
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    vg_tests="test_schemes test_misuse test_regressions test_hostile test_langevin test_temperature test_dsmc test_cells test_review test_processes test_classes"
-    for t in $vg_tests; do
+    for t in $c_tests; do
         gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
             "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
     done
-    jobs_max=${COAG_VALGRIND_JOBS:-2}
-    case $jobs_max in
-        '' | *[!0-9]* | 0) echo "COAG_VALGRIND_JOBS=$jobs_max: not a positive integer, using 2"; jobs_max=2 ;;
-    esac
-    for t in $vg_tests; do
-        while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
-        (
-            rc=0
-            COAG_TEST_QUICK=1 valgrind -q --error-exitcode=99 --leak-check=full \
-                --errors-for-leak-kinds=definite,indirect "$out/vg_$t" || rc=$?
-            echo "$rc" > "$out/vg_$t.rc"
-        ) > "$out/vg_$t.log" 2>&1 &
-    done
-    wait
-    failed=""
-    for t in $vg_tests; do
-        rc=$(cat "$out/vg_$t.rc" 2>/dev/null || echo "no status")
-        if [ "$rc" = 0 ]; then
-            tail -n 1 "$out/vg_$t.log"
-        else
-            cat "$out/vg_$t.log"
-            echo "$t under valgrind: exit status $rc"
-            failed="$failed $t"
-        fi
-    done
-    if [ -n "$failed" ]; then
-        echo "failed under valgrind:$failed"
-        exit 1
-    fi
+    export COAG_TEST_QUICK=1
+    run_all vg_ valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect
 fi

@@ -511,7 +511,7 @@ static void reproducers(const coag_kernel *k) {
     for (size_t m = 0; m < nschemes; m++) {
         if (schemes[m].model == COAG_MODEL_GAS) continue; /* (no rate coefficient) */
         s = make_with(m, huge, thuge, NULL, 0.0, NULL);
-        OK(coag_sim_set_work_limit(s, quick ? 20000 : 10000000));
+        OK(coag_sim_set_work_limit(s, quick ? 4000 : 10000000));
         int st = coag_sim_advance_to(s, 1.0, NULL);
         /* (without particle doubling, direct simulation and the mass flow algorithm
          * merge all their particles in tiny waiting times and reach the target; low

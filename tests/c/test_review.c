@@ -110,7 +110,7 @@ static void returns(coag_sim *s, double t, const char *what) {
 }
 
 int main(void) {
-    limit = test_quick() ? 200000 : 5000000;
+    limit = test_quick() ? 50000 : 5000000;
     coag_kernel *k1 = kernel("constant", (const double[]){1.0}, 1);
     coag_kernel *kxy = kernel("multiplicative", (const double[]){1.0}, 1);
     coag_kernel *kbr = kernel("brownian", (const double[]){1.0}, 1);

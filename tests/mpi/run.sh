@@ -16,7 +16,7 @@ trap 'rm -rf "$work"' EXIT
 # the reference: the default build (no MPI) that the README's test command made (CI
 # runs this after it; `cargo test --no-run` with its crates is a no-op then, and here
 # makes sure the binary is that build's)
-cargo test --workspace --exclude coagula-python --no-run -q
+cargo test --workspace --exclude coagula-python --lib --bins --tests --no-run -q
 cp "$target/debug/coagula" "$work/coagula-plain"
 # the MPI build: the binary alone (with the feature, `cargo test` would rebuild every
 # test binary: the mpi crate changes features of the dev-dependencies' tree), the cli
