@@ -209,6 +209,27 @@ impl Classes {
         Ok(out)
     }
 
+    /// Checks class numbers per unit volume: one per pivot, each finite and ≥ 0.
+    pub fn check_numbers(&self, numbers: &[f64]) -> Result<()> {
+        if numbers.len() != self.pivots.len() {
+            return Err(Error::BufferLength {
+                name: "class numbers",
+                expected: self.pivots.len(),
+                got: numbers.len(),
+            });
+        }
+        for &n in numbers {
+            if !(n >= 0.0 && n.is_finite()) {
+                return Err(Error::OutOfRange {
+                    name: "class number per unit volume",
+                    value: n,
+                    range: "[0, inf)",
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// Particle counts per class in a volume `volume` for the class numbers per unit
     /// volume `numbers`: `N_i V` rounded down, and up with probability its fractional
     /// part (one draw from `rng` per class with one), so each count's expectation is
@@ -220,17 +241,11 @@ impl Classes {
         volume: f64,
         rng: &mut G,
     ) -> Result<Vec<u64>> {
-        if numbers.len() != self.pivots.len() {
-            return Err(Error::BufferLength {
-                name: "class numbers",
-                expected: self.pivots.len(),
-                got: numbers.len(),
-            });
-        }
+        self.check_numbers(numbers)?;
         crate::error::positive("volume", volume)?;
         const LIMIT: f64 = 9_007_199_254_740_992.0; // 2^53
         for &n in numbers {
-            if !(n >= 0.0 && n * volume < LIMIT) {
+            if n * volume >= LIMIT {
                 return Err(Error::OutOfRange {
                     name: "class number per unit volume (times the volume: a count below 2^53)",
                     value: n,

@@ -93,24 +93,12 @@ where
     S: Simulation<K, F, G> + ?Sized,
     G: Rng + ?Sized,
 {
-    if numbers.len() != classes.len() {
-        return Err(Error::BufferLength {
-            name: "class numbers",
-            expected: classes.len(),
-            got: numbers.len(),
-        });
-    }
-    let mut mass = 0.0;
-    for (&n, &x) in numbers.iter().zip(classes.pivots()) {
-        if !(n >= 0.0 && n.is_finite()) {
-            return Err(Error::OutOfRange {
-                name: "class number per unit volume",
-                value: n,
-                range: "[0, inf)",
-            });
-        }
-        mass += n * x;
-    }
+    classes.check_numbers(numbers)?;
+    let mass: f64 = numbers
+        .iter()
+        .zip(classes.pivots())
+        .map(|(n, x)| n * x)
+        .sum();
     crate::error::positive(
         "mass of the class numbers (a mass-flow state carries mass)",
         mass,
