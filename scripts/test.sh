@@ -8,10 +8,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 # (the Python crate has no Rust tests: it is built below as the wheel a user installs,
-# not a second time in the test profile; the examples are not tests — clippy checks
-# that they build — and compiling them was 35 of the test build's 695 unit-seconds)
-cargo test --workspace --exclude coagula-python --lib --bins --tests
-cargo test --workspace --exclude coagula-python --doc
+# not a second time in the test profile; coagula-mpi has none and needs an MPI
+# library, tests/mpi/run.sh runs it; the examples are not tests — clippy checks that
+# they build — and compiling them was 35 of the test build's 695 unit-seconds)
+cargo test --workspace --exclude coagula-python --exclude coagula-mpi --lib --bins --tests
+cargo test --workspace --exclude coagula-python --exclude coagula-mpi --doc
 
 # The C library the Python tests compare bits with (the test profile's build, which
 # `cargo test` has compiled most of).

@@ -37,7 +37,6 @@ pub trait World {
 }
 
 /// One process.
-#[cfg_attr(feature = "mpi", allow(dead_code))]
 pub struct Alone;
 
 impl World for Alone {
@@ -52,81 +51,25 @@ impl World for Alone {
     }
 }
 
-/// The processes `mpirun` started (a singleton when started without it).
-#[cfg(feature = "mpi")]
-pub struct Mpi {
-    _universe: mpi::environment::Universe,
-    world: mpi::topology::SimpleCommunicator,
+/// How a front end opens its world of processes.
+pub type Opener = fn() -> Result<Box<dyn World>, String>;
+
+static OPENER: std::sync::OnceLock<Opener> = std::sync::OnceLock::new();
+
+/// Makes [`world`] open the processes through `open` (the `coagula-mpi` binary installs
+/// MPI's world this way, before the command line is parsed). Once per process: a second
+/// call is refused.
+pub fn set_opener(open: Opener) -> Result<(), String> {
+    OPENER
+        .set(open)
+        .map_err(|_| "the world of processes was set already".to_string())
 }
 
-#[cfg(feature = "mpi")]
-impl Mpi {
-    /// Initialises MPI (once per process). With more than one process a panic ends
-    /// the whole job (the other ranks would wait for this one forever).
-    pub fn init() -> Result<Self, String> {
-        use mpi::traits::Communicator;
-        let universe = mpi::initialize().ok_or("MPI was initialised already")?;
-        let world = universe.world();
-        if world.size() < 1 {
-            return Err("MPI world of no process".into());
-        }
-        if world.size() > 1 {
-            let previous = std::panic::take_hook();
-            std::panic::set_hook(Box::new(move |info| {
-                previous(info);
-                mpi::topology::SimpleCommunicator::world().abort(101);
-            }));
-        }
-        Ok(Mpi {
-            _universe: universe,
-            world,
-        })
-    }
-}
-
-#[cfg(feature = "mpi")]
-impl World for Mpi {
-    fn rank(&self) -> usize {
-        use mpi::traits::Communicator;
-        self.world.rank() as usize
-    }
-    fn size(&self) -> usize {
-        use mpi::traits::Communicator;
-        self.world.size() as usize
-    }
-    fn gather(&self, mine: Vec<u64>) -> Option<Vec<Vec<u64>>> {
-        use mpi::traits::{Communicator, Destination, Source};
-        if self.rank() == 0 {
-            let mut all = vec![mine];
-            for r in 1..self.world.size() {
-                let (words, _) = self.world.process_at_rank(r).receive_vec::<u64>();
-                all.push(words);
-            }
-            Some(all)
-        } else {
-            self.world.process_at_rank(0).send(&mine[..]);
-            None
-        }
-    }
-    fn fatal(&self, e: String) -> String {
-        use mpi::traits::Communicator;
-        if self.world.size() > 1 {
-            eprintln!("error (rank {}): {e}", self.rank());
-            self.world.abort(1);
-        }
-        e
-    }
-}
-
-/// The world of this process: MPI's when built with the `mpi` feature, else one process.
+/// The world of this process: what [`set_opener`] installed, else one process.
 pub fn world() -> Result<Box<dyn World>, String> {
-    #[cfg(feature = "mpi")]
-    {
-        Ok(Box::new(Mpi::init()?))
-    }
-    #[cfg(not(feature = "mpi"))]
-    {
-        Ok(Box::new(Alone))
+    match OPENER.get() {
+        Some(open) => open(),
+        None => Ok(Box::new(Alone)),
     }
 }
 

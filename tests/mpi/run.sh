@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# MPI ensembles (the cli's `mpi` feature, Open MPI): `mpirun -n 2 coagula run` gives
+# MPI ensembles (the coagula-mpi binary, Open MPI): `mpirun -n 2 coagula-mpi run` gives
 # the bits of one process (a run and a sweep), and an ensemble whose rank is killed
 # mid-way resumes from its checkpoints with the bits of an unbroken run.
 # Needs mpirun and libclang (Debian: openmpi-bin libopenmpi-dev libclang-dev).
@@ -16,16 +16,13 @@ trap 'rm -rf "$work"' EXIT
 # the reference: the default build (no MPI) that the README's test command made (CI
 # runs this after it; `cargo test --no-run` with its crates is a no-op then, and here
 # makes sure the binary is that build's)
-cargo test --workspace --exclude coagula-python --lib --bins --tests --no-run -q
+cargo test --workspace --exclude coagula-python --exclude coagula-mpi --lib --bins --tests --no-run -q
 cp "$target/debug/coagula" "$work/coagula-plain"
-# the MPI build: the binary alone (with the feature, `cargo test` would rebuild every
-# test binary: the mpi crate changes features of the dev-dependencies' tree), the cli
-# crate at opt-level 1 (its dependencies are the test build's, already compiled; the
-# runs below are small, and Rust's floating point does not depend on the opt-level, so
-# the bits compared are the same)
-cargo build --profile test -q -p coagula-cli --features mpi \
-    --config 'profile.test.package.coagula-cli.opt-level=1'
-bin="$target/debug/coagula"
+# the MPI build: the coagula-mpi binary over the test build's cli library (its own
+# crate, so only it and rsmpi compile here; Rust's floating point does not depend on
+# the opt-level, so the bits compared are those of a release build)
+cargo build --profile test -q -p coagula-mpi
+bin="$target/debug/coagula-mpi"
 plain="$work/coagula-plain"
 cd "$work"
 
