@@ -595,6 +595,11 @@ module coagula
        type(c_ptr), value :: sim
        real(c_double), value :: coefficient, exponent
      end function
+     integer(c_int32_t) function coag_sim_set_growth_step(sim, step) bind(c, name="coag_sim_set_growth_step")
+       import
+       type(c_ptr), value :: sim
+       real(c_double), value :: step
+     end function
      integer(c_int32_t) function coag_sim_clear_processes(sim) bind(c, name="coag_sim_clear_processes")
        import
        type(c_ptr), value :: sim

@@ -1642,14 +1642,29 @@ int32_t coag_sim_set_source_schedule(coag_sim *sim, const double *times, const d
 int32_t coag_sim_set_removal(coag_sim *sim, double coefficient, double exponent);
 
 /*
- Sets growth by monomer attachment: a particle of size i gains a monomer at rate
- `G(i) = coefficient · i^exponent` (exponent in [−10, 1]); integer-size schemes only
- (a scheme over real sizes: `COAG_UNSUPPORTED`). As `coag_sim_set_source` otherwise.
+ Sets growth `G(x) = coefficient · x^exponent` (exponent in [−10, 1]): on an
+ integer-size scheme by monomer attachment (a particle of size i gains a monomer at
+ rate G(i), exact); on a scheme over real sizes by Strang splitting of the step that
+ `coag_sim_set_growth_step` set before (without one: `COAG_UNSUPPORTED`). As
+ `coag_sim_set_source` otherwise.
 
  # Safety
  `sim` NULL or live.
  */
 int32_t coag_sim_set_growth(coag_sim *sim, double coefficient, double exponent);
+
+/*
+ Sets the splitting step of growth on real sizes (finite, > 0; call it before
+ `coag_sim_set_growth` or `coag_sim_set_growth_callback` on such a scheme): every
+ particle grows by a step at the times (k + ½)·step — in closed form for a power of
+ size, by a fourth-order Runge–Kutta step with a host's rate — and coagulation and the
+ other processes run exactly in between; second order in the step at its multiples.
+ Not used on integer sizes. As `coag_sim_set_source` otherwise.
+
+ # Safety
+ `sim` NULL or live.
+ */
+int32_t coag_sim_set_growth_step(coag_sim *sim, double step);
 
 /*
  Sets a host's removal rate per particle, `rate(x, user_data)` (NULL: none), at most

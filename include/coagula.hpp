@@ -639,6 +639,8 @@ class Sim {
     void set_growth(double coefficient, double exponent) {
         check(coag_sim_set_growth(s_.get(), coefficient, exponent));
     }
+    /// The splitting step of growth on real sizes (set it before the growth).
+    void set_growth_step(double step) { check(coag_sim_set_growth_step(s_.get(), step)); }
     void clear_processes() { check(coag_sim_clear_processes(s_.get())); }
     /// The processes' books (throws COAG_UNSUPPORTED when none is set).
     coag_books books() const {

@@ -17,7 +17,7 @@ use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 
 /// The schemes that take processes.
-fn process_schemes() -> Vec<V> {
+pub(crate) fn process_schemes() -> Vec<V> {
     let p = Processes::default().with_removal(1.0, 0.0).unwrap();
     let mut v: Vec<V> = registry::SCHEMES
         .iter()
@@ -35,7 +35,7 @@ fn process_schemes() -> Vec<V> {
 
 /// A scheme of the registry, and for `lowrank` which engine it is pinned to.
 #[derive(Clone, Copy)]
-struct V {
+pub(crate) struct V {
     info: SchemeId,
     slots: bool,
 }
@@ -48,7 +48,7 @@ impl std::ops::Deref for V {
 }
 
 impl V {
-    fn label(&self) -> String {
+    pub(crate) fn label(&self) -> String {
         if self.slots {
             format!("{} (slots)", self.info.name)
         } else {
@@ -58,7 +58,7 @@ impl V {
 }
 
 /// A sim of `id` from `counts` in `volume` (as particle sizes for a sizes scheme).
-fn sim(id: V, k: Coagulation, counts: &[u64], volume: f64) -> Box<common::Sim> {
+pub(crate) fn sim(id: V, k: Coagulation, counts: &[u64], volume: f64) -> Box<common::Sim> {
     let model = Model::coagulation(k, NoFragmentation);
     if id.inits.contains(&InitKind::Counts) {
         let init = Init::Counts { counts, volume };
@@ -114,7 +114,7 @@ fn tally(s: &common::Sim) -> (u64, f64) {
 }
 
 /// The checkpoint envelope of `s`, in a buffer of the size it needs.
-fn checkpoint(s: &common::Sim) -> Vec<u8> {
+pub(crate) fn checkpoint(s: &common::Sim) -> Vec<u8> {
     let mut w = coagula_core::checkpoint::Writer::new(&mut []);
     s.save_checkpoint(None, &mut w);
     let mut buf = vec![0u8; w.needed()];
@@ -124,7 +124,7 @@ fn checkpoint(s: &common::Sim) -> Vec<u8> {
     buf
 }
 
-fn rng(seed: u64) -> Pcg64Mcg {
+pub(crate) fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
 }
 
@@ -179,6 +179,25 @@ fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
             ),
         ),
     ];
+    if !integer {
+        // growth by splitting (growth.rs checks its accuracy)
+        v.push((
+            "split growth",
+            Processes::default()
+                .with_growth(0.1, 1.0)
+                .unwrap()
+                .with_growth_step(0.3)
+                .unwrap(),
+        ));
+        v.push((
+            "split user growth and removal",
+            Processes::default()
+                .with_user_growth(UserRate::new(|x: f64| 0.3 * x / (1.0 + x), 0.3, 2).unwrap())
+                .with_user_removal(UserRate::new(|x: f64| 0.2 / x, 0.2, 3).unwrap())
+                .with_growth_step(0.3)
+                .unwrap(),
+        ));
+    }
     if integer {
         v.push((
             "growth",
@@ -266,11 +285,6 @@ fn schemes_without_processes_refuse_them_and_stay_as_they_were() {
         assert!(s.processes().is_none() && s.books().is_none());
         assert_eq!(s.particles(), before);
     }
-    // growth on real sizes names the scheme that has it
-    let id = registry::find("lowrank-sizes").unwrap();
-    let g = Processes::default().with_growth(1.0, 0.0).unwrap();
-    let msg = id.takes_processes(&g).unwrap_err().to_string();
-    assert!(msg.contains("lowrank"), "{msg}");
 }
 
 #[test]

@@ -20,6 +20,8 @@ mod dsmc;
 mod finite_n;
 #[path = "fuzz_findings.rs"]
 mod fuzz_findings;
+#[path = "growth.rs"]
+mod growth;
 #[path = "host_control.rs"]
 mod host_control;
 #[path = "kernel_bounds.rs"]

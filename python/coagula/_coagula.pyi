@@ -140,8 +140,9 @@ class Simulation:
         self,
         *,
         source: Optional[Dict[str, Any]] = None,
-        removal: Union[float, Tuple[float, float], None] = None,
-        growth: Union[float, Tuple[float, float], None] = None,
+        removal: Union[float, Tuple[float, float], Dict[str, Any], None] = None,
+        growth: Union[float, Tuple[float, float], Dict[str, Any], None] = None,
+        growth_step: Optional[float] = None,
     ) -> None: ...
     @property
     def processes(self) -> Optional[Dict[str, Any]]: ...

@@ -124,6 +124,7 @@ pub(crate) fn processes_of(
     source: Option<&Bound<'_, PyAny>>,
     removal: Option<&Bound<'_, PyAny>>,
     growth: Option<&Bound<'_, PyAny>>,
+    growth_step: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Option<Processes>> {
     let mut p = Processes::default();
     if let Some(s) = source {
@@ -147,6 +148,12 @@ pub(crate) fn processes_of(
             let (c, e) = power_of("growth", g)?;
             p = p.with_growth(c, e).map_err(py_err)?;
         }
+    }
+    if let Some(h) = growth_step {
+        let h: f64 = h
+            .extract()
+            .map_err(|_| PyValueError::new_err("growth_step: a number (a time step)"))?;
+        p = p.with_growth_step(h).map_err(py_err)?;
     }
     Ok((!p.is_empty()).then_some(p))
 }
@@ -192,6 +199,9 @@ pub(crate) fn processes_dict<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bo
         if let Some(v) = v {
             d.set_item(key, PyTuple::new(py, [v.coefficient, v.exponent])?)?;
         }
+    }
+    if let Some(h) = p.growth_step {
+        d.set_item("growth_step", h)?;
     }
     Ok(d)
 }

@@ -572,15 +572,17 @@ impl Sim {
     /// (`rate` per unit volume and time, `kind` monodisperse/exponential/lognormal with
     /// `size`, `mean` or `median` and `gsd`), `removal` and `growth` a coefficient or
     /// `(coefficient, exponent)` (`c x^p` per particle; growth as monomer attachment on
-    /// integer sizes). The books start from the state now.
-    #[pyo3(signature = (*, source=None, removal=None, growth=None))]
+    /// integer sizes, on real sizes by Strang splitting of step `growth_step`, which it
+    /// needs there). The books start from the state now.
+    #[pyo3(signature = (*, source=None, removal=None, growth=None, growth_step=None))]
     fn set_processes(
         &self,
         source: Option<&Bound<'_, PyAny>>,
         removal: Option<&Bound<'_, PyAny>>,
         growth: Option<&Bound<'_, PyAny>>,
+        growth_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
-        let p = crate::process::processes_of(source, removal, growth)?;
+        let p = crate::process::processes_of(source, removal, growth, growth_step)?;
         let user = [removal, growth].map(|a| {
             a.filter(|a| a.cast::<PyDict>().is_ok())
                 .map(|a| a.clone().unbind())
@@ -720,7 +722,8 @@ fn _simulation(
     if let Some(p) = processes {
         let get = |k| p.get_item(k);
         let (s, r, g) = (get("source")?, get("removal")?, get("growth")?);
-        let p = crate::process::processes_of(s.as_ref(), r.as_ref(), g.as_ref())?;
+        let h = get("growth_step")?;
+        let p = crate::process::processes_of(s.as_ref(), r.as_ref(), g.as_ref(), h.as_ref())?;
         let user = [r, g].map(|a| a.filter(|a| a.cast::<PyDict>().is_ok()).map(|a| a.unbind()));
         sim.with(|c| {
             c.sim.set_processes(p)?;

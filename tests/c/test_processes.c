@@ -108,6 +108,25 @@ int main(void) {
     coag_sim *ls;
     OK(coag_sim_new_sizes("lowrank-sizes", k, NULL, NULL, sizes, 64, 1.0, &ls));
     EXPECT(coag_sim_set_growth(ls, 0.1, 0.0), COAG_UNSUPPORTED);
+    {
+        /* growth on real sizes: split of the step set first; linear growth with the
+           constant kernel gives M1 = M1(0) e^{gt} at the step's multiples, exactly;
+           between them the half step not yet taken */
+        coag_sim *gs;
+        OK(coag_sim_new_sizes("lowrank-sizes", k, NULL, NULL, sizes, 64, 1.0, &gs));
+        EXPECT(coag_sim_set_growth_step(gs, 0.0), COAG_INVALID_ARGUMENT);
+        OK(coag_sim_set_growth_step(gs, 0.25));
+        OK(coag_sim_set_growth(gs, 0.2, 1.0));
+        double g0, g1, g2;
+        OK(coag_sim_moment(gs, 1.0, &g0));
+        OK(coag_sim_advance_to(gs, 2.0, NULL));
+        OK(coag_sim_moment(gs, 1.0, &g1));
+        CHECK(fabs(g1 - g0 * exp(0.4)) < 1e-12 * g1, "split growth: M1 %.15g vs %.15g", g1, g0 * exp(0.4));
+        OK(coag_sim_advance_to(gs, 2.1, NULL));
+        OK(coag_sim_moment(gs, 1.0, &g2));
+        CHECK(fabs(g2 - g1) < 1e-12 * g1, "no growth before (k + 1/2) step: %.15g", g2);
+        coag_sim_free(gs);
+    }
     OK(coag_sim_set_removal(ls, 0.1, 0.0));
     EXPECT(coag_sim_set_removal(ls, 0.1, 1.5), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(ls, -1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_INVALID_ARGUMENT);

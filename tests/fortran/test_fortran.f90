@@ -549,6 +549,7 @@ contains
     call coag_options_free(o)
     call ok(coag_sim_set_source(sim, 0.5_c_double, COAG_SOURCE_MONODISPERSE, 1.0_c_double, 0.0_c_double))
     call ok(coag_sim_set_removal(sim, 0.2_c_double, 0.0_c_double))
+    call ok(coag_sim_set_growth_step(sim, 0.25_c_double)) ! (not used on integer sizes; see test_processes.c)
     call ok(coag_sim_set_growth(sim, 0.1_c_double, 1.0_c_double))
     call expect(coag_sim_set_removal(sim, 1.0_c_double, 2.0_c_double), COAG_INVALID_ARGUMENT, "removal exponent 2")
     call expect(coag_sim_set_source(sim, 1.0_c_double, 7, 1.0_c_double, 0.0_c_double), COAG_INVALID_ARGUMENT, &

@@ -55,7 +55,8 @@ pub struct SinkSpec {
 }
 
 /// `[growth]`: `dx/dt = rate · x^exponent`, as monomer attachment on the integer-size
-/// schemes (exact there).
+/// schemes (exact there), by Strang splitting of step `step` on real sizes (needed
+/// there; core's `Processes::with_growth_step`).
 #[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, rename_all = "kebab-case")]
 pub struct GrowthSpec {
@@ -63,6 +64,8 @@ pub struct GrowthSpec {
     pub rate: f64,
     /// The exponent q ∈ [−10, 1] (default 0: constant growth; 1: linear).
     pub exponent: Option<f64>,
+    /// The splitting step on real sizes (time; not used on integer sizes).
+    pub step: Option<f64>,
 }
 
 /// The processes of scenario `s` for `scheme`, in simulation units (`unit`: the size
@@ -159,26 +162,36 @@ pub(super) fn of(
         let e = g.exponent.unwrap_or(0.0);
         let c = g.rate * unit.powf(e - 1.0);
         p = p.with_growth(c, e).map_err(|e| src.at("growth", e))?;
+        let integer = scheme
+            .inits
+            .contains(&coagula_core::scheme::facade::InitKind::Counts);
+        match g.step {
+            Some(h) if !integer => {
+                p = p
+                    .with_growth_step(h)
+                    .map_err(|e| src.at("growth.step", e))?;
+            }
+            Some(_) => {
+                return Err(src.at(
+                    "growth.step",
+                    "not used here (growth on integer sizes is monomer attachment, exact)",
+                ));
+            }
+            None if !integer => {
+                return Err(src.at(
+                    "growth.step",
+                    "growth on real sizes needs a splitting step (second order in it at its multiples)",
+                ));
+            }
+            None => {}
+        }
     }
     if p.is_empty() {
         return Ok(None);
     }
-    scheme.takes_processes(&p).map_err(|e| {
-        let key = if s.growth.is_some()
-            && scheme
-                .takes_processes(
-                    &Processes::default()
-                        .with_growth(0.0, 0.0)
-                        .unwrap_or_default(),
-                )
-                .is_err()
-        {
-            "growth"
-        } else {
-            "scheme.name"
-        };
-        src.at(key, e)
-    })?;
+    scheme
+        .takes_processes(&p)
+        .map_err(|e| src.at("scheme.name", e))?;
     if s.fragmentation.is_some() {
         return Err(src.at(
             "fragmentation",

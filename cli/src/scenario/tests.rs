@@ -79,6 +79,7 @@ const KEYS: &[&str] = &[
     "sink.exponent",
     "growth.rate",
     "growth.exponent",
+    "growth.step",
     "nonsense.key",
 ];
 const VALUES: &[&str] = &[
@@ -340,7 +341,7 @@ fn processes_tables() {
         (&["sink.exponent=2.0"][..], "sink"),
         (
             &["growth.rate=1.0", "scheme.name=\"lowrank-sizes\""][..],
-            "growth",
+            "growth.step",
         ),
         (
             &["scheme.name=\"massflow\"", "scheme.dt=0.01"][..],
@@ -361,6 +362,22 @@ fn processes_tables() {
             .unwrap_or_else(|| panic!("{ov:?} accepted"));
         assert!(e.message.contains(key), "{ov:?}: {}", e.message);
     }
+    // growth on real sizes by splitting of the step given; the step refused on integer
+    // sizes, where growth is attachment
+    let p = plan(
+        &[
+            "scheme.name=\"lowrank-sizes\"",
+            "growth.rate=0.5",
+            "growth.step=0.05",
+        ],
+        &[],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(p.processes.unwrap().growth_step, Some(0.05));
+    let e = plan(&["growth.rate=0.5", "growth.step=0.05"], &[])
+        .err()
+        .unwrap();
+    assert!(e.message.contains("growth.step"), "{}", e.message);
     // a listed source: drawn uniformly from the list, its closed form with the list's
     // mean and mean square; not on an integer scheme when a size is not an integer
     let p = plan(

@@ -1,5 +1,6 @@
 //! Processes beside coagulation (core's `process` module): a particle source, removal
-//! at a power of size, growth by monomer attachment, and their books. The rules live in
+//! at a power of size, growth (monomer attachment on integer sizes, splitting on real
+//! ones), and their books. The rules live in
 //! core; these calls translate.
 
 use super::coag_sim;
@@ -175,9 +176,11 @@ pub unsafe extern "C" fn coag_sim_set_removal(
     })
 }
 
-/// Sets growth by monomer attachment: a particle of size i gains a monomer at rate
-/// `G(i) = coefficient · i^exponent` (exponent in [−10, 1]); integer-size schemes only
-/// (a scheme over real sizes: `COAG_UNSUPPORTED`). As `coag_sim_set_source` otherwise.
+/// Sets growth `G(x) = coefficient · x^exponent` (exponent in [−10, 1]): on an
+/// integer-size scheme by monomer attachment (a particle of size i gains a monomer at
+/// rate G(i), exact); on a scheme over real sizes by Strang splitting of the step that
+/// `coag_sim_set_growth_step` set before (without one: `COAG_UNSUPPORTED`). As
+/// `coag_sim_set_source` otherwise.
 ///
 /// # Safety
 /// `sim` NULL or live.
@@ -191,6 +194,26 @@ pub unsafe extern "C" fn coag_sim_set_growth(
         // SAFETY: NULL checked; live by contract.
         let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
         let p = current(s).with_growth(coefficient, exponent)?;
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
+/// Sets the splitting step of growth on real sizes (finite, > 0; call it before
+/// `coag_sim_set_growth` or `coag_sim_set_growth_callback` on such a scheme): every
+/// particle grows by a step at the times (k + ½)·step — in closed form for a power of
+/// size, by a fourth-order Runge–Kutta step with a host's rate — and coagulation and the
+/// other processes run exactly in between; second order in the step at its multiples.
+/// Not used on integer sizes. As `coag_sim_set_source` otherwise.
+///
+/// # Safety
+/// `sim` NULL or live.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_growth_step(sim: *mut coag_sim, step: f64) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let p = current(s).with_growth_step(step)?;
         s.sim.set_processes(Some(p))?;
         Ok(())
     })

@@ -259,6 +259,11 @@ where
             });
         }
         let integer = matches!(self.s.state(), State::Counts(..));
+        if !integer && procs.grows() && procs.growth_step.is_none() {
+            return Err(Error::Unsupported {
+                what: "growth on real sizes without a growth step (it is split: set the step first); on the integer-size schemes, lowrank among them, growth is exact monomer attachment",
+            });
+        }
         let mut d = Driver::new(procs, integer, 0, 0.0);
         d.rebase(&self.s)?;
         self.driver = Some(d);

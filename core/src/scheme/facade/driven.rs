@@ -10,6 +10,10 @@
 //! with its own clock; then a source, removal or growth event happens with probability
 //! its rate over `R̄` (which particle: in proportion to its rate), or nothing.
 //!
+//! Growth on real sizes is split off (Strang splitting, [`Processes::with_growth_step`]):
+//! the instants `(k + ½) h` end a candidate's bound like a schedule's change, and there
+//! every particle grows by a step.
+//!
 //! The candidate is kept across calls and in checkpoints, so that a run split at any
 //! times gives the bits of an unbroken one.
 //!
@@ -34,6 +38,29 @@ const RECORD: usize = 13;
 /// The bound of a void candidate: the next change of a scheduled source's rate, where
 /// the candidate is drawn afresh and nothing happens.
 const VOID: f64 = -1.0;
+
+/// The bound of a growth instant on real sizes (`(k + ½) h` of the splitting step h):
+/// every particle grows by a step, and the candidate is drawn afresh.
+const GROW: f64 = -2.0;
+
+/// The first growth instant `(k + ½) h` after `now`.
+fn next_growth(h: f64, now: f64) -> Result<f64> {
+    let steps = now / h;
+    if steps.abs() < (1u64 << 50) as f64 {
+        let k0 = libm::floor(steps - 0.5);
+        for k in [k0 - 1.0, k0, k0 + 1.0, k0 + 2.0] {
+            let at = (k + 0.5) * h;
+            if at > now {
+                return Ok(at);
+            }
+        }
+    }
+    Err(Error::OutOfRange {
+        name: "growth step",
+        value: h,
+        range: "large enough that time / step < 2^50 (the growth instants must be distinct)",
+    })
+}
 
 /// The processes of one sim, their books and the pending candidate.
 #[derive(Clone, Debug)]
@@ -120,6 +147,12 @@ fn laws(p: &Processes) -> impl Iterator<Item = (Rate<'_>, bool)> {
         .into_iter()
         .filter_map(|(q, g)| q.as_ref().map(|q| (Rate::User(q), g)));
     power.chain(user)
+}
+
+/// The laws drawn as events by thinning: every law on integer sizes; on real sizes
+/// growth is split off ([`GROW`]) and only removal is.
+fn thinned(p: &Processes, integer: bool) -> impl Iterator<Item = (Rate<'_>, bool)> {
+    laws(p).filter(move |&(_, grow)| integer || !grow)
 }
 
 /// The rate per occupied entry `k` of `h` (counts times the rate per particle).
@@ -219,11 +252,11 @@ impl Driver {
         s: &S,
     ) -> Result<(f64, Option<Held>)> {
         let mut r = self.source_rate(s.volume(), s.time());
-        if laws(&self.procs).next().is_none() {
+        if thinned(&self.procs, self.integer).next().is_none() {
             return Ok((r, None));
         }
         let h = held(s)?;
-        for (law, _) in laws(&self.procs) {
+        for (law, _) in thinned(&self.procs, self.integer) {
             r += total(&h, law)?;
         }
         Ok((r, Some(h)))
@@ -269,7 +302,18 @@ impl Driver {
                         .source
                         .as_ref()
                         .map_or(f64::INFINITY, |q| q.next_change(now));
-                    let (at, r) = if at > change { (change, VOID) } else { (at, r) };
+                    // and until the particles grow by a splitting step (real sizes)
+                    let grow = match self.split() {
+                        Some(h) => next_growth(h, now)?,
+                        None => f64::INFINITY,
+                    };
+                    let (at, r) = if at <= change && at <= grow {
+                        (at, r)
+                    } else if grow <= change {
+                        (grow, GROW)
+                    } else {
+                        (change, VOID)
+                    };
                     self.pending = Some((at, r));
                     (at, r)
                 }
@@ -305,8 +349,17 @@ impl Driver {
                 out.time = s.time();
                 return Ok(out);
             }
-            if bound == VOID {
-                // a scheduled rate changes here: the candidate is drawn afresh
+            if bound == VOID || bound == GROW {
+                // a scheduled rate changes here, or the particles grow by a step: the
+                // candidate is drawn afresh
+                if bound == GROW {
+                    if !budget.take(1) {
+                        out.interrupted = true;
+                        out.time = s.time();
+                        return Ok(out);
+                    }
+                    self.grow_all(s)?;
+                }
                 self.pending = None;
                 out.time = s.time();
                 if at >= t {
@@ -329,6 +382,38 @@ impl Driver {
         }
     }
 
+    /// The splitting step when growth on real sizes is split off.
+    fn split(&self) -> Option<f64> {
+        if self.integer || !self.procs.grows() {
+            None
+        } else {
+            self.procs.growth_step
+        }
+    }
+
+    /// Every particle grows by one splitting step (real sizes; on error, the state and
+    /// the books are unchanged).
+    fn grow_all<K, F, S: Controls<K, F>>(&mut self, s: &mut S) -> Result<()> {
+        let (Some(h), State::Sizes(x)) = (self.split(), s.state()) else {
+            return Err(Error::Unsupported {
+                what: "growth by splitting on integer sizes (growth is monomer attachment there)",
+            });
+        };
+        let mut y = Vec::new();
+        try_reserve(&mut y, x.len())?;
+        let (mut before, mut after) = (0.0, 0.0);
+        for &xi in x {
+            let g = crate::error::finite("grown size", self.procs.grow(xi, h)?)?;
+            before += xi;
+            after += g;
+            y.push(g);
+        }
+        s.set_sizes(&y)?;
+        s.set_doubling(false);
+        self.books.grown_mass += after - before;
+        Ok(())
+    }
+
     /// Whether the scheme edits single particles: then a process event costs a draw
     /// and an edit, not a state replacement. On integer sizes every process has its
     /// bound (`x^p ≤ 1` or `≤ x` on sizes ≥ 1); on real sizes only a size-independent
@@ -338,13 +423,13 @@ impl Driver {
         if !s.edits() {
             return false;
         }
-        let by_mass =
-            laws(&self.procs).any(|(l, _)| matches!(l, Rate::Power(p) if p.exponent > 0.0));
+        let by_mass = thinned(&self.procs, self.integer)
+            .any(|(l, _)| matches!(l, Rate::Power(p) if p.exponent > 0.0));
         if self.integer {
             return !by_mass || s.draws_by_mass();
         }
-        // (a user rate has its bound at every size: uniform draws)
-        !self.procs.grows() && self.procs.removal.is_none_or(|p| p.exponent == 0.0)
+        // (a user rate has its bound at every size: uniform draws; growth is split off)
+        self.procs.removal.is_none_or(|p| p.exponent == 0.0)
     }
 
     /// The bound of the edited path: `S V`, and for removal and growth `c N` (exponent
@@ -353,7 +438,7 @@ impl Driver {
     /// the next process event.
     fn bound_fast<K, F, S: Scheme + Controls<K, F> + Observe>(&self, s: &S) -> f64 {
         let mut r = self.source_rate(s.volume(), s.time());
-        for (law, _) in laws(&self.procs) {
+        for (law, _) in thinned(&self.procs, self.integer) {
             r += self.law_bound(s, law);
         }
         r
@@ -388,7 +473,7 @@ impl Driver {
         }
         u -= src;
         let procs = self.procs.clone();
-        for (law, grow) in laws(&procs) {
+        for (law, grow) in thinned(&procs, self.integer) {
             let w = self.law_bound(s, law);
             if u >= w {
                 u -= w;
@@ -444,7 +529,7 @@ impl Driver {
             let (_, h) = self.rate(s)?;
             let mut chosen = None;
             if let Some(h) = h {
-                for (law, grow) in laws(&self.procs) {
+                for (law, grow) in thinned(&self.procs, self.integer) {
                     let w = total(&h, law)?;
                     if u < w {
                         let k = pick(&h, law, u)?;
@@ -600,7 +685,7 @@ impl Driver {
             1 => {
                 let (at, b) = (r.f64()?, r.f64()?);
                 if !(at.is_finite() || at == f64::INFINITY)
-                    || !(b == VOID || (b.is_finite() && b >= 0.0))
+                    || !(b == VOID || b == GROW || (b.is_finite() && b >= 0.0))
                 {
                     return Err(bad("a process candidate that is not a time"));
                 }
@@ -659,6 +744,9 @@ fn fingerprint(p: &Processes) -> u64 {
         if let Some(q) = q {
             words.extend([tag, q.tag(), q.bound().to_bits()]);
         }
+    }
+    if let Some(h) = p.growth_step {
+        words.extend([8, h.to_bits()]);
     }
     crate::checkpoint::fingerprint(words)
 }

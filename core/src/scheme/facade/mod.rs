@@ -150,21 +150,17 @@ impl SchemeInfo {
         }
     }
 
-    /// Whether the scheme takes the processes `p` beside coagulation
+    /// Whether the scheme takes the processes `_p` beside coagulation
     /// ([`crate::process`]): the finite-N schemes over counts take a source, removal
     /// and growth by monomer attachment; those over real sizes (`lowrank-sizes`, `dsa`)
-    /// a source and removal; all of them with coagulation alone (no fragmentation
-    /// kernel). The mass-flow, time-stepped, temperature and gas schemes take none yet
-    /// (`docs/design/processes.md`).
-    pub fn takes_processes(&self, p: &crate::process::Processes) -> crate::error::Result<()> {
+    /// a source, removal and growth by splitting (which needs its step: the sim checks
+    /// that, [`Simulation::set_processes`]); all of them with coagulation alone (no
+    /// fragmentation kernel). The mass-flow, time-stepped, temperature and gas schemes
+    /// take none yet (`docs/design/processes.md`).
+    pub fn takes_processes(&self, _p: &crate::process::Processes) -> crate::error::Result<()> {
         if self.law != Law::FiniteN {
             return Err(crate::Error::Unsupported {
                 what: "processes beside coagulation on this scheme (they run on the finite-N schemes: lowrank, lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes, dsa)",
-            });
-        }
-        if p.grows() && !self.inits.contains(&InitKind::Counts) {
-            return Err(crate::Error::Unsupported {
-                what: "growth on a scheme over real sizes (growth by monomer attachment runs on the integer-size schemes: lowrank)",
             });
         }
         Ok(())
