@@ -64,10 +64,22 @@ run_all() {
     fi
 }
 
-for t in $c_tests; do
-    gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror $san -I"$root/include" \
-        "tests/c/$t.c" "$lib" $libs -o "$out/$t"
-done
+# build_all PREFIX FLAGS...: compiles every C test to $out/PREFIX$t, jobs_max at a time
+build_all() {
+    local prefix=$1
+    shift
+    for t in $c_tests; do
+        while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+        gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror "$@" -I"$root/include" \
+            "tests/c/$t.c" "$lib" $libs -o "$out/$prefix$t" &
+    done
+    wait
+    for t in $c_tests; do
+        [ -x "$out/$prefix$t" ] || { echo "$prefix$t did not compile"; exit 1; }
+    done
+}
+
+build_all "" $san
 run_all ""
 
 # the many-cells host example (OpenMP), small: it runs and its cells evolve
@@ -96,10 +108,7 @@ gfortran -std=f2008 -O1 -g -Wall -Wextra -Werror -fcheck=all -J "$out" \
 # and fewer crafted checkpoints in test_hostile: the same code paths). Two at a time
 # (COAG_TEST_JOBS): memcheck runs one thread per program.
 if [ "${COAG_VALGRIND:-0}" = 1 ]; then
-    for t in $c_tests; do
-        gcc -std=c11 -O1 -g -Wall -Wextra -Wpedantic -Werror -I"$root/include" \
-            "tests/c/$t.c" "$lib" $libs -o "$out/vg_$t"
-    done
+    build_all vg_
     export COAG_TEST_QUICK=1
     run_all vg_ valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect
 fi
