@@ -569,6 +569,14 @@ module coagula
        real(c_double), intent(in) :: times(*), rates(*)
        integer(c_size_t), value :: len
      end function
+     integer(c_int32_t) function coag_sim_set_source_callback(sim, rate, user_data, bound, tag) &
+          bind(c, name="coag_sim_set_source_callback")
+       import
+       type(c_ptr), value :: sim, user_data
+       type(c_funptr), value :: rate               ! coag_rate_callback or NULL
+       real(c_double), value :: bound
+       integer(c_int64_t), value :: tag
+     end function
      integer(c_int32_t) function coag_sim_set_removal_callback(sim, rate, user_data, bound, tag) &
           bind(c, name="coag_sim_set_removal_callback")
        import

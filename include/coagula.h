@@ -786,8 +786,8 @@ typedef struct {
 typedef uint64_t (*coag_rng_callback)(void *user_data);
 
 /*
- A host's rate per particle as a function of size: `rate(x, user_data)`, at most the
- bound given with it at every size (a value above it is `COAG_INVALID_RATE` from the
+ A host's rate as a function of one number, `rate(x, user_data)` — a particle's size
+ (removal, growth) or the time (a source) — at most the bound given with it (a value above it is `COAG_INVALID_RATE` from the
  advance that met it, the state as before the event).
  */
 typedef double (*coag_rate_callback)(double x, void *user_data);
@@ -1628,6 +1628,21 @@ int32_t coag_sim_set_source_sizes(coag_sim *sim, double rate, const double *size
  `sim` NULL or live; `times` and `rates` valid for `len` doubles each.
  */
 int32_t coag_sim_set_source_schedule(coag_sim *sim, const double *times, const double *rates, size_t len);
+
+/*
+ Gives the sim's source a host's rate function of time: `S(t) = rate(t, user_data)`
+ particles per unit volume and time (NULL: back to the rate the source was set with),
+ at most `bound` (finite, > 0) at every time. Exact for any rate within the bound:
+ candidates come at the bound and a source event is kept with `S(t)/bound`; a value
+ above the bound is `COAG_INVALID_RATE` from the advance that met it, the state as
+ before the event. Not with a schedule. Set a source first (else
+ `COAG_INVALID_ARGUMENT`). `tag`, the callback's contract and the rest as
+ `coag_sim_set_removal_callback`.
+
+ # Safety
+ `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+ */
+int32_t coag_sim_set_source_callback(coag_sim *sim, coag_rate_callback rate, void *user_data, double bound, uint64_t tag);
 
 /*
  Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,

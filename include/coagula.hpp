@@ -627,6 +627,9 @@ class Sim {
     }
     /// A host's removal / growth rate per particle, at most `bound` at every size
     /// (nullptr: none); `tag` names it in checkpoints.
+    void set_source_callback(coag_rate_callback rate, void *user_data, double bound, std::uint64_t tag = 0) {
+        check(coag_sim_set_source_callback(s_.get(), rate, user_data, bound, tag));
+    }
     void set_removal_callback(coag_rate_callback rate, void *user_data, double bound, std::uint64_t tag = 0) {
         check(coag_sim_set_removal_callback(s_.get(), rate, user_data, bound, tag));
     }

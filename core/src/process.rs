@@ -96,8 +96,10 @@ fn rate(name: &'static str, c: f64) -> Result<f64> {
     }
 }
 
-/// Particles injected at `rate` per unit volume and time with sizes from `sizes`, or at
-/// a piecewise-constant rate `S(t)` ([`with_schedule`](Source::with_schedule)).
+/// Particles injected at `rate` per unit volume and time with sizes from `sizes`, at a
+/// piecewise-constant rate `S(t)` ([`with_schedule`](Source::with_schedule)), or at a
+/// host's rate function of time with a bound
+/// ([`with_rate_function`](Source::with_rate_function)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Source {
     rate: f64,
@@ -105,6 +107,9 @@ pub struct Source {
     /// `(t_k, S_k)`: `S(t) = S_k` on `[t_k, t_{k+1})`, the last one after; `rate`
     /// before `t_0`. Empty: the constant `rate`.
     schedule: Vec<(f64, f64)>,
+    /// `S(t)` as a host's function of time, at most its bound (then `rate` and
+    /// `schedule` are not used).
+    function: Option<UserRate>,
 }
 
 /// Largest number of pieces of a source's schedule.
@@ -126,7 +131,52 @@ impl Source {
             rate,
             sizes,
             schedule: Vec::new(),
+            function: None,
         })
+    }
+
+    /// The rate as a host's function of time, `S(t) = f(t)` particles per unit volume
+    /// and time, at most the function's bound at every time: candidates come at the
+    /// bound and a source event is kept with `S(t)/bound` (thinning, exact for any `S`
+    /// within the bound; a value above it is [`Error::BoundExceeded`], negative or NaN
+    /// [`Error::InvalidRate`], raised before anything changes). Replaces the constant
+    /// rate; not with a schedule.
+    pub fn with_rate_function(mut self, f: UserRate) -> Result<Self> {
+        if !self.schedule.is_empty() {
+            return Err(Error::Unsupported {
+                what: "a source rate given both as a schedule and as a function (one of them)",
+            });
+        }
+        self.function = Some(f);
+        Ok(self)
+    }
+
+    /// The source back at the rate it was built with (and its schedule, if any).
+    pub fn without_rate_function(mut self) -> Self {
+        self.function = None;
+        self
+    }
+
+    /// The host's rate function, if the rate is one.
+    pub fn rate_function(&self) -> Option<&UserRate> {
+        self.function.as_ref()
+    }
+
+    /// A bound of the rate from `t` until [`next_change`](Source::next_change): the
+    /// rate itself, or a rate function's bound.
+    pub fn bound_at(&self, t: f64) -> f64 {
+        match &self.function {
+            Some(f) => f.bound(),
+            None => self.rate_at(t),
+        }
+    }
+
+    /// The rate at `t`, a rate function's value checked against its bound.
+    pub fn rate_now(&self, t: f64) -> Result<f64> {
+        match &self.function {
+            Some(f) => f.at(t),
+            None => Ok(self.rate_at(t)),
+        }
     }
 
     /// The rate as a piecewise-constant function of time: `rates[k]` from `times[k]` to
@@ -134,6 +184,11 @@ impl Source {
     /// the first. Times finite, ≥ 0 and strictly ascending; rates as `new`'s; 1 to
     /// [`MAX_SCHEDULE`] pieces, as many times as rates.
     pub fn with_schedule(mut self, times: &[f64], rates: &[f64]) -> Result<Self> {
+        if self.function.is_some() {
+            return Err(Error::Unsupported {
+                what: "a source rate given both as a schedule and as a function (one of them)",
+            });
+        }
         if times.len() != rates.len() || times.is_empty() || times.len() > MAX_SCHEDULE {
             return Err(Error::BufferLength {
                 name: "source schedule (as many times as rates, 1 to 2^20)",
@@ -172,7 +227,8 @@ impl Source {
         &self.schedule
     }
 
-    /// The rate at time `t`.
+    /// The rate at time `t` (of the constant rate or the schedule: see
+    /// [`rate_now`](Source::rate_now) for a rate function).
     pub fn rate_at(&self, t: f64) -> f64 {
         // the last piece that starts at or before t
         match self.schedule.partition_point(|p| p.0 <= t) {
@@ -311,7 +367,7 @@ impl UserRate {
         let v = (self.f)(x);
         if !(v >= 0.0 && v.is_finite()) {
             return Err(Error::InvalidRate {
-                name: "user rate (removal or growth)",
+                name: "user rate (removal, growth or source)",
                 value: v,
             });
         }

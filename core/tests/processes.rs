@@ -128,7 +128,7 @@ pub(crate) fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
 }
 
-fn monomers(rate: f64) -> Source {
+pub(crate) fn monomers(rate: f64) -> Source {
     Source::new(rate, Distribution::Monodisperse { size: 1.0 }).unwrap()
 }
 
@@ -390,7 +390,7 @@ fn source_sink_reference(s: f64, lambda: f64, n_start: u64, v: f64, times: &[f64
 
 /// As [`source_sink_reference`] with a source rate `pieces[k].1` from time
 /// `pieces[k].0` on (0 before the first).
-fn scheduled_reference(
+pub(crate) fn scheduled_reference(
     pieces: &[(f64, f64)],
     lambda: f64,
     n_start: u64,
@@ -503,7 +503,7 @@ fn a_source_and_a_sink_follow_the_finite_n_master_equation() {
 /// Failures of E[N/V] against `exact` at `times` over `reps` replicas of every scheme
 /// that takes processes, from N0 = V = 16 under the constant kernel with the processes
 /// `procs()` (replica r of variant k on the generator `seed | k << 32 | r`).
-fn chain_failures(
+pub(crate) fn chain_failures(
     procs: impl Fn() -> Processes,
     times: &[f64],
     exact: &[f64],

@@ -38,6 +38,8 @@ mod regime_sweep;
 mod regressions;
 #[path = "review_findings.rs"]
 mod review_findings;
+#[path = "source_function.rs"]
+mod source_function;
 #[path = "temperature.rs"]
 mod temperature;
 #[path = "value_stability.rs"]

@@ -23,17 +23,26 @@ fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
     for k in d.keys() {
         let k: String = k.extract()?;
         if ![
-            "rate", "kind", "size", "mean", "median", "gsd", "sizes", "times", "rates",
+            "rate", "kind", "size", "mean", "median", "gsd", "sizes", "times", "rates", "bound",
         ]
         .contains(&k.as_str())
         {
             return Err(PyValueError::new_err(format!(
-                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd, sizes, times, rates)"
+                "source: unknown key {k:?} (rate, kind, size, mean, median, gsd, sizes, times, rates, bound)"
             )));
         }
     }
-    let rate =
-        number(d, "rate")?.ok_or_else(|| PyValueError::new_err("source: missing \"rate\""))?;
+    // a rate that is a callable of the time, with its bound
+    let function = match d.get_item("rate")?.filter(|f| f.is_callable()) {
+        Some(f) => Some(host_rate("source", f.unbind(), d)?),
+        None => None,
+    };
+    let rate = match function {
+        Some(_) => 0.0,
+        None => {
+            number(d, "rate")?.ok_or_else(|| PyValueError::new_err("source: missing \"rate\""))?
+        }
+    };
     let kind: String = match d.get_item("kind")? {
         Some(k) => k.extract()?,
         None => "monodisperse".into(),
@@ -64,7 +73,10 @@ fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
             )));
         }
     };
-    let source = Source::new(rate, sizes).map_err(py_err)?;
+    let mut source = Source::new(rate, sizes).map_err(py_err)?;
+    if let Some(f) = function {
+        source = source.with_rate_function(f).map_err(py_err)?;
+    }
     match (d.get_item("times")?, d.get_item("rates")?) {
         (None, None) => Ok(source),
         (Some(t), Some(r)) => {
@@ -106,6 +118,11 @@ fn user_rate_of(what: &str, d: &Bound<'_, PyDict>) -> PyResult<UserRate> {
         .filter(|f| f.is_callable())
         .ok_or_else(|| PyValueError::new_err(format!("{what}: \"rate\" a callable of the size")))?
         .unbind();
+    host_rate(what, f, d)
+}
+
+/// The host's callable `f` with the dict's `"bound"`, as core's rate with a bound.
+fn host_rate(what: &str, f: Py<PyAny>, d: &Bound<'_, PyDict>) -> PyResult<UserRate> {
     let bound: f64 = d
         .get_item("bound")?
         .ok_or_else(|| PyValueError::new_err(format!("{what}: missing \"bound\"")))?
@@ -117,6 +134,39 @@ fn user_rate_of(what: &str, d: &Bound<'_, PyDict>) -> PyResult<UserRate> {
         0,
     )
     .map_err(py_err)
+}
+
+/// What core cannot give back as Python objects: the dicts of a host's removal and
+/// growth, and a source dict whose rate is a callable, as given (for `processes` and
+/// pickling).
+pub(crate) type Kept = [Option<Py<PyAny>>; 3];
+
+/// The [`Kept`] objects of `set_processes`' arguments.
+pub(crate) fn kept(
+    source: Option<&Bound<'_, PyAny>>,
+    removal: Option<&Bound<'_, PyAny>>,
+    growth: Option<&Bound<'_, PyAny>>,
+) -> Kept {
+    let dict = |a: Option<&Bound<'_, PyAny>>| {
+        a.filter(|a| a.cast::<PyDict>().is_ok())
+            .map(|a| a.clone().unbind())
+    };
+    let callable_rate = |a: &&Bound<'_, PyAny>| {
+        a.cast::<PyDict>()
+            .ok()
+            .and_then(|d| d.get_item("rate").ok().flatten())
+            .is_some_and(|r| r.is_callable())
+    };
+    [
+        dict(removal),
+        dict(growth),
+        source.filter(callable_rate).map(|a| a.clone().unbind()),
+    ]
+}
+
+/// A copy of [`Kept`] objects (the same Python objects).
+pub(crate) fn kept_clone(py: Python<'_>, k: &Kept) -> Kept {
+    k.each_ref().map(|u| u.as_ref().map(|u| u.clone_ref(py)))
 }
 
 /// The processes of `set_processes`' arguments (`None` when all are absent).
@@ -158,8 +208,34 @@ pub(crate) fn processes_of(
     Ok((!p.is_empty()).then_some(p))
 }
 
-/// The processes as the keyword arguments of `set_processes`.
-pub(crate) fn processes_dict<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bound<'py, PyDict>> {
+/// The processes as the keyword arguments of `set_processes` (a host's functions as
+/// the objects `kept` holds).
+pub(crate) fn processes_dict<'py>(
+    py: Python<'py>,
+    p: &Processes,
+    kept: &Kept,
+) -> PyResult<Bound<'py, PyDict>> {
+    let d = processes_values(py, p)?;
+    let set = [
+        ("removal", p.user_removal.is_some()),
+        ("growth", p.user_growth.is_some()),
+        (
+            "source",
+            p.source
+                .as_ref()
+                .is_some_and(|s| s.rate_function().is_some()),
+        ),
+    ];
+    for ((key, is_set), u) in set.into_iter().zip(kept) {
+        if let (Some(u), true) = (u, is_set) {
+            d.set_item(key, u.clone_ref(py))?;
+        }
+    }
+    Ok(d)
+}
+
+/// The processes' values (a host's function not among them).
+fn processes_values<'py>(py: Python<'py>, p: &Processes) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     if let Some(s) = &p.source {
         let q = PyDict::new(py);

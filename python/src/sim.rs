@@ -32,10 +32,9 @@ pub(crate) type Columns<'py, A, B> = PyResult<(Bound<'py, A>, Bound<'py, B>)>;
 struct Cell {
     sim: Box<Dyn>,
     rng: Generator,
-    /// The `{"rate": callable, "bound": b}` dicts of a user removal and growth, as
-    /// given (core keeps the functions, not the Python objects): for `processes` and
-    /// pickling.
-    user: [Option<Py<PyAny>>; 2],
+    /// A host's functions as given (core keeps the functions, not the Python
+    /// objects): for `processes` and pickling.
+    user: crate::process::Kept,
 }
 
 /// Core's options from keyword arguments (`memory_budget=…` is core's
@@ -165,7 +164,7 @@ impl Sim {
             cell: Mutex::new(Cell {
                 sim,
                 rng,
-                user: [None, None],
+                user: [None, None, None],
             }),
             scheme: id,
             kernel: kernel.clone().unbind(),
@@ -583,10 +582,7 @@ impl Sim {
         growth_step: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<()> {
         let p = crate::process::processes_of(source, removal, growth, growth_step)?;
-        let user = [removal, growth].map(|a| {
-            a.filter(|a| a.cast::<PyDict>().is_ok())
-                .map(|a| a.clone().unbind())
-        });
+        let user = crate::process::kept(source, removal, growth);
         self.with(|c| {
             c.sim.set_processes(p)?;
             c.user = user;
@@ -599,20 +595,11 @@ impl Sim {
     #[getter]
     fn processes<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         let (p, user) = self.with(|c| {
-            let user = [0, 1].map(|i| c.user[i].as_ref().map(|u| u.clone_ref(py)));
+            let user = crate::process::kept_clone(py, &c.user);
             (c.sim.processes().cloned(), user)
         })?;
         let Some(p) = p else { return Ok(None) };
-        let d = crate::process::processes_dict(py, &p)?;
-        for (key, (u, set)) in ["removal", "growth"].into_iter().zip(
-            user.into_iter()
-                .zip([p.user_removal.is_some(), p.user_growth.is_some()]),
-        ) {
-            if let (Some(u), true) = (u, set) {
-                d.set_item(key, u)?;
-            }
-        }
-        Ok(Some(d))
+        Ok(Some(crate::process::processes_dict(py, &p, &user)?))
     }
 
     /// The processes' books (None without processes): what was injected, removed and
@@ -647,7 +634,7 @@ impl Sim {
         let (sim, rng, user) = self
             .with(|c| {
                 c.sim.duplicate().map(|s| {
-                    let user = [0, 1].map(|i| c.user[i].as_ref().map(|u| u.clone_ref(py)));
+                    let user = crate::process::kept_clone(py, &c.user);
                     (s, c.rng.clone(), user)
                 })
             })?
@@ -724,7 +711,7 @@ fn _simulation(
         let (s, r, g) = (get("source")?, get("removal")?, get("growth")?);
         let h = get("growth_step")?;
         let p = crate::process::processes_of(s.as_ref(), r.as_ref(), g.as_ref(), h.as_ref())?;
-        let user = [r, g].map(|a| a.filter(|a| a.cast::<PyDict>().is_ok()).map(|a| a.unbind()));
+        let user = crate::process::kept(s.as_ref(), r.as_ref(), g.as_ref());
         sim.with(|c| {
             c.sim.set_processes(p)?;
             c.user = user;

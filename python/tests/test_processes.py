@@ -190,3 +190,33 @@ def test_growth_on_real_sizes_is_split_and_pickles():
     assert sim.save() == copy.save() and sim.books == copy.books
     assert sim.moment(1) == pytest.approx(m0 * np.exp(0.5), rel=1e-12)
     assert sim.books["grown_mass"] > 0
+
+
+def _half(t):
+    return 0.5
+
+
+def test_a_source_rate_function_is_thinned_and_pickles():
+    """S(t) = 0.5 drawn against a bound of 2: Poisson(S V t) = 2000 monomers in
+    V = 2000 over t = 2 (8000 without the thinning)."""
+    sim = Simulation("lowrank", Kernel("constant"), Initial.monodisperse(1, particles=2000), seed=4)
+    src = {"rate": _half, "bound": 2.0, "kind": "monodisperse", "size": 1.0}
+    sim.set_processes(source=src, removal=0.1)
+    assert sim.processes == {"source": src, "removal": (0.1, 0.0)}
+    sim.advance_to(1.0)
+    copy = pickle.loads(pickle.dumps(sim))
+    for s in (sim, copy):
+        s.advance_to(2.0)
+    assert sim.save() == copy.save() and sim.books == copy.books
+    assert abs(sim.books["injected_number"] - 2000) < 6 * 2000**0.5
+    # above its bound: refused, the sim where it stood
+    sim.set_processes(source={"rate": _half, "bound": 0.25})
+    with pytest.raises(coagula.CoagulaError):
+        sim.advance_to(5.0)
+    before = (sim.time, sim.counts().tobytes())
+    with pytest.raises(coagula.CoagulaError):
+        sim.advance_to(5.0)
+    assert (sim.time, sim.counts().tobytes()) == before
+    for bad in [{"rate": _half}, {"rate": _half, "bound": 0.0}, {"rate": _half, "bound": 1.0, "times": [1.0], "rates": [0.0]}]:
+        with pytest.raises(ValueError):
+            sim.set_processes(source=bad)

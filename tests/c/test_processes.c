@@ -185,6 +185,33 @@ int main(void) {
         coag_sim_free(copy);
         coag_sim_free(q);
     }
+    {
+        /* a host's source rate as a function of time: refused without a source; with
+         * one, S = 0.25 against a bound 4 times higher injects Poisson(S V t) = 300
+         * monomers in V = 300 over t = 4 (not 1200: the thinning); above its bound the
+         * advance is refused; NULL goes back to the source's own rate */
+        coag_sim *q = make("lowrank", 0);
+        static double s_rate = 0.25;
+        EXPECT(coag_sim_set_source_callback(q, host_rate, &s_rate, 1.0, 12), COAG_INVALID_ARGUMENT);
+        OK(coag_sim_set_source(q, 50.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0));
+        OK(coag_sim_set_source_callback(q, host_rate, &s_rate, 1.0, 12));
+        OK(coag_sim_advance_to(q, 4.0, NULL));
+        coag_books fb;
+        memset(&fb, 0, sizeof fb);
+        fb.struct_size = sizeof fb;
+        OK(coag_sim_books(q, &fb));
+        CHECK(fabs((double)fb.injected_number - 300.0) < 6.0 * sqrt(300.0), "source function: %llu injected",
+              (unsigned long long)fb.injected_number);
+        uint64_t fn_count;
+        OK(coag_sim_particle_count(q, &fn_count));
+        CHECK(fb.initial_number + fb.injected_number - fb.removed_number - fb.merged == fn_count,
+              "source function: the books give the number");
+        OK(coag_sim_set_source_callback(q, host_rate, &s_rate, 0.1, 12));
+        EXPECT(coag_sim_advance_to(q, 10.0, NULL), COAG_INVALID_RATE);
+        OK(coag_sim_set_source_callback(q, NULL, NULL, 0.0, 0));
+        OK(coag_sim_advance_to(q, 10.0, NULL));
+        coag_sim_free(q);
+    }
     double listed[3] = {1.0, 2.5, 2.5};
     OK(coag_sim_set_source_sizes(ls, 0.5, listed, 3));
     listed[1] = NAN;

@@ -575,6 +575,8 @@ contains
     call expect(coag_sim_advance_to(sim, 3.0_c_double, c_null_ptr), COAG_INVALID_RATE, "a host rate above its bound")
     call expect(coag_sim_set_growth_callback(sim, c_funloc(size_rate), c_loc(rk), -1.0_c_double, 8_c_int64_t), &
          COAG_INVALID_ARGUMENT, "a negative bound")
+    call expect(coag_sim_set_source_callback(sim, c_funloc(size_rate), c_loc(rk), 0.5_c_double, 9_c_int64_t), &
+         COAG_UNSUPPORTED, "a source rate function beside a schedule")
     call ok(coag_sim_set_removal_callback(sim, c_null_funptr, c_null_ptr, 1.0_c_double, 0_c_int64_t))
     call ok(coag_sim_set_growth_callback(sim, c_null_funptr, c_null_ptr, 1.0_c_double, 0_c_int64_t))
     call expect(coag_sim_set_source_schedule(sim, [4.0_c_double, 3.0_c_double], [0.0_c_double, 1.0_c_double], &

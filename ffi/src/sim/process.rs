@@ -153,6 +153,45 @@ pub unsafe extern "C" fn coag_sim_set_source_schedule(
     })
 }
 
+/// Gives the sim's source a host's rate function of time: `S(t) = rate(t, user_data)`
+/// particles per unit volume and time (NULL: back to the rate the source was set with),
+/// at most `bound` (finite, > 0) at every time. Exact for any rate within the bound:
+/// candidates come at the bound and a source event is kept with `S(t)/bound`; a value
+/// above the bound is `COAG_INVALID_RATE` from the advance that met it, the state as
+/// before the event. Not with a schedule. Set a source first (else
+/// `COAG_INVALID_ARGUMENT`). `tag`, the callback's contract and the rest as
+/// `coag_sim_set_removal_callback`.
+///
+/// # Safety
+/// `sim` NULL or live; `rate` NULL or callable with `user_data` while set.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_sim_set_source_callback(
+    sim: *mut coag_sim,
+    rate: coag_rate_callback,
+    user_data: *mut c_void,
+    bound: f64,
+    tag: u64,
+) -> i32 {
+    guard(|| {
+        // SAFETY: NULL checked; live by contract.
+        let (s, _busy) = unsafe { handle_mut(sim, "sim") }?;
+        let mut p = current(s);
+        let Some(source) = p.source.take() else {
+            return fail(
+                COAG_INVALID_ARGUMENT,
+                "source callback: the sim has no source (set one first)".to_string(),
+            );
+        };
+        let source = match rate {
+            Some(f) => source.with_rate_function(user_rate(f, user_data, bound, tag)?)?,
+            None => source.without_rate_function(),
+        };
+        p.source = Some(source);
+        s.sim.set_processes(Some(p))?;
+        Ok(())
+    })
+}
+
 /// Sets removal at `λ(x) = coefficient · x^exponent` per particle (coefficient finite,
 /// ≥ 0; exponent in [−10, 1]): dilution and outflow at exponent 0, deposition and
 /// sedimentation at a power of size. Dilution with a background population is this and
@@ -219,8 +258,8 @@ pub unsafe extern "C" fn coag_sim_set_growth_step(sim: *mut coag_sim, step: f64)
     })
 }
 
-/// A host's rate per particle as a function of size: `rate(x, user_data)`, at most the
-/// bound given with it at every size (a value above it is `COAG_INVALID_RATE` from the
+/// A host's rate as a function of one number, `rate(x, user_data)` — a particle's size
+/// (removal, growth) or the time (a source) — at most the bound given with it (a value above it is `COAG_INVALID_RATE` from the
 /// advance that met it, the state as before the event).
 pub type coag_rate_callback = Option<unsafe extern "C" fn(x: f64, user_data: *mut c_void) -> f64>;
 

@@ -238,12 +238,23 @@ impl Driver {
         self.pending = None;
     }
 
-    /// The source's rate in the sim's volume at time `t`.
+    /// A bound of the source's rate in the sim's volume from time `t` until the next
+    /// change of a schedule (the rate itself, or a rate function's bound).
     fn source_rate(&self, volume: f64, t: f64) -> f64 {
         self.procs
             .source
             .as_ref()
-            .map_or(0.0, |s| s.rate_at(t) * volume)
+            .map_or(0.0, |s| s.bound_at(t) * volume)
+    }
+
+    /// Whether a candidate at `u` (below the source's bound `src`) injects: always
+    /// with a constant or scheduled rate; with a rate function when `u` is below its
+    /// value now (thinning within the source's share).
+    fn source_keeps(&self, u: f64, volume: f64, t: f64) -> Result<bool> {
+        match &self.procs.source {
+            Some(q) if q.rate_function().is_some() => Ok(u < q.rate_now(t)? * volume),
+            _ => Ok(true),
+        }
     }
 
     /// The total process rate of the state.
@@ -464,6 +475,9 @@ impl Driver {
         let mut u = open_unit(rng) * bound;
         let src = self.source_rate(s.volume(), s.time());
         if u < src {
+            if !self.source_keeps(u, s.volume(), s.time())? {
+                return Ok(()); // thinned
+            }
             let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
             let x = source.draw(self.integer, rng);
             s.add_particle(x)?;
@@ -522,6 +536,9 @@ impl Driver {
         let mut u = open_unit(rng) * bound;
         let src = self.source_rate(s.volume(), s.time());
         let event = if u < src {
+            if !self.source_keeps(u, s.volume(), s.time())? {
+                return Ok(()); // thinned
+            }
             let source = self.procs.source.as_ref().ok_or(Error::Empty)?;
             Some((Event::Inject(source.draw(self.integer, rng)), None))
         } else {
@@ -717,6 +734,9 @@ fn fingerprint(p: &Processes) -> u64 {
                     .iter()
                     .flat_map(|&(t, r)| [t.to_bits(), r.to_bits()]),
             ));
+        }
+        if let Some(f) = s.rate_function() {
+            words.extend([9, f.tag(), f.bound().to_bits()]);
         }
         match s.sizes() {
             D::Monodisperse { size } => words.extend([1, size.to_bits()]),
