@@ -18,13 +18,16 @@ trap 'rm -rf "$work"' EXIT
 # makes sure the binary is that build's)
 cargo test --workspace --exclude coagula-python --exclude coagula-mpi --lib --bins --tests --no-run -q
 cp "$target/debug/coagula" "$work/coagula-plain"
-# the MPI build: the coagula-mpi binary (its own crate). Without the test build's
-# dev-dependencies, serde, bitflags and either have other features, so the cli library
-# and part of its tree compile again: the cli crate at opt-level 1 (the runs below are
-# small, and Rust's floating point does not depend on the opt-level, so the bits
-# compared are those of a release build)
-cargo build --profile test -q -p coagula-mpi \
-    --config 'profile.test.package.coagula-cli.opt-level=1'
+# the MPI build: the coagula-mpi binary (its own crate), over the cli library the test
+# build compiled (mpi/Cargo.toml names the dev-dependencies' features so that the two
+# builds resolve that library's tree alike: only rsmpi and coagula-mpi compile here)
+cargo build --profile test -p coagula-mpi --message-format=json-render-diagnostics \
+    > "$work/build.json"
+if grep '"reason":"compiler-artifact"' "$work/build.json" | grep '"name":"coagula_cli"' |
+    grep -q '"fresh":false'; then
+    echo "note: the MPI build compiled the cli library again: its dependencies' features"
+    echo "      differ from the test build's (compare cargo tree -e features; mpi/Cargo.toml)"
+fi
 bin="$target/debug/coagula-mpi"
 plain="$work/coagula-plain"
 cd "$work"
