@@ -4,7 +4,7 @@
 //! that takes processes.
 
 use crate::common;
-use crate::processes::{checkpoint, process_schemes, rng, sim};
+use crate::processes::{checkpoint, monomers, process_schemes, rng, sim};
 
 use coagula_core::Error;
 use coagula_core::kernel::Coagulation;
@@ -274,5 +274,36 @@ fn split_growth_runs_keep_their_bits_through_checkpoints() {
         let mut s = sim(id, Coagulation::additive(), &[60, 20], 50.0);
         s.set_processes(Some(other)).unwrap();
         assert!(s.restore_checkpoint(&checkpoint(&*whole)).is_err());
+    }
+}
+
+/// A population that dilution empties waits for its source through the growth
+/// instants, and grows what comes.
+#[test]
+fn an_emptied_population_grows_what_its_source_brings() {
+    let p = Processes::default()
+        .with_source(monomers(0.2))
+        .with_removal(5.0, 0.0)
+        .unwrap()
+        .with_growth(0.5, 1.0)
+        .unwrap()
+        .with_growth_step(0.1)
+        .unwrap();
+    for id in real_size_schemes() {
+        let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[3], 1.0);
+        s.set_processes(Some(p.clone())).unwrap();
+        let mut r = rng(18);
+        let mut empty = 0;
+        for k in 1..=200 {
+            s.advance_to(0.25 * f64::from(k), &mut r).unwrap();
+            empty += u32::from(s.particles() == 0);
+        }
+        let b = s.books().unwrap();
+        assert!(empty > 50, "{}: empty {empty}", id.label());
+        assert!(
+            b.injected_number > 3 && b.grown_mass > 0.0,
+            "{}: {b:?}",
+            id.label()
+        );
     }
 }

@@ -702,6 +702,7 @@ proptest::proptest! {
         g in hostile(),
         q in hostile(),
         t in hostile(),
+        h in hostile(),
         flip in proptest::prelude::any::<usize>(),
         value in proptest::prelude::any::<u8>(),
     ) {
@@ -719,6 +720,9 @@ proptest::proptest! {
             procs = r;
         }
         if let Ok(r) = procs.clone().with_growth(g, q) {
+            procs = r;
+        }
+        if let Ok(r) = procs.clone().with_growth_step(h) {
             procs = r;
         }
         let mut s = sim(id, Coagulation::constant(1.0).unwrap(), &[30, 5], 30.0);

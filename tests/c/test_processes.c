@@ -132,6 +132,10 @@ int main(void) {
     EXPECT(coag_sim_set_source(ls, -1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(ls, 1.0, COAG_SOURCE_LOGNORMAL, 1.0, 0.5), COAG_INVALID_ARGUMENT);
     EXPECT(coag_sim_set_source(NULL, 1.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_set_growth_step(NULL, 0.5), COAG_NULL_PARAMETER);
+    EXPECT(coag_sim_set_growth_step(ls, NAN), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_growth_step(ls, INFINITY), COAG_INVALID_ARGUMENT);
+    EXPECT(coag_sim_set_source_callback(NULL, host_rate, NULL, 1.0, 0), COAG_NULL_PARAMETER);
     {
         /* a schedule: off until t = 1, then on; before a source is set: refused */
         coag_sim *q = make("lowrank", 0);
@@ -194,6 +198,7 @@ int main(void) {
         static double s_rate = 0.25;
         EXPECT(coag_sim_set_source_callback(q, host_rate, &s_rate, 1.0, 12), COAG_INVALID_ARGUMENT);
         OK(coag_sim_set_source(q, 50.0, COAG_SOURCE_MONODISPERSE, 1.0, 0.0));
+        EXPECT(coag_sim_set_source_callback(q, host_rate, &s_rate, NAN, 12), COAG_INVALID_ARGUMENT);
         OK(coag_sim_set_source_callback(q, host_rate, &s_rate, 1.0, 12));
         OK(coag_sim_advance_to(q, 4.0, NULL));
         coag_books fb;

@@ -410,6 +410,9 @@ impl Driver {
                 what: "growth by splitting on integer sizes (growth is monomer attachment there)",
             });
         };
+        if x.is_empty() {
+            return Ok(()); // (an emptied population waits for its source)
+        }
         let mut y = Vec::new();
         try_reserve(&mut y, x.len())?;
         let (mut before, mut after) = (0.0, 0.0);
