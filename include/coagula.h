@@ -1696,9 +1696,11 @@ int32_t coag_sim_set_growth_step(coag_sim *sim, double step);
 int32_t coag_sim_set_removal_callback(coag_sim *sim, coag_rate_callback rate, void *user_data, double bound, uint64_t tag);
 
 /*
- Sets a host's growth rate, monomers per unit time at size i, `rate(i, user_data)`
- (NULL: none), at most `bound` at every size, beside `coag_sim_set_growth`'s power;
- integer-size schemes only. As `coag_sim_set_removal_callback` otherwise.
+ Sets a host's growth rate `rate(x, user_data)` (NULL: none), at most `bound` at
+ every size, beside `coag_sim_set_growth`'s power: monomers per unit time at size i
+ on integer sizes, `dx/dt` on real sizes (split: set `coag_sim_set_growth_step`
+ first; integrated by a fourth-order Runge–Kutta step). As
+ `coag_sim_set_removal_callback` otherwise.
 
  # Safety
  `sim` NULL or live; `rate` NULL or callable with `user_data` while set.

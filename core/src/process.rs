@@ -311,8 +311,10 @@ impl Power {
         } else if p == 0.0 {
             x + c * t
         } else {
+            // x (1 + a c t x^{−a})^{1/a}: the same, keeping its digits for q near 1
+            // and not overflowing x^a for a large a
             let a = 1.0 - p;
-            libm::pow(libm::pow(x, a) + a * c * t, 1.0 / a)
+            x * libm::exp(libm::log1p(a * c * t * libm::pow(x, -a)) / a)
         }
     }
 }

@@ -42,8 +42,19 @@ fn growth_alone_is_the_closed_form_at_every_step() {
     let h = 0.25;
     let start = [1u64, 2, 0, 3];
     for id in real_size_schemes() {
+        // the closed forms written out (not the library's)
+        let exact = |q: f64, g: f64, x: f64, t: f64| -> f64 {
+            if q == 0.0 {
+                x + g * t
+            } else if q == 1.0 {
+                x * (g * t).exp()
+            } else if q == 1.0 / 3.0 {
+                (x.powf(2.0 / 3.0) + 2.0 / 3.0 * g * t).powf(1.5)
+            } else {
+                (x.cbrt() + g * t / 3.0).powi(3)
+            }
+        };
         for (g, q) in [(0.4, 0.0), (0.3, 1.0 / 3.0), (0.3, 2.0 / 3.0), (0.5, 1.0)] {
-            let law = Power::new("growth", g, q).unwrap();
             let mut s = sim(id, Coagulation::constant(1e-12).unwrap(), &start, 100.0);
             let x0 = sorted_sizes(&*s);
             let p = Processes::default()
@@ -57,7 +68,7 @@ fn growth_alone_is_the_closed_form_at_every_step() {
                 s.advance_to(t, &mut r).unwrap();
                 let x = sorted_sizes(&*s);
                 for (a, b) in x.iter().zip(&x0) {
-                    let want = law.grown(*b, grown_for);
+                    let want = exact(q, g, *b, grown_for);
                     assert!(
                         (a - want).abs() <= 1e-12 * want,
                         "{} G = {g} x^{q:.3}, t = {t}: {a} vs {want}",
@@ -172,13 +183,16 @@ fn linear_growth_with_the_additive_kernel_has_its_exact_finite_n_mean() {
                     expect(false)
                 );
             }
-            // the test's power: the first-order placement is far off
+            // the test's power: the first-order placement is far off (by t = 1.5)
             let z_lie = (mean - expect(true)) / se;
-            assert!(
-                z_lie.abs() > 3.0 * z_max,
-                "{} t = {t}: z_lie = {z_lie:.2}",
-                id.label()
-            );
+            eprintln!("{} t = {t}: z = {z:.2}, z_lie = {z_lie:.2}", id.label());
+            if t >= 1.5 {
+                assert!(
+                    z_lie.abs() > 3.0 * z_max,
+                    "{} t = {t}: z_lie = {z_lie:.2}",
+                    id.label()
+                );
+            }
         }
     }
     // the splitting's own error against the continuous equation: second order
@@ -306,4 +320,51 @@ fn an_emptied_population_grows_what_its_source_brings() {
             id.label()
         );
     }
+}
+
+/// The closed form where it is delicate: an exponent within 1e-9 of 1 gives `x e^{ct}`
+/// to 1e-8 (the naive `(x^{1−q} + (1−q) c t)^{1/(1−q)}` keeps no digit there), and
+/// q = −10 at a size of 1e30 does not overflow. The grid of growth instants starts
+/// when the growth is set; setting another process keeps it.
+#[test]
+fn the_closed_form_keeps_its_digits_and_the_grid_starts_with_the_growth() {
+    let near = Power::new("growth", 0.5, 1.0 - 1e-9).unwrap();
+    let (x, t) = (3.0, 2.0);
+    let want = x * (0.5f64 * t).exp();
+    assert!(
+        (near.grown(x, t) - want).abs() < 1e-8 * want,
+        "{}",
+        near.grown(x, t)
+    );
+    let steep = Power::new("growth", 0.5, -10.0).unwrap();
+    let big = steep.grown(1e30, 1.0);
+    assert!(
+        big.is_finite() && (big - 1e30).abs() <= 1e-12 * 1e30,
+        "{big}"
+    );
+    // processes set at t = 0.3: at t = 0.3 + 4 h the particles grew by 4 h exactly
+    let id = real_size_schemes()[0];
+    let mut s = sim(id, Coagulation::constant(1e-12).unwrap(), &[4], 100.0);
+    s.advance_to(0.3, &mut rng(3)).unwrap();
+    let p = Processes::default()
+        .with_growth(0.5, 0.0)
+        .unwrap()
+        .with_growth_step(0.25)
+        .unwrap();
+    s.set_processes(Some(p.clone())).unwrap();
+    s.advance_to(0.3 + 4.0 * 0.25, &mut rng(3)).unwrap();
+    assert!(
+        (sorted_sizes(&*s)[0] - 1.5).abs() < 1e-12,
+        "{:?}",
+        sorted_sizes(&*s)
+    );
+    // another process set: the grid stays (the next instant at 1.425, one more step)
+    let p2 = p.with_removal(1e-9, 0.0).unwrap();
+    s.set_processes(Some(p2)).unwrap();
+    s.advance_to(1.5, &mut rng(3)).unwrap();
+    assert!(
+        (sorted_sizes(&*s)[0] - 1.625).abs() < 1e-12,
+        "{:?}",
+        sorted_sizes(&*s)
+    );
 }

@@ -168,7 +168,7 @@ fn cases(integer: bool) -> Vec<(&'static str, Processes)> {
         (
             "user removal",
             Processes::default()
-                .with_user_removal(UserRate::new(|x: f64| 0.4 / (1.0 + x), 0.4, 1).unwrap()),
+                .with_user_removal(UserRate::new(|x: f64| 0.8 / (1.0 + x), 0.8, 1).unwrap()),
         ),
         (
             "scheduled source",

@@ -37,6 +37,11 @@ fn source_of(d: &Bound<'_, PyDict>) -> PyResult<Source> {
         Some(f) => Some(host_rate("source", f.unbind(), d)?),
         None => None,
     };
+    if function.is_none() && d.contains("bound")? {
+        return Err(PyValueError::new_err(
+            "source: \"bound\" goes with a callable \"rate\"",
+        ));
+    }
     let rate = match function {
         Some(_) => 0.0,
         None => {

@@ -217,6 +217,11 @@ def test_a_source_rate_function_is_thinned_and_pickles():
     with pytest.raises(coagula.CoagulaError):
         sim.advance_to(5.0)
     assert (sim.time, sim.counts().tobytes()) == before
-    for bad in [{"rate": _half}, {"rate": _half, "bound": 0.0}, {"rate": _half, "bound": 1.0, "times": [1.0], "rates": [0.0]}]:
+    for bad in [
+        {"rate": _half},
+        {"rate": _half, "bound": 0.0},
+        {"rate": _half, "bound": 1.0, "times": [1.0], "rates": [0.0]},
+        {"rate": 0.5, "bound": 1.0},
+    ]:
         with pytest.raises(ValueError):
             sim.set_processes(source=bad)

@@ -127,6 +127,9 @@ fn solve(
         let fastest = fastest_loss(
             &sec,
             s.sink.as_ref().map(|k| (k.rate, k.exponent.unwrap_or(0.0))),
+            s.growth
+                .as_ref()
+                .map(|g| (g.rate, g.exponent.unwrap_or(0.0))),
         );
         let dt = (1.0 / fastest.max(1e-12)).min(1e-2);
         sec.advance_to(t * f64::from(k) / f64::from(pieces), dt)
@@ -141,19 +144,30 @@ fn solve(
     Ok(sec)
 }
 
-/// The fastest loss rate of any pivot: `Σ_k K(x_j, x_k) n_k + λ(x_j)`, the largest over
-/// j (what bounds RK4's step).
-fn fastest_loss<K: CoagulationKernel>(sec: &Sectional<K>, removal: Option<(f64, f64)>) -> f64 {
+/// The fastest loss rate of any pivot: `Σ_k K(x_j, x_k) n_k + λ(x_j)`, and with growth
+/// `G(x_j)` over the gap to the next pivot (what growth moves on), the largest over j
+/// (what bounds RK4's step).
+fn fastest_loss<K: CoagulationKernel>(
+    sec: &Sectional<K>,
+    removal: Option<(f64, f64)>,
+    growth: Option<(f64, f64)>,
+) -> f64 {
     let (x, n) = (sec.pivots(), sec.numbers());
     let mut fastest = 0.0f64;
-    for &xj in x {
+    for (j, &xj) in x.iter().enumerate() {
         let coag: f64 = x
             .iter()
             .zip(n)
             .map(|(&xk, &nk)| sec.kernel().rate(xj, xk) * nk)
             .sum();
         let lam = removal.map_or(0.0, |(c, p)| c * xj.powf(p));
-        fastest = fastest.max(coag + lam);
+        let gap = match (x.get(j + 1), j.checked_sub(1).map(|i| x[i])) {
+            (Some(&next), _) => next - xj,
+            (None, Some(prev)) => xj - prev,
+            (None, None) => 1.0,
+        };
+        let grow = growth.map_or(0.0, |(c, q)| c * xj.powf(q) / gap);
+        fastest = fastest.max(coag + lam + grow);
     }
     fastest
 }

@@ -342,9 +342,11 @@ unsafe fn set_user(
     })
 }
 
-/// Sets a host's growth rate, monomers per unit time at size i, `rate(i, user_data)`
-/// (NULL: none), at most `bound` at every size, beside `coag_sim_set_growth`'s power;
-/// integer-size schemes only. As `coag_sim_set_removal_callback` otherwise.
+/// Sets a host's growth rate `rate(x, user_data)` (NULL: none), at most `bound` at
+/// every size, beside `coag_sim_set_growth`'s power: monomers per unit time at size i
+/// on integer sizes, `dx/dt` on real sizes (split: set `coag_sim_set_growth_step`
+/// first; integrated by a fourth-order Runge–Kutta step). As
+/// `coag_sim_set_removal_callback` otherwise.
 ///
 /// # Safety
 /// `sim` NULL or live; `rate` NULL or callable with `user_data` while set.

@@ -266,6 +266,7 @@ where
         }
         let mut d = Driver::new(procs, integer, 0, 0.0);
         d.rebase(&self.s)?;
+        d.start(self.s.time(), self.driver.as_ref());
         self.driver = Some(d);
         // the processes set the particle number: no doubling while they run
         self.s.set_doubling(false);
@@ -339,7 +340,7 @@ where
     fn set_time(&mut self, t: f64) -> Result<()> {
         self.s.set_time(t)?;
         if let Some(d) = &mut self.driver {
-            d.forget();
+            d.forget(t);
         }
         Ok(())
     }
@@ -433,8 +434,8 @@ where
             self.built = b;
             self.opts = o;
         }
-        if let (Some(d), Some((pending, books))) = (&mut self.driver, procs) {
-            d.install(pending, books);
+        if let (Some(d), Some(record)) = (&mut self.driver, procs) {
+            d.install(record);
             self.s.set_doubling(false);
         }
         Ok(out)

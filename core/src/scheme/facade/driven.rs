@@ -22,7 +22,6 @@
 //! reads and replaces the state (`O(occupied sizes)` on counts, `O(N)` on sizes).
 
 use super::{Controls, State};
-use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::memory::try_reserve;
 use crate::observe::Observe;
@@ -32,8 +31,7 @@ use crate::scheme::{Budget, Scheme, StepReport};
 use alloc::vec::Vec;
 use rand_core::Rng;
 
-/// Words of the checkpoint record: fingerprint, candidate (3), books (9).
-const RECORD: usize = 13;
+mod record;
 
 /// The bound of a void candidate: the next change of a scheduled source's rate, where
 /// the candidate is drawn afresh and nothing happens.
@@ -43,13 +41,13 @@ const VOID: f64 = -1.0;
 /// every particle grows by a step, and the candidate is drawn afresh.
 const GROW: f64 = -2.0;
 
-/// The first growth instant `(k + ½) h` after `now`.
-fn next_growth(h: f64, now: f64) -> Result<f64> {
-    let steps = now / h;
+/// The first growth instant `origin + (k + ½) h` after `now`.
+fn next_growth(h: f64, origin: f64, now: f64) -> Result<f64> {
+    let steps = (now - origin) / h;
     if steps.abs() < (1u64 << 50) as f64 {
         let k0 = libm::floor(steps - 0.5);
         for k in [k0 - 1.0, k0, k0 + 1.0, k0 + 2.0] {
-            let at = (k + 0.5) * h;
+            let at = origin + (k + 0.5) * h;
             if at > now {
                 return Ok(at);
             }
@@ -70,6 +68,9 @@ pub(crate) struct Driver {
     /// The next candidate time and the bound it was drawn with.
     pending: Option<(f64, f64)>,
     integer: bool,
+    /// Where the grid of growth instants starts (the time growth was set or the clock
+    /// was, see [`start`](Driver::start)).
+    origin: f64,
 }
 
 /// A population as the driver edits it.
@@ -155,11 +156,38 @@ fn thinned(p: &Processes, integer: bool) -> impl Iterator<Item = (Rate<'_>, bool
     laws(p).filter(move |&(_, grow)| integer || !grow)
 }
 
-/// The rate per occupied entry `k` of `h` (counts times the rate per particle).
+/// The thinning weight of occupied entry `k` of `h` (counts times the rate per
+/// particle; a host's rate by its bound, which merges cannot raise in total — its value
+/// is the acceptance, [`keep`]).
 fn weight(h: &Held, rate: Rate<'_>, k: usize) -> Result<f64> {
+    let per = |x: f64| match rate {
+        Rate::User(u) => Ok(u.bound()),
+        _ => rate.at(x),
+    };
     match h {
-        Held::Counts(v) => Ok(rate.at(v[k].0 as f64)? * v[k].1 as f64),
-        Held::Sizes(x) => rate.at(x[k]),
+        Held::Counts(v) => Ok(per(v[k].0 as f64)? * v[k].1 as f64),
+        Held::Sizes(x) => per(x[k]),
+    }
+}
+
+/// Whether the particle of size `x` drawn for `rate` acts: always for a power (drawn by
+/// its rate); for a host's rate (drawn by its bound) with probability `f(x)/bound`,
+/// which evaluates and checks `f` there.
+fn keep<G: Rng + ?Sized>(rate: Rate<'_>, x: f64, rng: &mut G) -> Result<bool> {
+    match rate {
+        Rate::User(u) => {
+            let f = u.at(x)?;
+            Ok(open_unit(rng) * u.bound() < f)
+        }
+        _ => Ok(true),
+    }
+}
+
+/// The size of entry `k` of `h`.
+fn size_of(h: &Held, k: usize) -> f64 {
+    match h {
+        Held::Counts(v) => v[k].0 as f64,
+        Held::Sizes(x) => x[k],
     }
 }
 
@@ -214,7 +242,23 @@ impl Driver {
             books: Books::starting(number, mass),
             pending: None,
             integer,
+            origin: 0.0,
         }
+    }
+
+    /// Starts the grid of growth instants at `origin`, or keeps `previous`'s when it had
+    /// the same growth and step (a host that changes another process mid-step keeps
+    /// the step's count).
+    pub(crate) fn start(&mut self, origin: f64, previous: Option<&Driver>) {
+        let same = |p: &Processes| {
+            p.growth == self.procs.growth
+                && p.user_growth == self.procs.user_growth
+                && p.growth_step == self.procs.growth_step
+        };
+        self.origin = match previous {
+            Some(d) if same(&d.procs) => d.origin,
+            _ => origin,
+        };
     }
 
     pub(crate) fn processes(&self) -> &Processes {
@@ -233,9 +277,11 @@ impl Driver {
         Ok(())
     }
 
-    /// The clock was set: the candidate is drawn afresh.
-    pub(crate) fn forget(&mut self) {
+    /// The clock was set to `t`: the candidate is drawn afresh, the growth instants
+    /// counted from `t`.
+    pub(crate) fn forget(&mut self, t: f64) {
         self.pending = None;
+        self.origin = t;
     }
 
     /// A bound of the source's rate in the sim's volume from time `t` until the next
@@ -315,10 +361,12 @@ impl Driver {
                         .map_or(f64::INFINITY, |q| q.next_change(now));
                     // and until the particles grow by a splitting step (real sizes)
                     let grow = match self.split() {
-                        Some(h) => next_growth(h, now)?,
+                        Some(h) => next_growth(h, self.origin, now)?,
                         None => f64::INFINITY,
                     };
-                    let (at, r) = if at <= change && at <= grow {
+                    // (a candidate exactly at an instant comes after it: the next
+                    // instant is drawn from the candidate's time, strictly later)
+                    let (at, r) = if at <= change && at < grow {
                         (at, r)
                     } else if grow <= change {
                         (grow, GROW)
@@ -553,6 +601,9 @@ impl Driver {
                     let w = total(&h, law)?;
                     if u < w {
                         let k = pick(&h, law, u)?;
+                        if !keep(law, size_of(&h, k), rng)? {
+                            break; // thinned
+                        }
                         chosen = Some(if grow {
                             Event::Grow(k)
                         } else {
@@ -650,126 +701,4 @@ impl Driver {
         self.books = books;
         Ok(())
     }
-
-    /// The checkpoint record: a fingerprint of the processes, the candidate and the
-    /// books.
-    pub(crate) fn record(&self) -> Vec<u64> {
-        let mut words = Vec::new();
-        let mut buf = [0u8; 8 * RECORD];
-        let mut w = Writer::new(&mut buf);
-        w.u64(fingerprint(&self.procs));
-        match self.pending {
-            Some((at, r)) => {
-                w.u64(1);
-                w.f64(at);
-                w.f64(r);
-            }
-            None => {
-                w.u64(0);
-                w.f64(0.0);
-                w.f64(0.0);
-            }
-        }
-        self.books.save(&mut w);
-        for c in buf.chunks_exact(8) {
-            let mut b = [0u8; 8];
-            b.copy_from_slice(c);
-            words.push(u64::from_le_bytes(b));
-        }
-        words
-    }
-
-    /// The candidate and books of a record written by [`record`](Self::record) for the
-    /// same processes (checked; nothing changes here).
-    pub(crate) fn read_record(&self, words: &[u64]) -> Result<(Option<(f64, f64)>, Books)> {
-        let bad = |what| Error::Checkpoint { what };
-        if words.len() != RECORD {
-            return Err(bad("a process record of the wrong length"));
-        }
-        let mut buf = [0u8; 8 * RECORD];
-        for (c, w) in buf.chunks_exact_mut(8).zip(words) {
-            c.copy_from_slice(&w.to_le_bytes());
-        }
-        let mut r = Reader::new(&buf);
-        if r.u64()? != fingerprint(&self.procs) {
-            return Err(bad(
-                "written with other processes (source, removal or growth)",
-            ));
-        }
-        let pending = match r.u64()? {
-            0 => {
-                r.f64()?;
-                r.f64()?;
-                None
-            }
-            1 => {
-                let (at, b) = (r.f64()?, r.f64()?);
-                if !(at.is_finite() || at == f64::INFINITY)
-                    || !(b == VOID || b == GROW || (b.is_finite() && b >= 0.0))
-                {
-                    return Err(bad("a process candidate that is not a time"));
-                }
-                Some((at, b))
-            }
-            _ => return Err(bad("invalid process candidate flag")),
-        };
-        Ok((pending, Books::load(&mut r)?))
-    }
-
-    /// Installs what [`read_record`](Self::read_record) returned.
-    pub(crate) fn install(&mut self, pending: Option<(f64, f64)>, books: Books) {
-        self.pending = pending;
-        self.books = books;
-    }
-}
-
-/// A fingerprint of the processes' parameters.
-fn fingerprint(p: &Processes) -> u64 {
-    use crate::initial::Distribution as D;
-    let mut words: Vec<u64> = Vec::new();
-    if let Some(s) = &p.source {
-        words.push(1);
-        words.push(s.rate().to_bits());
-        if !s.schedule().is_empty() {
-            words.push(5);
-            words.push(crate::checkpoint::fingerprint(
-                s.schedule()
-                    .iter()
-                    .flat_map(|&(t, r)| [t.to_bits(), r.to_bits()]),
-            ));
-        }
-        if let Some(f) = s.rate_function() {
-            words.extend([9, f.tag(), f.bound().to_bits()]);
-        }
-        match s.sizes() {
-            D::Monodisperse { size } => words.extend([1, size.to_bits()]),
-            D::Exponential { mean } => words.extend([2, mean.to_bits()]),
-            D::Lognormal { median, gsd } => words.extend([3, median.to_bits(), gsd.to_bits()]),
-            D::Sizes(x) => {
-                words.push(4);
-                words.push(crate::checkpoint::fingerprint(
-                    x.iter().map(|v| v.to_bits()),
-                ));
-            }
-            D::Counts(c) => {
-                words.push(5);
-                words.push(crate::checkpoint::fingerprint(c.iter().copied()));
-            }
-        }
-    }
-    for (tag, q) in [(2, &p.removal), (3, &p.growth)] {
-        if let Some(q) = q {
-            words.extend([tag, q.coefficient.to_bits(), q.exponent.to_bits()]);
-        }
-    }
-    // a host's function is known by its tag and bound
-    for (tag, q) in [(6, &p.user_removal), (7, &p.user_growth)] {
-        if let Some(q) = q {
-            words.extend([tag, q.tag(), q.bound().to_bits()]);
-        }
-    }
-    if let Some(h) = p.growth_step {
-        words.extend([8, h.to_bits()]);
-    }
-    crate::checkpoint::fingerprint(words)
 }
