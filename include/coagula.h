@@ -1674,7 +1674,9 @@ int32_t coag_sim_set_growth(coag_sim *sim, double coefficient, double exponent);
  particle grows by a step at the times (k + ½)·step — in closed form for a power of
  size, by a fourth-order Runge–Kutta step with a host's rate — and coagulation and the
  other processes run exactly in between; second order in the step at its multiples.
- Not used on integer sizes. As `coag_sim_set_source` otherwise.
+ Not used on integer sizes. An advance over more than 2^24 steps is refused
+ (`COAG_INVALID_ARGUMENT`: each step rebuilds the state). As `coag_sim_set_source`
+ otherwise.
 
  # Safety
  `sim` NULL or live.

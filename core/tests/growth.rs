@@ -225,6 +225,16 @@ fn growth_on_real_sizes_is_refused_without_a_step_and_errors_change_nothing() {
             other => panic!("{}: {other:?}", id.label()),
         }
         assert!(s.processes().is_none());
+        // more than 2^24 steps in one advance: refused up front, nothing changed
+        let tiny = Processes::default()
+            .with_growth(1.0, 0.0)
+            .unwrap()
+            .with_growth_step(1e-9)
+            .unwrap();
+        s.set_processes(Some(tiny)).unwrap();
+        let before = common::state_bits(&*s);
+        assert!(s.advance_to(1.0, &mut rng(4)).is_err());
+        assert_eq!((common::state_bits(&*s), s.time()), (before, 0.0));
         // a rate that leaves its bound once the sizes pass 3
         let rate = UserRate::new(|x: f64| if x < 3.0 { 1.0 } else { 5.0 }, 1.0, 5).unwrap();
         let p = Processes::default()
@@ -262,26 +272,8 @@ fn split_growth_runs_keep_their_bits_through_checkpoints() {
             s.set_processes(Some(p.clone())).unwrap();
             s
         };
-        let mut whole = make();
-        whole.advance_to(3.0, &mut rng(6)).unwrap();
-        let mut split = make();
-        let mut h = rng(6);
         // 0.375 is a growth instant, 1.0 a step's end, 2.2 between
-        for t in [0.375, 1.0, 2.2] {
-            split.advance_to(t, &mut h).unwrap();
-            let buf = checkpoint(&*split);
-            let mut fresh = make();
-            fresh.restore_checkpoint(&buf).unwrap();
-            split = fresh;
-        }
-        split.advance_to(3.0, &mut h).unwrap();
-        assert_eq!(
-            common::state_bits(&*whole),
-            common::state_bits(&*split),
-            "{}",
-            id.label()
-        );
-        assert_eq!(whole.books(), split.books(), "{}", id.label());
+        let whole = same_bits_split(make, &[0.375, 1.0, 2.2], 3.0, 6, &id.label());
         assert!(whole.books().unwrap().grown_mass > 0.0);
         // another step is another fingerprint: refused
         let other = p.clone().with_growth_step(0.5).unwrap();
@@ -367,4 +359,34 @@ fn the_closed_form_keeps_its_digits_and_the_grid_starts_with_the_growth() {
         "{:?}",
         sorted_sizes(&*s)
     );
+}
+
+/// Runs `make()` to `end` on generator `seed` once unbroken and once split at `at`,
+/// each piece restored from a checkpoint into a fresh `make()`; asserts the same state
+/// bits and books, and returns the unbroken sim.
+pub(crate) fn same_bits_split(
+    make: impl Fn() -> Box<common::Sim>,
+    at: &[f64],
+    end: f64,
+    seed: u64,
+    what: &str,
+) -> Box<common::Sim> {
+    let mut whole = make();
+    whole.advance_to(end, &mut rng(seed)).unwrap();
+    let mut split = make();
+    let mut g = rng(seed);
+    for &t in at {
+        split.advance_to(t, &mut g).unwrap();
+        let mut fresh = make();
+        fresh.restore_checkpoint(&checkpoint(&*split)).unwrap();
+        split = fresh;
+    }
+    split.advance_to(end, &mut g).unwrap();
+    assert_eq!(
+        common::state_bits(&*whole),
+        common::state_bits(&*split),
+        "{what}"
+    );
+    assert_eq!(whole.books(), split.books(), "{what}");
+    whole
 }

@@ -4,6 +4,7 @@
 //! above the bound is an error that changes nothing; split runs keep their bits.
 
 use crate::common;
+use crate::growth::same_bits_split;
 use crate::processes::{
     chain_failures, checkpoint, monomers, process_schemes, rng, scheduled_reference, sim,
 };
@@ -102,24 +103,7 @@ fn split_runs_with_a_rate_function_keep_their_bits() {
             s.set_processes(Some(procs(tag))).unwrap();
             s
         };
-        let mut whole = make(1);
-        whole.advance_to(3.0, &mut rng(4)).unwrap();
-        let mut split = make(1);
-        let mut g = rng(4);
-        for t in [0.4, 1.7] {
-            split.advance_to(t, &mut g).unwrap();
-            let mut fresh = make(1);
-            fresh.restore_checkpoint(&checkpoint(&*split)).unwrap();
-            split = fresh;
-        }
-        split.advance_to(3.0, &mut g).unwrap();
-        assert_eq!(
-            common::state_bits(&*whole),
-            common::state_bits(&*split),
-            "{}",
-            id.label()
-        );
-        assert_eq!(whole.books(), split.books(), "{}", id.label());
+        let whole = same_bits_split(|| make(1), &[0.4, 1.7], 3.0, 4, &id.label());
         assert!(
             whole.books().unwrap().injected_number > 20,
             "{}",

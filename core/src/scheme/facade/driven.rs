@@ -41,6 +41,9 @@ const VOID: f64 = -1.0;
 /// every particle grows by a step, and the candidate is drawn afresh.
 const GROW: f64 = -2.0;
 
+/// The most growth steps one advance takes (each one rebuilds the state, O(N)).
+const MAX_GROWTH_STEPS: f64 = (1u64 << 24) as f64;
+
 /// The first growth instant `origin + (k + ½) h` after `now`.
 fn next_growth(h: f64, origin: f64, now: f64) -> Result<f64> {
     let steps = (now - origin) / h;
@@ -332,6 +335,16 @@ impl Driver {
         G: Rng + ?Sized,
     {
         crate::scheme::check_target(s.time(), t)?;
+        if let Some(h) = self.split()
+            && (t - s.time()) / h > MAX_GROWTH_STEPS
+        {
+            // each step rebuilds the state: refused rather than a call without end
+            return Err(Error::OutOfRange {
+                name: "growth step (steps in one advance)",
+                value: h,
+                range: "at least (t - now) / 2^24: split the advance or take a larger step",
+            });
+        }
         let mut out = StepReport {
             time: s.time(),
             ..StepReport::default()
