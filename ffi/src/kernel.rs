@@ -195,6 +195,25 @@ impl CoagulationKernel for Kernel {
             Kernel::User(u) => u.sup.map(|f| unsafe { f(lo, hi, u.user_data) }),
         }
     }
+    fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
+        match self {
+            Kernel::Builtin(k) => k.sup_block(x0, x1, y0, y1),
+            // a user kernel's supremum over the square around the block
+            Kernel::User(_) => self.sup_rate(x0.min(y0), x1.max(y1)),
+        }
+    }
+    fn low_rank_is_loose(&self) -> bool {
+        match self {
+            Kernel::Builtin(k) => k.low_rank_is_loose(),
+            Kernel::User(_) => false,
+        }
+    }
+    fn integer_sizes(&self) -> bool {
+        match self {
+            Kernel::Builtin(k) => k.integer_sizes(),
+            Kernel::User(_) => false,
+        }
+    }
     fn min_size(&self) -> f64 {
         match self {
             Kernel::Builtin(k) => k.min_size(),

@@ -178,6 +178,25 @@ impl CoagulationKernel for PyCoag {
             PyCoag::User(u) => u.sup.as_ref().map(|f| call_f64(f, &u.raised, (lo, hi))),
         }
     }
+    fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
+        match self {
+            PyCoag::Builtin(k) => k.sup_block(x0, x1, y0, y1),
+            // a user kernel's supremum over the square around the block
+            PyCoag::User(_) => self.sup_rate(x0.min(y0), x1.max(y1)),
+        }
+    }
+    fn low_rank_is_loose(&self) -> bool {
+        match self {
+            PyCoag::Builtin(k) => k.low_rank_is_loose(),
+            PyCoag::User(_) => false,
+        }
+    }
+    fn integer_sizes(&self) -> bool {
+        match self {
+            PyCoag::Builtin(k) => k.integer_sizes(),
+            PyCoag::User(_) => false,
+        }
+    }
     fn min_size(&self) -> f64 {
         match self {
             PyCoag::Builtin(k) => k.min_size(),

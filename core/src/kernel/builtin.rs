@@ -164,6 +164,14 @@ pub const BUILTINS: &[BuiltinInfo] = &[
         units: "",
     },
     BuiltinInfo {
+        name: "atmospheric",
+        family: Family::Coagulation,
+        formula: "K = b (i + j) (i^(1/3) + j^(1/3))^(2/3) / ((i j)^(5/9) |i^(2/3) - j^(2/3)|), K(i, i) = 4 b (integer sizes)",
+        source: "Dyachenko, Matveev & Valiakhmetov, arXiv 2501.10206 (2025); docs/design/block-majorants.md",
+        params: &[COEFFICIENT],
+        units: "",
+    },
+    BuiltinInfo {
         name: "brownian-continuum",
         family: Family::Coagulation,
         formula: "K = (2 k_B T / 3 mu) (v^(1/3) + w^(1/3)) (v^(-1/3) + w^(-1/3))",
@@ -390,6 +398,7 @@ fn build(info: &'static BuiltinInfo, v: &[f64; 4], given: &[bool; 4]) -> Result<
         "homogeneous" => coag(Coagulation::homogeneous(p[0])?, p[1])?,
         "free-molecular" => coag(Coagulation::free_molecular().with_min_size(p[1])?, p[0])?,
         "brownian" => coag(Coagulation::brownian(), p[0])?,
+        "atmospheric" => coag(Coagulation::atmospheric(), p[0])?,
         "brownian-continuum" => Builtin::Coagulation(Coagulation::brownian_continuum(p[0], p[1])?),
         "free-molecular-physical" => {
             let d = crate::error::positive("monomer-diameter", p[2])?;

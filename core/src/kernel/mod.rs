@@ -38,7 +38,7 @@ pub mod gas;
 pub mod temperature;
 
 pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
-pub use coagulation::{BOLTZMANN, Coagulation};
+pub use coagulation::{BOLTZMANN, Coagulation, atmospheric};
 pub use fragmentation::{
     BinaryUniform, Fragmentation, FragmentationKernel, NoFragmentation, UserFragmentation,
     break_rate_bound, checked_break_rate, checked_break_rate_within,
@@ -109,6 +109,30 @@ pub trait CoagulationKernel {
     /// `sup K(x, y)` over `lo ≤ x, y ≤ hi`, if known (acceptance–rejection needs it).
     fn sup_rate(&self, _lo: f64, _hi: f64) -> Option<f64> {
         None
+    }
+
+    /// `sup K(x, y)` over the block `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1` of sizes, if known: the
+    /// bound of a block-majorant scheme (`docs/design/block-majorants.md`). A scheme on
+    /// integer sizes asks only for blocks with integer ends and needs the supremum over
+    /// the integer pairs in them. The default bounds the block by the square around it
+    /// through [`sup_rate`](Self::sup_rate) (valid, but loose far from the diagonal).
+    fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
+        self.sup_rate(x0.min(y0), x1.max(y1))
+    }
+
+    /// Whether the kernel is defined on integer sizes only (its values or bounds do
+    /// not hold between them): the registry refuses it for schemes over real sizes.
+    /// False by default.
+    fn integer_sizes(&self) -> bool {
+        false
+    }
+
+    /// Whether the low-rank bound is loose somewhere (the acceptance `K / (A + Aᵀ)`
+    /// falls towards 0 on part of the size range), so that a scheme that can choose
+    /// prefers block majorants ([`sup_block`](Self::sup_block)) when the kernel has
+    /// them. False by default.
+    fn low_rank_is_loose(&self) -> bool {
+        false
     }
 
     /// A fingerprint of the kernel and its parameters, which a checkpoint records so

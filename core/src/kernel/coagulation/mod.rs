@@ -116,6 +116,7 @@ enum Kind {
     Homogeneous(f64),
     FreeMolecular,
     Brownian,
+    Atmospheric,
 }
 
 impl Coagulation {
@@ -130,6 +131,7 @@ impl Coagulation {
             Kind::Homogeneous(g) => (5, g),
             Kind::FreeMolecular => (6, 0.0),
             Kind::Brownian => (7, 0.0),
+            Kind::Atmospheric => (8, 0.0),
         };
         crate::checkpoint::fingerprint([
             tag,
@@ -201,6 +203,18 @@ impl Coagulation {
         Self::new(Kind::Brownian)
     }
 
+    /// The "atmospheric" kernel of integer sizes (see [`atmospheric`](crate::kernel::atmospheric)):
+    /// `K(i, j) = (i + j)(i^{1/3} + j^{1/3})^{2/3} / ((i j)^{5/9} |i^{2/3} − j^{2/3}|)`,
+    /// `K(i, i) = 4`, with the rank-2 bound `A(x, y) = 0.2556 x^{−5/9} + 2.38125 (x y)^{2/9}`
+    /// (loose: the acceptance falls as the sizes grow) and exact suprema over blocks of
+    /// integer sizes. Sizes are integers from 1 (the bounds hold there only).
+    pub fn atmospheric() -> Self {
+        Coagulation {
+            min_size: 1.0,
+            ..Self::new(Kind::Atmospheric)
+        }
+    }
+
     fn new(kind: Kind) -> Self {
         Coagulation {
             kind,
@@ -229,6 +243,13 @@ impl Coagulation {
                 name: "min_size",
                 value: s,
                 range: "[0, inf)",
+            });
+        }
+        if self.kind == Kind::Atmospheric && s < 1.0 {
+            return Err(Error::OutOfRange {
+                name: "min_size",
+                value: s,
+                range: "[1, inf) for the atmospheric kernel (integer sizes)",
             });
         }
         self.min_size = s;
@@ -288,6 +309,7 @@ impl Coagulation {
             Kind::Product(a) => 2.0 * a,
             Kind::Homogeneous(g) => g,
             Kind::FreeMolecular => 1.0 / 6.0,
+            Kind::Atmospheric => -5.0 / 9.0,
         }
     }
 
@@ -341,6 +363,7 @@ impl Coagulation {
             Kind::Homogeneous(_) => "homogeneous",
             Kind::FreeMolecular => "free-molecular",
             Kind::Brownian => "brownian",
+            Kind::Atmospheric => "atmospheric",
         }
     }
 }
@@ -408,7 +431,7 @@ impl CoagulationKernel for Coagulation {
     fn rank(&self) -> usize {
         match self.kind {
             Kind::FreeMolecular => 3,
-            Kind::Brownian => 2,
+            Kind::Brownian | Kind::Atmospheric => 2,
             _ => 1,
         }
     }
@@ -434,7 +457,18 @@ impl CoagulationKernel for Coagulation {
     }
 
     fn low_rank_is_exact(&self) -> bool {
-        !matches!(self.kind, Kind::FreeMolecular | Kind::Homogeneous(_))
+        !matches!(
+            self.kind,
+            Kind::FreeMolecular | Kind::Homogeneous(_) | Kind::Atmospheric
+        )
+    }
+
+    fn low_rank_is_loose(&self) -> bool {
+        self.kind == Kind::Atmospheric
+    }
+
+    fn integer_sizes(&self) -> bool {
+        self.kind == Kind::Atmospheric
     }
 
     /// Ballistic: `K / (A + Aᵀ) = sqrt(1/x + 1/y) / (x^{-1/2} + y^{-1/2}) ≥ 1/√2` (equality
@@ -442,15 +476,35 @@ impl CoagulationKernel for Coagulation {
     fn low_rank_floor(&self) -> f64 {
         match self.kind {
             Kind::FreeMolecular => core::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-12),
-            Kind::Homogeneous(_) => 0.0,
+            Kind::Homogeneous(_) | Kind::Atmospheric => 0.0,
             _ => 1.0,
         }
     }
 
     /// Every built-in kernel is, along each axis, monotone or decreasing-then-increasing
     /// (quasi-convex), so its supremum over a square is attained at a corner.
+    /// The atmospheric kernel's square on integer sizes: see [`atmospheric`](crate::kernel::atmospheric).
     fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
+        if self.kind == Kind::Atmospheric {
+            return Some(self.scale * atmospheric::sup_block(lo, hi, lo, hi));
+        }
         let corners = [self.rate(lo, lo), self.rate(lo, hi), self.rate(hi, hi)];
+        Some(corners.into_iter().fold(0.0, f64::max))
+    }
+
+    /// Quasi-convex along each axis (as for [`sup_rate`](Self::sup_rate)): the supremum
+    /// over a block is at one of its four corners; the atmospheric kernel's, on integer
+    /// sizes, from [`atmospheric::sup_block`](crate::kernel::atmospheric::sup_block).
+    fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
+        if self.kind == Kind::Atmospheric {
+            return Some(self.scale * atmospheric::sup_block(x0, x1, y0, y1));
+        }
+        let corners = [
+            self.rate(x0, y0),
+            self.rate(x0, y1),
+            self.rate(x1, y0),
+            self.rate(x1, y1),
+        ];
         Some(corners.into_iter().fold(0.0, f64::max))
     }
 }
@@ -472,6 +526,7 @@ impl Coagulation {
                 sqrt(1.0 / x + 1.0 / y) * s * s
             }
             Kind::Brownian => (cbrt(x) + cbrt(y)) * (1.0 / cbrt(x) + 1.0 / cbrt(y)),
+            Kind::Atmospheric => atmospheric::rate(x, y, cbrt_of(x), cbrt_of(y)),
         }
     }
 
@@ -493,6 +548,7 @@ impl Coagulation {
                 }
             }
             Kind::Brownian => cbrt(x) + 1.0 / cbrt(x),
+            Kind::Atmospheric => atmospheric::MAJORANT_C * (pow(x, 2.0 / 9.0) + pow(x, -5.0 / 9.0)),
         })
     }
 
@@ -540,9 +596,17 @@ impl Coagulation {
                 a[1] = c;
                 b[1] = 1.0 / c;
             }
+            Kind::Atmospheric => {
+                let p = pow(x, 2.0 / 9.0);
+                a[0] = atmospheric::A0 * pow(x, -5.0 / 9.0);
+                b[0] = 1.0;
+                a[1] = 0.5 * atmospheric::A1 * p;
+                b[1] = p;
+            }
         }
     }
 }
 
+pub mod atmospheric;
 #[cfg(test)]
 mod tests;

@@ -268,6 +268,44 @@ fn sup_rate_is_attained_at_a_corner() {
     }
 }
 
+/// The corner rule of `sup_block` against a dense grid scan of rectangles on and off
+/// the diagonal.
+#[test]
+fn sup_block_is_attained_at_a_corner() {
+    let kernels = [
+        Coagulation::constant(2.0).unwrap(),
+        Coagulation::additive(),
+        Coagulation::multiplicative(),
+        Coagulation::product(0.7).unwrap(),
+        Coagulation::homogeneous(1.3).unwrap(),
+        Coagulation::free_molecular(),
+        Coagulation::brownian(),
+    ];
+    for k in kernels {
+        for &(x0, x1, y0, y1) in &[
+            (1.0, 2.0, 3.0, 9.0),
+            (0.01, 3.0, 1.0, 2.0),
+            (5.0, 1e6, 1.0, 1e3),
+        ] {
+            let sup = k.sup_block(x0, x1, y0, y1).unwrap();
+            let n = 80;
+            let mut max = 0.0_f64;
+            for a in 0..=n {
+                for b in 0..=n {
+                    let x = x0 * libm::pow(x1 / x0, a as f64 / n as f64);
+                    let y = y0 * libm::pow(y1 / y0, b as f64 / n as f64);
+                    max = max.max(k.rate(x, y));
+                }
+            }
+            assert!(
+                sup >= max * (1.0 - 1e-12) && sup <= max * (1.0 + 1e-12),
+                "{} {sup} {max}",
+                k.name()
+            );
+        }
+    }
+}
+
 #[test]
 fn additive_shift_is_tight_at_the_minimum_size() {
     // for s = 1, c = √2 − 1 and K(1,1) = h(1)²
