@@ -242,7 +242,7 @@ fn balance(b: &Books, s: &common::Sim, what: &str) {
 fn the_books_balance_on_every_scheme_and_process() {
     let schemes = process_schemes();
     let names: Vec<String> = schemes.iter().map(|s| s.label()).collect();
-    assert_eq!(names.len(), 9, "{names:?}");
+    assert_eq!(names.len(), 10, "{names:?}");
     for id in schemes {
         let integer = id.inits.contains(&InitKind::Counts);
         for (what, p) in cases(integer) {

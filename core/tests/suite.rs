@@ -6,6 +6,8 @@
 
 mod common;
 
+#[path = "blocks.rs"]
+mod blocks;
 #[path = "checkpoint.rs"]
 mod checkpoint;
 #[path = "classes.rs"]

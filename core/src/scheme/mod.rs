@@ -93,6 +93,8 @@ pub(crate) mod tag {
     pub const LOWRANK_BINARY: u64 = 15;
     pub const TEMPERATURE_REJECTION: u64 = 16;
     pub const DSMC_REJECTION: u64 = 17;
+    // the block-majorant engine
+    pub const BLOCKS: u64 = 18;
 }
 
 impl StepReport {

@@ -37,8 +37,8 @@ use super::facade::{
     Simulation,
 };
 use super::lowrank::{
-    BinaryTreeEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry, TemperatureEntry,
-    TemperatureRejectionEntry, TreeEntry,
+    BinaryTreeEntry, BlocksEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry,
+    TemperatureEntry, TemperatureRejectionEntry, TreeEntry,
 };
 use super::massflow::MassFlowEntry;
 use crate::error::{Error, Result};
@@ -110,6 +110,7 @@ registry!(
     BucketedEntry,
     TreeEntry,
     BinaryTreeEntry,
+    BlocksEntry,
     InverseEntry,
     RejectionEntry,
     MfaEntry,
@@ -163,6 +164,14 @@ fn check<K: RegistryKernel, F: RegistryFragmentation>(
     if !id.accepts(init) {
         return Err(Error::Unsupported {
             what: "initial state of another kind than this scheme takes (its registry entry lists them: counts, sizes, temperatures or velocities)",
+        });
+    }
+    if let Model::Coagulation { kernel, .. } = model
+        && kernel.integer_sizes()
+        && !matches!(init, Init::Counts { .. })
+    {
+        return Err(Error::Unsupported {
+            what: "kernel of integer sizes (atmospheric): start from counts, on a scheme over integer sizes (lowrank-blocks, lowrank, inverse, ...)",
         });
     }
     if model.fragments() && !id.fragmentation {

@@ -217,6 +217,60 @@ counts_entry!(
     .with_batched_clock(opts.batched_clock())
 );
 
+/// The registry entry of [`Blocks`](super::Blocks): block majorants over integer sizes.
+pub struct BlocksEntry;
+
+impl Register for BlocksEntry {
+    const INFO: &'static SchemeInfo = &SchemeInfo {
+        name: "lowrank-blocks",
+        paper: "Dyachenko, Matveev & Valiakhmetov 2025 (mosaic blocks); Osinsky 2023, §2 (event loop)",
+        summary: "Monte Carlo over block majorants, for kernels no low-rank bound fits",
+        model: ModelKind::Coagulation,
+        inits: &[InitKind::Counts],
+        sizes: Samples::None,
+        fragmentation: false,
+        options: COUNT_OPTIONS,
+        memory: Memory::Growing,
+        tag: tag::BLOCKS,
+        observables: &[],
+        law: Law::FiniteN,
+    };
+
+    fn build<K, F, G>(
+        model: Model<K, F>,
+        init: &Init<'_>,
+        opts: &Options,
+    ) -> Result<Box<dyn Simulation<K, F, G>>>
+    where
+        K: RegistryKernel,
+        F: RegistryFragmentation,
+        G: Rng + ?Sized + 'static,
+    {
+        let (k, _) = model.kernels()?;
+        let (counts, volume) = counts_of(init, opts)?;
+        let s = super::Blocks::new_with_memory_budget(k, counts, volume, opts.memory_budget())?
+            .with_size_limit(opts.size_limit())
+            .with_batched_clock(opts.batched_clock());
+        Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
+    }
+
+    /// The count tree (16 bytes a size) and the blocks (about
+    /// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 40 bytes each).
+    fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
+        let first = reach.start.max(8).next_power_of_two();
+        reach.bytes(
+            first,
+            16 + (40.0 * super::blocks::BLOCKS_PER_SIZE) as u64,
+            0,
+            0,
+        )
+    }
+
+    fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {
+        Blank::Counts(vec![2], 1.0)
+    }
+}
+
 /// The registry entry of [`LowRankSizes`].
 pub struct SizesEntry;
 

@@ -54,6 +54,7 @@
 //! ```
 
 mod auto;
+pub mod blocks;
 pub mod bound;
 pub mod bucketed;
 mod counted;
@@ -70,12 +71,13 @@ pub mod uniform;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
 pub use auto::{AutoBucketed, BucketMode};
+pub use blocks::BlockEngine;
 pub use bound::MAX_PARTICLES;
 pub use bucketed::BucketedEngine;
 pub use counted::CountedEngine;
 pub use entry::{
-    BinaryTreeEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry, TemperatureEntry,
-    TemperatureRejectionEntry, TreeEntry,
+    BinaryTreeEntry, BlocksEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry,
+    TemperatureEntry, TemperatureRejectionEntry, TreeEntry,
 };
 pub use proposal::{Candidate, Outcome, ProposalEngine};
 pub use rule::{Coagulate, EventRule, Reweighed, SPOT_CHECK};
@@ -164,6 +166,10 @@ impl Clock {
 /// Low-rank MC with the paper's per-size trees ([`WideTree`] by default, [`BinaryTree`]
 /// for comparison).
 pub type LowRank<K, const R: usize, T = WideTree<R>> = LowRankMc<K, R, TreeEngine<R, T>>;
+
+/// The event loop over block majorants ([`blocks`]): for kernels that no low-rank bound
+/// fits (the rank parameter is unused).
+pub type Blocks<K> = LowRankMc<K, 1, BlockEngine>;
 
 /// Low-rank MC over size buckets, the default and fastest layout for large systems (see
 /// [`bucketed`]). `W` must be `2R`.
@@ -542,7 +548,12 @@ where
                             continue 'epoch;
                         }
                     }
-                    Ok(false) => {}
+                    Ok(false) => {
+                        if E::REFRESH_AFTER_REJECT && self.engine.needs_refresh() {
+                            self.clock = Clock::Stale;
+                            continue 'epoch;
+                        }
+                    }
                     Err(e) => {
                         // the state is as before the proposal, which stays pending
                         self.time = before;
@@ -598,7 +609,13 @@ where
                         return Ok(false);
                     }
                 }
-                Ok(false) => {}
+                Ok(false) => {
+                    if E::REFRESH_AFTER_REJECT && self.engine.needs_refresh() {
+                        self.time = batch.time_of(k, rng);
+                        self.clock = Clock::Stale;
+                        return Ok(false);
+                    }
+                }
                 Err(e) => {
                     self.time = batch.time_of(k - 1, rng);
                     return Err(self.fail(e, rep));

@@ -82,6 +82,11 @@ pub trait ProposalEngine<const R: usize>: Sized {
         true
     }
 
+    /// Whether a rejected proposal may also have changed the proposal rate (an engine
+    /// that tightens its majorant when it draws): the loop then asks
+    /// [`needs_refresh`](Self::needs_refresh) after rejections too.
+    const REFRESH_AFTER_REJECT: bool = false;
+
     /// Whether the engine's bound at a pair is the kernel's factor bound itself, so that
     /// `low = bound` always (the per-size layout; a coarsened bound has `low ≤ bound`).
     const LOW_IS_BOUND: bool;
