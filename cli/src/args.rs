@@ -428,6 +428,28 @@ pub(crate) enum BenchKind {
         #[arg(long, value_enum, default_value_t = PeerProblem::Golovin)]
         problem: PeerProblem,
     },
+    /// Block majorants against the low-rank engine on a kernel no low-rank bound fits
+    /// (the atmospheric kernel from monomers): acceptance and cost per interval of t.
+    Blocks {
+        /// Built-in coagulation kernel (at its default parameters).
+        #[arg(long, default_value = "atmospheric")]
+        kernel: String,
+        /// Registry schemes, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "lowrank-blocks,lowrank")]
+        schemes: Vec<String>,
+        /// Initial monomers (c0 = 1).
+        #[arg(long, default_value_t = 1_000_000, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]
+        n0: u64,
+        /// The ends of the intervals of t, comma-separated, increasing.
+        #[arg(long, value_delimiter = ',', default_value = "5,100,1000,3000")]
+        times: Vec<f64>,
+        /// Wall-clock seconds a run may take (the intervals after are skipped).
+        #[arg(long, default_value_t = 120.0, value_parser = positive_f64)]
+        budget: f64,
+        /// Alternating rounds (the fastest of each interval kept).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100))]
+        repeat: u32,
+    },
     /// What a monomer source and dilution cost per event against pure coagulation
     /// (K = 1 from monomers), the same start, alternating runs.
     Processes {

@@ -238,6 +238,14 @@ fn bench_command(which: BenchKind) -> Done {
             Some(steps) => bench::lowrank_host_steps(&n0, replicas, steps),
             None => bench::lowrank_small(&n0, len, t, replicas),
         }),
+        BenchKind::Blocks {
+            kernel,
+            schemes,
+            n0,
+            times,
+            budget,
+            repeat,
+        } => ok(bench::blocks(&kernel, &schemes, n0, &times, budget, repeat)),
         BenchKind::Processes {
             scheme,
             n0,

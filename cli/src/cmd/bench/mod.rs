@@ -6,8 +6,10 @@ use coagula_core::scheme::facade::{Init, Model, Options, SchemeId, Simulation};
 use coagula_core::scheme::registry;
 use std::time::{Duration, Instant};
 
+mod blocks;
 mod peers;
 mod processes;
+pub use blocks::blocks;
 use peers::original_particles;
 pub use peers::peers;
 pub use processes::processes;

@@ -1,0 +1,125 @@
+//! `coagula bench blocks`: block majorants (`lowrank-blocks`) against the low-rank
+//! engine (`lowrank`) on a kernel no low-rank bound fits (issue 45), from monomers,
+//! interval by interval of t: proposals, coagulations, acceptance and the cost per
+//! proposal and per coagulation. Runs alternate between the schemes; the fastest of
+//! each interval is kept (the event counts are those of one seed).
+
+use coagula_core::kernel::NoFragmentation;
+use coagula_core::kernel::builtin::{self, Builtin};
+use coagula_core::random::generator;
+use coagula_core::scheme::facade::{Init, Model, Options};
+use coagula_core::scheme::registry;
+use std::time::{Duration, Instant};
+
+/// One interval of one run.
+#[derive(Clone, Copy, Default)]
+struct Cell {
+    seconds: f64,
+    proposals: u64,
+    events: u64,
+}
+
+/// One run of `scheme` through `times`; `None` past the wall-clock `budget`.
+fn once(
+    scheme: &str,
+    kernel: &str,
+    n0: u64,
+    times: &[f64],
+    budget: Duration,
+    seed: u64,
+) -> Result<Vec<Option<Cell>>, String> {
+    let info = registry::find(scheme).map_err(|e| e.to_string())?;
+    let Builtin::Coagulation(k) = builtin::make(kernel, &[]).map_err(|e| e.to_string())? else {
+        return Err(format!("{kernel}: not a coagulation kernel"));
+    };
+    let init = Init::Counts {
+        counts: &[n0],
+        volume: n0 as f64,
+    };
+    let mut sim = registry::build::<_, _, coagula_core::random::Generator>(
+        info,
+        Model::coagulation(k, NoFragmentation),
+        &init,
+        &Options::default(),
+    )
+    .map_err(|e| e.to_string())?;
+    let mut rng = generator(seed, 0);
+    let start = Instant::now();
+    let mut out = Vec::new();
+    for &t in times {
+        if start.elapsed() > budget {
+            out.push(None);
+            continue;
+        }
+        let t0 = Instant::now();
+        let rep = sim.advance_to(t, &mut rng).map_err(|e| e.to_string())?;
+        out.push(Some(Cell {
+            seconds: t0.elapsed().as_secs_f64(),
+            proposals: rep.proposals,
+            events: rep.events,
+        }));
+    }
+    Ok(out)
+}
+
+/// The table (see the module docs); `budget` seconds per run.
+pub fn blocks(
+    kernel: &str,
+    schemes: &[String],
+    n0: u64,
+    times: &[f64],
+    budget: f64,
+    repeat: u32,
+) -> Result<(), String> {
+    println!(
+        "{kernel} kernel from {n0} monomers (c0 = 1), seed 1; alternating runs, the fastest of {repeat} kept per interval; {budget} s a run"
+    );
+    let budget = Duration::from_secs_f64(budget);
+    let mut best: Vec<Vec<Option<Cell>>> = vec![vec![None; times.len()]; schemes.len()];
+    for _ in 0..repeat {
+        for (s, scheme) in schemes.iter().enumerate() {
+            let run = once(scheme, kernel, n0, times, budget, 1)?;
+            for (b, c) in best[s].iter_mut().zip(run) {
+                if let Some(c) = c
+                    && b.is_none_or(|b| c.seconds < b.seconds)
+                {
+                    *b = Some(c);
+                }
+            }
+        }
+    }
+    println!(
+        "{:>20} {:>22} {:>12} {:>11} {:>10} {:>9} {:>12} {:>10}",
+        "scheme",
+        "interval",
+        "proposals",
+        "events",
+        "accepted",
+        "seconds",
+        "ns/proposal",
+        "ns/event"
+    );
+    for (s, scheme) in schemes.iter().enumerate() {
+        let mut from = 0.0;
+        for (&t, c) in times.iter().zip(&best[s]) {
+            let interval = format!("({from}, {t}]");
+            from = t;
+            let Some(c) = c else {
+                println!("{scheme:>20} {interval:>22} {:>12}", "(past the budget)");
+                continue;
+            };
+            println!(
+                "{:>20} {:>22} {:>12} {:>11} {:>9.2}% {:>9.3} {:>12.1} {:>10.1}",
+                scheme,
+                interval,
+                c.proposals,
+                c.events,
+                100.0 * c.events as f64 / c.proposals.max(1) as f64,
+                c.seconds,
+                c.seconds * 1e9 / c.proposals.max(1) as f64,
+                c.seconds * 1e9 / c.events.max(1) as f64
+            );
+        }
+    }
+    Ok(())
+}
