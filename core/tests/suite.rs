@@ -20,6 +20,8 @@ mod count_schemes;
 mod dsmc;
 #[path = "finite_n.rs"]
 mod finite_n;
+#[path = "finite_n_product.rs"]
+mod finite_n_product;
 #[path = "fuzz_findings.rs"]
 mod fuzz_findings;
 #[path = "growth.rs"]
