@@ -1437,8 +1437,9 @@ int32_t coag_sim_clone(const coag_sim *sim, coag_sim **out);
 int32_t coag_sim_scheme(const coag_sim *sim, const char **out);
 
 /*
- The engine the bucketed low-rank scheme runs now (a static string: `"slots"` or
- `"counted"`; chosen by the particle number unless the `engine` option pinned it);
+ The engine the `lowrank` scheme runs now (a static string: `"slots"`, `"counted"` or
+ `"blocks"`; chosen by the kernel and the particle number unless the `engine` option
+ pinned it);
  `COAG_UNSUPPORTED` for every other scheme.
 
  # Safety

@@ -434,8 +434,13 @@ pub(crate) enum BenchKind {
         /// Built-in coagulation kernel (at its default parameters).
         #[arg(long, default_value = "atmospheric")]
         kernel: String,
-        /// Registry schemes, comma-separated.
-        #[arg(long, value_delimiter = ',', default_value = "lowrank-blocks,lowrank")]
+        /// Registry schemes, comma-separated; `NAME:ENGINE` pins the `engine` option
+        /// (`lowrank:slots`: the low-rank bound, as before block majorants).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            default_value = "lowrank-blocks,lowrank:slots"
+        )]
         schemes: Vec<String>,
         /// Initial monomers (c0 = 1).
         #[arg(long, default_value_t = 1_000_000, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]

@@ -168,3 +168,77 @@ fn a_split_run_keeps_its_bits() {
     assert_eq!(a.counts(), b.counts());
     assert_eq!(bytes(&a), bytes(&b));
 }
+
+/// Which engine `lowrank` runs: block majorants for a kernel whose low-rank bound is
+/// loose (the atmospheric one) or missing (a kernel of rank 0 that bounds blocks), the
+/// bucketed engines otherwise; the `engine` option forces either, and a checkpoint of
+/// one engine restores into a scheme on another unless that one is pinned.
+#[test]
+fn lowrank_chooses_block_majorants_for_a_loose_or_missing_bound() {
+    use coagula_core::scheme::facade::{BucketMode, Init, Model, Options};
+    use coagula_core::scheme::lowrank::AutoBucketed;
+    let lowrank = registry::find("lowrank").unwrap();
+    let engine = |k: Coagulation, opts: &Options| {
+        let init = Init::Counts {
+            counts: &[1000],
+            volume: 1000.0,
+        };
+        let model = Model::coagulation(k, coagula_core::kernel::NoFragmentation);
+        registry::build::<_, _, Pcg64Mcg>(lowrank, model, &init, opts).map(|s| s.engine())
+    };
+    let auto = Options::default();
+    let atm = Coagulation::atmospheric();
+    assert_eq!(engine(atm, &auto).unwrap(), Some(BucketMode::Blocks));
+    let pinned = Options::default().with_engine(Some(BucketMode::Counted));
+    assert_eq!(engine(atm, &pinned).unwrap(), Some(BucketMode::Counted));
+    // a tight low-rank bound keeps the bucketed engines (the Osinsky rows)
+    for k in [
+        Coagulation::constant(1.0).unwrap(),
+        Coagulation::additive(),
+        Coagulation::brownian(),
+    ] {
+        assert_eq!(engine(k, &auto).unwrap(), Some(BucketMode::Counted));
+        let forced = Options::default().with_engine(Some(BucketMode::Blocks));
+        assert_eq!(engine(k, &forced).unwrap(), Some(BucketMode::Blocks));
+    }
+
+    // no low-rank bound at all: blocks, and the low-rank-only layouts refuse it by name
+    #[derive(Clone, Copy, Debug)]
+    struct Bounded;
+    impl CoagulationKernel for Bounded {
+        fn rate(&self, x: f64, y: f64) -> f64 {
+            (x * y).sqrt()
+        }
+        fn sup_block(&self, _x0: f64, x1: f64, _y0: f64, y1: f64) -> Option<f64> {
+            Some((x1 * y1).sqrt())
+        }
+    }
+    use coagula_core::observe::Observe;
+    let mut s = AutoBucketed::<_, 1, 2>::new(Bounded, &[400], 400.0).unwrap();
+    assert_eq!(s.mode(), BucketMode::Blocks);
+    let mut rng = Pcg64Mcg::seed_from_u64(5);
+    s.advance_to(3.0, &mut rng).unwrap();
+    assert!(s.particles() < 400);
+    let e = s.set_mode(Some(BucketMode::Slots)).unwrap_err();
+    assert!(format!("{e}").contains("rank"), "{e}");
+    assert_eq!(s.mode(), BucketMode::Blocks);
+
+    // checkpoints move between engines unless pinned
+    use coagula_core::checkpoint::Checkpoint;
+    let mut a = AutoBucketed::<_, 2, 4>::new(atm, &[3000], 3000.0).unwrap();
+    a.advance_to(5.0, &mut rng).unwrap();
+    let mut buf = vec![0u8; a.checkpoint_len()];
+    let n = a.save_to(&mut buf).unwrap();
+    let mut b = AutoBucketed::<_, 2, 4>::new(atm, &[10], 10.0)
+        .unwrap()
+        .with_mode(Some(BucketMode::Counted))
+        .unwrap();
+    let e = b.restore_from(&buf[..n]).unwrap_err();
+    assert!(format!("{e}").contains("pinned"), "{e}");
+    assert_eq!(b.mode(), BucketMode::Counted);
+    b.set_mode(None).unwrap();
+    b.restore_from(&buf[..n]).unwrap();
+    assert_eq!(b.mode(), BucketMode::Blocks);
+    assert_eq!(b.counts(), a.counts());
+    assert_eq!(b.time(), a.time());
+}

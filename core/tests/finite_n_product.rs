@@ -55,7 +55,7 @@ fn transitions((s, d): &State, doubling: bool) -> Vec<(Option<State>, f64)> {
             t[a - 1] -= 1;
             t[b - 1] -= 1;
             t[a + b - 1] += 1;
-            if !doubling || n - 1 >= N0 / 2 {
+            if !doubling || n > N0 / 2 {
                 out.push((Some((t, *d)), rate));
             } else if *d == 0 {
                 // particle doubling: every count and V doubled

@@ -141,7 +141,7 @@ static void counts_schemes(void) {
     coag_kernel_free(builtin);
 }
 
-/* The engine a sim runs now ("slots", "counted"; "" when it has none). */
+/* The engine a sim runs now ("slots", "counted", "blocks"; "" when it has none). */
 static const char *engine_of(const coag_sim *s) {
     const char *e = NULL;
     OK(coag_sim_engine(s, &e));
@@ -158,18 +158,18 @@ static coag_sim *lowrank_sim(const coag_kernel *k, const char *engine, uint64_t 
     return s;
 }
 
-/* The bucketed low-rank method's two engines: chosen by size (engine "auto" or not set)
- * or pinned; each pinned engine against the exact M0(2) of the constant kernel; the pin
+/* The low-rank method's engines: chosen by size (engine "auto" or not set) and by the
+ * kernel (block majorants for a loose low-rank bound), or pinned; each pinned engine against the exact M0(2) of the constant kernel; the pin
  * kept through set_counts and clone; a checkpoint of the other engine refused by a
  * pinned sim. */
 static void bucket_engines(void) {
     coag_kernel *k = KERNEL1("constant", 1.0);
     double e_m0;
     OK(coag_exact_moment(COAG_EXACT_CONSTANT, 0, 2.0, &e_m0));
-    const char *modes[4] = {NULL, "auto", "slots", "counted"};
+    const char *modes[5] = {NULL, "auto", "slots", "counted", "blocks"};
     /* 8192 particles: the size choice is the counted engine */
-    const char *runs[4] = {"counted", "counted", "slots", "counted"};
-    for (int mi = 0; mi < 4; mi++) {
+    const char *runs[5] = {"counted", "counted", "slots", "counted", "blocks"};
+    for (int mi = 0; mi < 5; mi++) {
         stats m0 = {0};
         for (int r = 0; r < REPLICAS; r++) {
             coag_sim *s = lowrank_sim(k, modes[mi], 2000 + r, 1 << 13);
@@ -186,6 +186,17 @@ static void bucket_engines(void) {
         CHECK(fabs(m0.mean - e_m0) < Z_TOL * stats_se(&m0), "engine %s: M0 %g ± %g vs %g",
               modes[mi] ? modes[mi] : "unset", m0.mean, stats_se(&m0), e_m0);
     }
+    /* by the kernel: the atmospheric kernel's low-rank bound is loose, so block
+     * majorants unless pinned */
+    coag_kernel *atm = KERNEL1("atmospheric", 1.0);
+    uint64_t many[1] = {20000};
+    coag_sim *ab = sim_counts("lowrank", atm, NULL, many, 1, 20000.0);
+    CHECK(strcmp(engine_of(ab), "blocks") == 0, "atmospheric by kernel: engine %s", engine_of(ab));
+    coag_sim *as = lowrank_sim(atm, "slots", 0, 20000);
+    CHECK(strcmp(engine_of(as), "slots") == 0, "atmospheric pinned to slots: engine %s", engine_of(as));
+    coag_sim_free(ab);
+    coag_sim_free(as);
+    coag_kernel_free(atm);
     /* by size: 20000 particles run on slots, and a replaced state chooses again; pinned
      * engines stay */
     uint64_t small[1] = {100};

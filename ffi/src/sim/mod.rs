@@ -435,8 +435,9 @@ pub unsafe extern "C" fn coag_sim_scheme(sim: *const coag_sim, out: *mut *const 
     })
 }
 
-/// The engine the bucketed low-rank scheme runs now (a static string: `"slots"` or
-/// `"counted"`; chosen by the particle number unless the `engine` option pinned it);
+/// The engine the `lowrank` scheme runs now (a static string: `"slots"`, `"counted"` or
+/// `"blocks"`; chosen by the kernel and the particle number unless the `engine` option
+/// pinned it);
 /// `COAG_UNSUPPORTED` for every other scheme.
 ///
 /// # Safety
@@ -450,6 +451,7 @@ pub unsafe extern "C" fn coag_sim_engine(sim: *const coag_sim, out: *mut *const 
         let name: &'static std::ffi::CStr = match s.sim.engine() {
             Some(coagula_core::scheme::facade::BucketMode::Slots) => c"slots",
             Some(coagula_core::scheme::facade::BucketMode::Counted) => c"counted",
+            Some(coagula_core::scheme::facade::BucketMode::Blocks) => c"blocks",
             None => {
                 return fail(
                     COAG_UNSUPPORTED,

@@ -1,13 +1,14 @@
 //! `coagula bench blocks`: block majorants (`lowrank-blocks`) against the low-rank
-//! engine (`lowrank`) on a kernel no low-rank bound fits (issue 45), from monomers,
-//! interval by interval of t: proposals, coagulations, acceptance and the cost per
+//! engine (`lowrank:slots`, the `lowrank` scheme pinned to its bucketed engine;
+//! unpinned it would choose block majorants) on a kernel no low-rank bound fits
+//! (issue 45), from monomers, interval by interval of t: proposals, coagulations, acceptance and the cost per
 //! proposal and per coagulation. Runs alternate between the schemes; the fastest of
 //! each interval is kept (the event counts are those of one seed).
 
 use coagula_core::kernel::NoFragmentation;
 use coagula_core::kernel::builtin::{self, Builtin};
 use coagula_core::random::generator;
-use coagula_core::scheme::facade::{Init, Model, Options};
+use coagula_core::scheme::facade::{Init, Model, Options, Value};
 use coagula_core::scheme::registry;
 use std::time::{Duration, Instant};
 
@@ -28,7 +29,16 @@ fn once(
     budget: Duration,
     seed: u64,
 ) -> Result<Vec<Option<Cell>>, String> {
-    let info = registry::find(scheme).map_err(|e| e.to_string())?;
+    let (name, engine) = match scheme.split_once(':') {
+        Some((name, engine)) => (name, Some(engine)),
+        None => (scheme, None),
+    };
+    let info = registry::find(name).map_err(|e| e.to_string())?;
+    let mut opts = Options::default();
+    if let Some(engine) = engine {
+        opts.set("engine", Value::Name(engine))
+            .map_err(|e| format!("{scheme}: {e}"))?;
+    }
     let Builtin::Coagulation(k) = builtin::make(kernel, &[]).map_err(|e| e.to_string())? else {
         return Err(format!("{kernel}: not a coagulation kernel"));
     };
@@ -40,7 +50,7 @@ fn once(
         info,
         Model::coagulation(k, NoFragmentation),
         &init,
-        &Options::default(),
+        &opts,
     )
     .map_err(|e| e.to_string())?;
     let mut rng = generator(seed, 0);

@@ -1,7 +1,10 @@
 //! The registry's `lowrank` scheme: the bucketed layout with the engine chosen by the
 //! system's size — [`BucketedCounted`] up to [`COUNTED_UP_TO`] initial particles (exact
 //! bucket counts in a sum tree: nothing stale when almost every event changes the
-//! distribution), [`Bucketed`] above (slots and alias tables: O(1) per proposal).
+//! distribution), [`Bucketed`] above (slots and alias tables: O(1) per proposal) — or
+//! by the kernel: block majorants ([`Blocks`](super::Blocks)) for a kernel that says
+//! its low-rank bound is loose (`CoagulationKernel::low_rank_is_loose`) or has none,
+//! and bounds blocks (`CoagulationKernel::sup_block`).
 //!
 //! The choice is made per scheme, not per proposal: each variant is a whole
 //! [`LowRankMc`] with its own event loop, so neither pays for the other's code (a
@@ -11,7 +14,9 @@
 //! crossover pins the engine with [`AutoBucketed::with_mode`]; a pinned scheme keeps its
 //! engine through `set_counts` and refuses a checkpoint the other engine wrote.
 
-use super::{Bucketed, BucketedCounted, COUNTED_UP_TO, Coagulate, LowRankMc, ProposalEngine};
+use super::{
+    BlockEngine, Bucketed, BucketedCounted, COUNTED_UP_TO, Coagulate, LowRankMc, ProposalEngine,
+};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
 use crate::error::Result;
 use crate::kernel::CoagulationKernel;
@@ -50,6 +55,8 @@ enum Engine<K, const R: usize, const W: usize> {
     Slots(Bucketed<K, R, W>),
     /// Up to [`COUNTED_UP_TO`] initial particles, or pinned.
     Counted(BucketedCounted<K, R, W>),
+    /// For a loose or missing low-rank bound, or pinned.
+    Blocks(LowRankMc<K, R, BlockEngine>),
 }
 
 /// `$body` with `$s` bound to whichever scheme is in use.
@@ -58,12 +65,23 @@ macro_rules! either {
         match $self {
             Engine::Slots($s) => $body,
             Engine::Counted($s) => $body,
+            Engine::Blocks($s) => $body,
         }
     };
 }
 
-/// The engine for `Σ counts` initial particles.
-fn mode_for(counts: &[u64]) -> BucketMode {
+/// Whether `kernel` runs on block majorants when not pinned: its low-rank bound is
+/// loose, missing or of a rank above the low-rank engines' 4, and it bounds blocks.
+pub fn prefers_blocks<K: CoagulationKernel>(kernel: &K) -> bool {
+    (kernel.low_rank_is_loose() || !(1..=4).contains(&kernel.rank()))
+        && kernel.sup_block(1.0, 2.0, 1.0, 2.0).is_some()
+}
+
+/// The engine for `kernel` and `Σ counts` initial particles.
+fn mode_for<K: CoagulationKernel>(kernel: &K, counts: &[u64]) -> BucketMode {
+    if prefers_blocks(kernel) {
+        return BucketMode::Blocks;
+    }
     let n0 = counts
         .iter()
         .try_fold(0u64, |a, &c| a.checked_add(c))
@@ -127,11 +145,14 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         budget: usize,
         pin: Option<BucketMode>,
     ) -> Result<Self> {
-        let engine = match pin.unwrap_or_else(|| mode_for(counts)) {
+        let engine = match pin.unwrap_or_else(|| mode_for(&kernel, counts)) {
             BucketMode::Slots => Engine::Slots(Bucketed::new_with_memory_budget(
                 kernel, counts, volume, budget,
             )?),
             BucketMode::Counted => Engine::Counted(BucketedCounted::new_with_memory_budget(
+                kernel, counts, volume, budget,
+            )?),
+            BucketMode::Blocks => Engine::Blocks(LowRankMc::new_with_memory_budget(
                 kernel, counts, volume, budget,
             )?),
         };
@@ -167,6 +188,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         let engine = match self.engine {
             Engine::Slots(s) => Engine::Slots(s.with_size_limit(limit)),
             Engine::Counted(s) => Engine::Counted(s.with_size_limit(limit)),
+            Engine::Blocks(s) => Engine::Blocks(s.with_size_limit(limit)),
         };
         AutoBucketed { engine, ..self }
     }
@@ -176,6 +198,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         let engine = match self.engine {
             Engine::Slots(s) => Engine::Slots(s.with_batched_clock(on)),
             Engine::Counted(s) => Engine::Counted(s.with_batched_clock(on)),
+            Engine::Blocks(s) => Engine::Blocks(s.with_batched_clock(on)),
         };
         AutoBucketed { engine, ..self }
     }
@@ -185,6 +208,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
         match self.engine {
             Engine::Slots(_) => BucketMode::Slots,
             Engine::Counted(_) => BucketMode::Counted,
+            Engine::Blocks(_) => BucketMode::Blocks,
         }
     }
 
@@ -247,7 +271,9 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
     /// new particle number (time, totals and limits carry over). Errors leave the scheme
     /// unchanged.
     pub fn set_counts(&mut self, counts: &[u64], volume: f64) -> Result<()> {
-        let mode = self.pin.unwrap_or_else(|| mode_for(counts));
+        let mode = self
+            .pin
+            .unwrap_or_else(|| either!(&self.engine, s => mode_for(&s.kernel, counts)));
         if mode == self.mode() {
             return either!(&mut self.engine, s => s.set_counts(counts, volume));
         }
@@ -272,6 +298,9 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
             }
             BucketMode::Counted => {
                 Engine::Counted(either!(&self.engine, s => carried(s, counts, volume))?)
+            }
+            BucketMode::Blocks => {
+                Engine::Blocks(either!(&self.engine, s => carried(s, counts, volume))?)
             }
         })
     }
@@ -331,37 +360,48 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> Checkpoint
     fn restore(&mut self, r: &mut Reader) -> Result<()> {
         let mut probe = r.clone();
         let tag = (probe.u64(), probe.u64(), probe.u64());
-        let slots = LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag();
-        let counted = LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag();
-        let theirs = match (self.mode(), tag) {
-            (BucketMode::Counted, (Ok(_), Ok(_), Ok(t))) => t == slots,
-            (BucketMode::Slots, (Ok(_), Ok(_), Ok(t))) => t == counted,
-            _ => false,
+        let writer = match tag {
+            (Ok(_), Ok(_), Ok(t)) => [
+                (
+                    LowRankMc::<K, R, super::BucketedEngine<R, W>>::tag(),
+                    BucketMode::Slots,
+                ),
+                (
+                    LowRankMc::<K, R, super::CountedEngine<R, W>, Coagulate>::tag(),
+                    BucketMode::Counted,
+                ),
+                (LowRankMc::<K, R, BlockEngine>::tag(), BucketMode::Blocks),
+            ]
+            .into_iter()
+            .find(|&(tag, _)| tag == t)
+            .map(|(_, mode)| mode),
+            _ => None,
         };
-        if theirs {
-            if let Some(pin) = self.pin {
-                return Err(crate::error::Error::Checkpoint {
-                    what: match pin {
-                        BucketMode::Slots => {
-                            "the counted engine's; this scheme is pinned to the slot engine"
-                        }
-                        BucketMode::Counted => {
-                            "the slot engine's; this scheme is pinned to the counted engine"
-                        }
-                    },
-                });
+        match writer {
+            Some(theirs) if theirs != self.mode() => {
+                if let Some(pin) = self.pin {
+                    return Err(crate::error::Error::Checkpoint {
+                        what: match pin {
+                            BucketMode::Slots => {
+                                "another engine's; this scheme is pinned to the slot engine"
+                            }
+                            BucketMode::Counted => {
+                                "another engine's; this scheme is pinned to the counted engine"
+                            }
+                            BucketMode::Blocks => {
+                                "another engine's; this scheme is pinned to block majorants"
+                            }
+                        },
+                    });
+                }
+                // (a blank of the writer's engine, with this one's kernel and options)
+                let mut other = self.on(theirs, &[2], 1.0)?;
+                either!(&mut other, s => s.restore(r))?;
+                self.engine = other;
+                Ok(())
             }
-            // (a blank of the other engine, with this one's kernel and options)
-            let other_mode = match self.mode() {
-                BucketMode::Slots => BucketMode::Counted,
-                BucketMode::Counted => BucketMode::Slots,
-            };
-            let mut other = self.on(other_mode, &[2], 1.0)?;
-            either!(&mut other, s => s.restore(r))?;
-            self.engine = other;
-            return Ok(());
+            _ => either!(&mut self.engine, s => s.restore(r)),
         }
-        either!(&mut self.engine, s => s.restore(r))
     }
 }
 

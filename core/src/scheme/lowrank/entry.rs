@@ -49,7 +49,7 @@ macro_rules! by_rank {
                 $body
             }
             _ => Err(Error::Unsupported {
-                what: "low-rank schemes: the kernel needs a low-rank bound of rank 1..4",
+                what: "low-rank layouts: the kernel needs a low-rank bound of rank 1..4 (lowrank and lowrank-blocks run a kernel of another rank, or none, on block majorants when it bounds blocks)",
             }),
         }
     };
@@ -74,6 +74,9 @@ const COUNT_OPTIONS: &[&str] = &["size-limit", "memory-budget", "batched-clock"]
 /// particle; up to [`COUNTED_UP_TO`] particles (or pinned) the counted engine, with a
 /// dense `u64` a size and a list entry per particle.
 fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
+    if opts.engine() == Some(BucketMode::Blocks) {
+        return blocks_memory(reach);
+    }
     let first = reach.start.max(1).next_power_of_two().max(64);
     let counted = match opts.engine() {
         Some(mode) => mode == BucketMode::Counted,
@@ -84,6 +87,18 @@ fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
     } else {
         reach.bytes(first, 4, 0, 6)
     }
+}
+
+/// Block majorants: the count tree (16 bytes a size) and the blocks (about
+/// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 40 bytes each).
+fn blocks_memory(reach: &Reach) -> u64 {
+    let first = reach.start.max(8).next_power_of_two();
+    reach.bytes(
+        first,
+        16 + (40.0 * super::blocks::BLOCKS_PER_SIZE) as u64,
+        0,
+        0,
+    )
 }
 
 /// Per-size segment trees, 8-ary: a count and 2R factors a size, the tree's 2R
@@ -102,10 +117,13 @@ fn binary_tree_memory(_opts: &Options, reach: &Reach) -> u64 {
     reach.bytes(first, 8 + 64 * reach.rank as u64, 0, 0)
 }
 
-/// An entry of low-rank MC over counts: the layouts differ only in their engine.
+/// An entry of low-rank MC over counts: the layouts differ only in their engine. With
+/// `blocks: true` a kernel of rank 0 or above 4 that bounds blocks builds the scheme
+/// at R = 1, where it runs on block majorants (the `lowrank` entry's automatic choice,
+/// [`prefers_blocks`](super::auto::prefers_blocks)).
 macro_rules! counts_entry {
     ($entry:ident, $name:expr, $paper:expr, $summary:expr, $tag:expr, $options:expr,
-     memory: $memory:path,
+     memory: $memory:path, blocks: $blocks:literal,
      |$k:ident, $counts:ident, $volume:ident, $opts:ident| $make:expr) => {
         #[doc = concat!("The registry entry `", $name, "`.")]
         pub struct $entry;
@@ -139,7 +157,11 @@ macro_rules! counts_entry {
                 let ($k, _) = model.kernels()?;
                 let ($counts, $volume) = counts_of(init, opts)?;
                 let $opts = opts;
-                by_rank!($k.rank(), R, W => {
+                let rank = match $k.rank() {
+                    0 | 5.. if $blocks && super::auto::prefers_blocks(&$k) => 1,
+                    r => r,
+                };
+                by_rank!(rank, R, W => {
                     let _ = W;
                     let s = $make;
                     Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
@@ -170,6 +192,7 @@ counts_entry!(
     tag::BUCKETED,
     &["size-limit", "memory-budget", "batched-clock", "engine"],
     memory: bucketed_memory,
+    blocks: true,
     |k, counts, volume, opts| AutoBucketed::<K, R, W>::new_with_mode(
         k,
         counts,
@@ -189,6 +212,7 @@ counts_entry!(
     tag::LOWRANK,
     COUNT_OPTIONS,
     memory: tree_memory,
+    blocks: false,
     |k, counts, volume, opts| LowRank::<K, R>::new_with_memory_budget(
         k,
         counts,
@@ -207,6 +231,7 @@ counts_entry!(
     tag::LOWRANK_BINARY,
     COUNT_OPTIONS,
     memory: binary_tree_memory,
+    blocks: false,
     |k, counts, volume, opts| LowRank::<K, R, BinaryTree<R>>::new_with_memory_budget(
         k,
         counts,
@@ -254,16 +279,9 @@ impl Register for BlocksEntry {
         Ok(Boxed::<Self, _, _, _>::new(s, model, init, opts).boxed())
     }
 
-    /// The count tree (16 bytes a size) and the blocks (about
-    /// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 40 bytes each).
+    /// See `blocks_memory`.
     fn memory_estimate(_init: &Init<'_>, _opts: &Options, _fragments: bool, reach: &Reach) -> u64 {
-        let first = reach.start.max(8).next_power_of_two();
-        reach.bytes(
-            first,
-            16 + (40.0 * super::blocks::BLOCKS_PER_SIZE) as u64,
-            0,
-            0,
-        )
+        blocks_memory(reach)
     }
 
     fn blank(_init: &Init<'_>, _opts: &Options, _fragments: bool) -> Blank {

@@ -66,6 +66,10 @@ pub enum BucketMode {
     Slots,
     /// Exact bucket counts in a sum tree: fastest for small systems.
     Counted,
+    /// Block majorants over the size-pair matrix (`docs/design/block-majorants.md`):
+    /// for kernels whose low-rank bound is loose or missing. Chosen when the kernel
+    /// says its low-rank bound is loose and it bounds blocks.
+    Blocks,
 }
 
 /// How low-rank DSMC draws collision directions (Osinsky 2023 §5).
@@ -206,9 +210,9 @@ pub const KEYS: &[Key] = &[
     },
     Key {
         name: "engine",
-        kind: Kind::Name(&["auto", "slots", "counted"]),
+        kind: Kind::Name(&["auto", "slots", "counted", "blocks"]),
         default: "auto",
-        doc: "the bucketed low-rank scheme's engine: slots and alias tables (large systems), exact bucket counts (small ones), or chosen by the particle number",
+        doc: "the low-rank scheme's engine: slots and alias tables (large systems), exact bucket counts (small ones), block majorants (kernels with a loose or no low-rank bound), or chosen by the kernel and the particle number",
         must_match: true,
     },
     Key {
@@ -376,7 +380,7 @@ fn key_names_message(key: &Key) -> &'static str {
         "randomization" => "one of none, shift, matousek, owen",
         "sorting" => "one of adaptive, full",
         "sampler" => "one of default, tree, groups",
-        "engine" => "one of auto, slots, counted",
+        "engine" => "one of auto, slots, counted, blocks",
         "directions" => "one of conditional, uniform",
         _ => "one of the names the key lists",
     }
@@ -422,8 +426,12 @@ impl Options {
                     [None, Some(Sampler::SumTree), Some(Sampler::Groups)][name(k, value)?]
             }
             "engine" => {
-                next.engine =
-                    [None, Some(BucketMode::Slots), Some(BucketMode::Counted)][name(k, value)?]
+                next.engine = [
+                    None,
+                    Some(BucketMode::Slots),
+                    Some(BucketMode::Counted),
+                    Some(BucketMode::Blocks),
+                ][name(k, value)?]
             }
             "directions" => {
                 next.directions = [Directions::Conditional, Directions::Uniform][name(k, value)?]
@@ -690,7 +698,8 @@ impl Options {
             truncation: f64::from_bits(w[8]),
             strict_bound: [false, true][pick(w[9], 2)?],
             sampler: opt(w[10], 2)?.map(|i| [Sampler::SumTree, Sampler::Groups][i]),
-            engine: opt(w[11], 2)?.map(|i| [BucketMode::Slots, BucketMode::Counted][i]),
+            engine: opt(w[11], 3)?
+                .map(|i| [BucketMode::Slots, BucketMode::Counted, BucketMode::Blocks][i]),
             directions: [Directions::Conditional, Directions::Uniform][pick(w[12], 2)?],
             seed: w[13],
             stream: w[14],
