@@ -8,6 +8,10 @@ pub const EXAMPLES: &[(&str, &str)] = &[
         include_str!("../../examples/aerosol-brownian-physical.toml"),
     ),
     (
+        "blocks-atmospheric.toml",
+        include_str!("../../examples/blocks-atmospheric.toml"),
+    ),
+    (
         "constant-exponential-massflow.toml",
         include_str!("../../examples/constant-exponential-massflow.toml"),
     ),

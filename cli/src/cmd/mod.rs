@@ -11,6 +11,7 @@ mod reproduce;
 pub mod run;
 mod schemes;
 pub mod validate;
+mod validate_discrete;
 mod validate_sectional;
 
 use crate::args::{BenchKind, Command};

@@ -371,6 +371,16 @@ fn evaluate_check(
                 "sectional (fixed pivot)".into(),
             )
         }
+        Reference::Named(n) if n == "discrete" => {
+            let t = check
+                .t
+                .ok_or_else(|| format!("case {name}: discrete needs t"))?;
+            (
+                super::validate_discrete::reference(plan, &o, t)
+                    .map_err(|e| format!("case {name}: {e}"))?,
+                "discrete Smoluchowski equations".into(),
+            )
+        }
         Reference::Named(n) => return Err(format!("case {name}: unknown reference {n:?}")),
         Reference::Run { run } => {
             let mut ov = overrides.to_vec();
@@ -472,7 +482,8 @@ mod tests {
                     "eibeck2000",
                     "maftei2016",
                     "exact",
-                    "processes"
+                    "processes",
+                    "blocks"
                 ]
                 .contains(&prefix),
                 "{}",

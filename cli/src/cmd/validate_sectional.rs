@@ -147,7 +147,7 @@ fn solve(
 /// The fastest loss rate of any pivot: `Σ_k K(x_j, x_k) n_k + λ(x_j)`, and with growth
 /// `G(x_j)` over the gap to the next pivot (what growth moves on), the largest over j
 /// (what bounds RK4's step).
-fn fastest_loss<K: CoagulationKernel>(
+pub(super) fn fastest_loss<K: CoagulationKernel>(
     sec: &Sectional<K>,
     removal: Option<(f64, f64)>,
     growth: Option<(f64, f64)>,
