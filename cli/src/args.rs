@@ -442,9 +442,19 @@ pub(crate) enum BenchKind {
             default_value = "lowrank-blocks,lowrank:slots"
         )]
         schemes: Vec<String>,
-        /// Initial monomers (c0 = 1).
+        /// The kernel's parameters, `NAME=VALUE` (repeatable; e.g. `unit-radius=1e-5` for
+        /// the gravitational kernel).
+        #[arg(long = "param", value_parser = name_value)]
+        params: Vec<(String, f64)>,
+        /// Initial particles.
         #[arg(long, default_value_t = 1_000_000, value_parser = count_in::<2, {1u64 << 32}>, allow_negative_numbers = true)]
         n0: u64,
+        /// Mean size of a geometric start (1: monomers).
+        #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
+        mean: f64,
+        /// Number concentration of the start (particles per unit volume).
+        #[arg(long, default_value_t = 1.0, value_parser = positive_f64)]
+        concentration: f64,
         /// The ends of the intervals of t, comma-separated, increasing.
         #[arg(long, value_delimiter = ',', default_value = "5,100,1000,3000")]
         times: Vec<f64>,
@@ -536,4 +546,18 @@ pub(crate) fn rqmc_count(v: &str) -> Result<u32, String> {
     } else {
         Ok(r)
     }
+}
+
+/// `NAME=VALUE` with a finite number.
+fn name_value(s: &str) -> Result<(String, f64), String> {
+    let (k, v) = s
+        .split_once('=')
+        .ok_or_else(|| format!("{s:?}: write NAME=VALUE"))?;
+    let v: f64 = v
+        .parse()
+        .map_err(|_| format!("{s:?}: {v:?} is not a number"))?;
+    if !v.is_finite() {
+        return Err(format!("{s:?}: not finite"));
+    }
+    Ok((k.to_string(), v))
 }

@@ -72,14 +72,20 @@ fn check_all(grid_name: &str, grid: &[f64], min_size: f64) {
         };
         let grid = &grid[..];
         let k = k.with_min_size(min_size).unwrap();
+        let l = check_low_rank(&k, grid).unwrap();
+        row(name, grid_name, "low-rank", &l);
+        assert_eq!(l.violations, 0, "{name}: low-rank bound violated ({l:?})");
+        if k.majorant(1.0).is_none() {
+            // (the gravitational kernel: no product majorant; the schemes that need one
+            // refuse it)
+            assert!(check_majorant(&k, grid).is_err(), "{name}");
+            continue;
+        }
         let m = check_majorant(&k, grid).unwrap();
         row(name, grid_name, "majorant", &m);
         assert_eq!(m.violations, 0, "{name}: majorant violated ({m:?})");
         assert_eq!(m.monotonicity_violations, 0, "{name}: h(x)/x increases");
         assert!(m.max_ratio <= 1.0 + 1e-12);
-        let l = check_low_rank(&k, grid).unwrap();
-        row(name, grid_name, "low-rank", &l);
-        assert_eq!(l.violations, 0, "{name}: low-rank bound violated ({l:?})");
     }
 }
 
@@ -110,11 +116,12 @@ fn bounds_are_as_tight_as_claimed() {
         };
         let l = check_low_rank(&k, &grid).unwrap();
         if k.low_rank_is_loose() {
-            // (the atmospheric kernel) what makes a kernel loose: an acceptance that
-            // falls towards 0 on part of the range, and a bound attained nowhere near 1
-            // off the diagonal's neighbours
+            // (the atmospheric and gravitational kernels) what makes a kernel loose: an
+            // acceptance that falls towards 0 on part of the range, though the bound is
+            // approached elsewhere (the gravitational one to 1/1.125: E = 1 for large
+            // drops against the bound's E_max)
             assert!(l.worst_acceptance < 1e-3, "{name}: {l:?}");
-            assert!(l.max_ratio <= 1.0 && l.max_ratio > 0.99, "{name}: {l:?}");
+            assert!(l.max_ratio <= 1.0 && l.max_ratio > 0.85, "{name}: {l:?}");
         } else if name.starts_with("free") {
             assert!(
                 l.worst_acceptance >= 1.0 / 2f64.sqrt() - 1e-12,
@@ -128,7 +135,10 @@ fn bounds_are_as_tight_as_claimed() {
                 "{name} low-rank not exact: {l:?}"
             );
         }
-        let m = check_majorant(&k, &grid).unwrap();
+        let Ok(m) = check_majorant(&k, &grid) else {
+            assert!(k.majorant(1.0).is_none(), "{name}");
+            continue;
+        };
         // at the smallest pair the majorants of constant, multiplicative, product,
         // Brownian, additive (s = 1) and free molecular (s = 1) are attained
         if (!name.starts_with("homogeneous") || name.ends_with("γ=2")) && !k.integer_sizes() {

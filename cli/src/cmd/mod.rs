@@ -241,12 +241,27 @@ fn bench_command(which: BenchKind) -> Done {
         }),
         BenchKind::Blocks {
             kernel,
+            params,
             schemes,
             n0,
+            mean,
+            concentration,
             times,
             budget,
             repeat,
-        } => ok(bench::blocks(&kernel, &schemes, n0, &times, budget, repeat)),
+        } => ok(bench::blocks(
+            &bench::BlocksStart {
+                kernel,
+                params,
+                n0,
+                mean,
+                concentration,
+            },
+            &schemes,
+            &times,
+            budget,
+            repeat,
+        )),
         BenchKind::Processes {
             scheme,
             n0,

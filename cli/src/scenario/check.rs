@@ -559,7 +559,8 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
         ));
     }
 
-    // the kernel in the simulation's size units: K(iδ, jδ) = δ^λ K(i, j); integer
+    // the kernel in the simulation's size units: K(iδ, jδ) (δ^λ K(i, j) for a homogeneous
+    // kernel); integer
     // sizes narrow the bounds to x ≥ 1
     let model = Model::of_builtin(builtin, |k| k, frag).map_err(|e| src.at("fragmentation", e))?;
     let (model, coefficient) = match model {
@@ -570,7 +571,7 @@ pub(super) fn check(s: Scenario, src: &Source<'_>) -> Result<Plan, ScenarioError
             let b = kernel.coefficient();
             let kernel = if unit != 1.0 {
                 kernel
-                    .with_coefficient(unit.powf(kernel.homogeneity()))
+                    .in_size_unit(unit)
                     .map_err(|e| src.at("initial.resolution", e))?
             } else {
                 kernel

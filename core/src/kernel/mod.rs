@@ -38,7 +38,7 @@ pub mod gas;
 pub mod temperature;
 
 pub use check::{BoundCheck, check_low_rank, check_majorant, log_grid};
-pub use coagulation::{BOLTZMANN, Coagulation, atmospheric};
+pub use coagulation::{BOLTZMANN, Coagulation, atmospheric, gravitational};
 pub use fragmentation::{
     BinaryUniform, Fragmentation, FragmentationKernel, NoFragmentation, UserFragmentation,
     break_rate_bound, checked_break_rate, checked_break_rate_within,

@@ -20,11 +20,43 @@ struct Cell {
     events: u64,
 }
 
+/// The kernel and the start of a run.
+pub struct BlocksStart {
+    /// A built-in coagulation kernel.
+    pub kernel: String,
+    /// Its parameters by name (the rest at their defaults).
+    pub params: Vec<(String, f64)>,
+    /// Initial particles.
+    pub n0: u64,
+    /// Mean size of a geometric start (1: monomers).
+    pub mean: f64,
+    /// Particles per unit volume at the start.
+    pub concentration: f64,
+}
+
+impl BlocksStart {
+    /// Counts `N_i` of the start: `n0` monomers, or a geometric law of mean `mean`
+    /// (`N_i = round(n0 (1 − q) q^{i−1})`, q = 1 − 1/mean, to 50 means).
+    fn counts(&self) -> Vec<u64> {
+        if self.mean <= 1.0 {
+            return vec![self.n0];
+        }
+        let q = 1.0 - 1.0 / self.mean;
+        let mut p = 1.0 - q;
+        (0..(50.0 * self.mean) as usize)
+            .map(|_| {
+                let c = (self.n0 as f64 * p).round() as u64;
+                p *= q;
+                c
+            })
+            .collect()
+    }
+}
+
 /// One run of `scheme` through `times`; `None` past the wall-clock `budget`.
 fn once(
     scheme: &str,
-    kernel: &str,
-    n0: u64,
+    start: &BlocksStart,
     times: &[f64],
     budget: Duration,
     seed: u64,
@@ -39,12 +71,16 @@ fn once(
         opts.set("engine", Value::Name(engine))
             .map_err(|e| format!("{scheme}: {e}"))?;
     }
-    let Builtin::Coagulation(k) = builtin::make(kernel, &[]).map_err(|e| e.to_string())? else {
+    let params: Vec<(&str, f64)> = start.params.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    let kernel = &start.kernel;
+    let Builtin::Coagulation(k) = builtin::make(kernel, &params).map_err(|e| e.to_string())? else {
         return Err(format!("{kernel}: not a coagulation kernel"));
     };
+    let counts = start.counts();
+    let n: u64 = counts.iter().sum();
     let init = Init::Counts {
-        counts: &[n0],
-        volume: n0 as f64,
+        counts: &counts,
+        volume: n as f64 / start.concentration,
     };
     let mut sim = registry::build::<_, _, coagula_core::random::Generator>(
         info,
@@ -74,21 +110,26 @@ fn once(
 
 /// The table (see the module docs); `budget` seconds per run.
 pub fn blocks(
-    kernel: &str,
+    start: &BlocksStart,
     schemes: &[String],
-    n0: u64,
     times: &[f64],
     budget: f64,
     repeat: u32,
 ) -> Result<(), String> {
+    let what = if start.mean <= 1.0 {
+        "monomers".to_string()
+    } else {
+        format!("particles of geometric sizes, mean {}", start.mean)
+    };
     println!(
-        "{kernel} kernel from {n0} monomers (c0 = 1), seed 1; alternating runs, the fastest of {repeat} kept per interval; {budget} s a run"
+        "{} kernel {:?} from {} {what} ({} per unit volume), seed 1; alternating runs, the fastest of {repeat} kept per interval; {budget} s a run",
+        start.kernel, start.params, start.n0, start.concentration
     );
     let budget = Duration::from_secs_f64(budget);
     let mut best: Vec<Vec<Option<Cell>>> = vec![vec![None; times.len()]; schemes.len()];
     for _ in 0..repeat {
         for (s, scheme) in schemes.iter().enumerate() {
-            let run = once(scheme, kernel, n0, times, budget, 1)?;
+            let run = once(scheme, start, times, budget, 1)?;
             for (b, c) in best[s].iter_mut().zip(run) {
                 if let Some(c) = c
                     && b.is_none_or(|b| c.seconds < b.seconds)

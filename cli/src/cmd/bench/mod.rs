@@ -9,7 +9,7 @@ use std::time::{Duration, Instant};
 mod blocks;
 mod peers;
 mod processes;
-pub use blocks::blocks;
+pub use blocks::{BlocksStart, blocks};
 use peers::original_particles;
 pub use peers::peers;
 pub use processes::processes;

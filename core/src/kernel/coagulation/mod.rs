@@ -117,6 +117,8 @@ enum Kind {
     FreeMolecular,
     Brownian,
     Atmospheric,
+    /// Gravitational collection; the unit radius r0 (m).
+    Gravitational(f64),
 }
 
 impl Coagulation {
@@ -132,6 +134,7 @@ impl Coagulation {
             Kind::FreeMolecular => (6, 0.0),
             Kind::Brownian => (7, 0.0),
             Kind::Atmospheric => (8, 0.0),
+            Kind::Gravitational(r0) => (9, r0),
         };
         crate::checkpoint::fingerprint([
             tag,
@@ -212,6 +215,46 @@ impl Coagulation {
         Coagulation {
             min_size: 1.0,
             ..Self::new(Kind::Atmospheric)
+        }
+    }
+
+    /// Gravitational collection of water drops with Long's efficiency (see
+    /// [`gravitational`](crate::kernel::gravitational)), in m³/s, for drop volumes in
+    /// units of a drop of radius `unit_radius` (m, in [1e-8, 1e-2]): `K = E(R, r) π (r_x
+    /// + r_y)² |v_x − v_y|`. Its rank-3 bound (`E ≤ 1.125`, `|v_x − v_y| ≤ v_x + v_y`) is
+    /// loose, so `lowrank` runs it on block majorants; no product majorant.
+    pub fn gravitational(unit_radius: f64) -> Result<Self> {
+        finite("unit radius", unit_radius)?;
+        if !(1e-8..=1e-2).contains(&unit_radius) {
+            return Err(Error::OutOfRange {
+                name: "unit radius",
+                value: unit_radius,
+                range: "[1e-8, 1e-2] m",
+            });
+        }
+        Ok(Self::new(Kind::Gravitational(unit_radius)))
+    }
+
+    /// The kernel for sizes counted in units of `unit` of this kernel's sizes:
+    /// `K'(i, j) = K(i·unit, j·unit)` — for a homogeneous kernel the coefficient times
+    /// `unit^λ` ([`homogeneity`](Self::homogeneity)), for the gravitational one the unit
+    /// radius times `unit^{1/3}`.
+    pub fn in_size_unit(self, unit: f64) -> Result<Self> {
+        positive("size unit", unit)?;
+        match self.kind {
+            Kind::Gravitational(r0) => Ok(Coagulation {
+                kind: Kind::Gravitational(Self::gravitational(r0 * cbrt(unit))?.unit_radius()),
+                ..self
+            }),
+            _ => self.with_coefficient(libm::pow(unit, self.homogeneity())),
+        }
+    }
+
+    /// The gravitational kernel's unit radius (m); NaN for the other kernels.
+    fn unit_radius(&self) -> f64 {
+        match self.kind {
+            Kind::Gravitational(r0) => r0,
+            _ => f64::NAN,
         }
     }
 
@@ -299,8 +342,9 @@ impl Coagulation {
 
     /// The degree λ of homogeneity, `K(s x, s y) = s^λ K(x, y)`: 0 (constant,
     /// Brownian), 1 (additive), 2 (multiplicative), 2a (product), γ (homogeneous-γ),
-    /// 1/6 (free molecular). A front end that measures sizes in units of δ multiplies
-    /// the kernel by `δ^λ`.
+    /// 1/6 (free molecular); NaN for the gravitational kernel, which is not
+    /// homogeneous. A front end that measures sizes in units of δ uses
+    /// [`in_size_unit`](Self::in_size_unit).
     pub fn homogeneity(&self) -> f64 {
         match self.kind {
             Kind::Constant(_) | Kind::Brownian => 0.0,
@@ -310,6 +354,8 @@ impl Coagulation {
             Kind::Homogeneous(g) => g,
             Kind::FreeMolecular => 1.0 / 6.0,
             Kind::Atmospheric => -5.0 / 9.0,
+            // (not homogeneous: see in_size_unit)
+            Kind::Gravitational(_) => f64::NAN,
         }
     }
 
@@ -364,6 +410,7 @@ impl Coagulation {
             Kind::FreeMolecular => "free-molecular",
             Kind::Brownian => "brownian",
             Kind::Atmospheric => "atmospheric",
+            Kind::Gravitational(_) => "gravitational",
         }
     }
 }
@@ -432,6 +479,7 @@ impl CoagulationKernel for Coagulation {
         match self.kind {
             Kind::FreeMolecular => 3,
             Kind::Brownian | Kind::Atmospheric => 2,
+            Kind::Gravitational(_) => 3,
             _ => 1,
         }
     }
@@ -459,12 +507,12 @@ impl CoagulationKernel for Coagulation {
     fn low_rank_is_exact(&self) -> bool {
         !matches!(
             self.kind,
-            Kind::FreeMolecular | Kind::Homogeneous(_) | Kind::Atmospheric
+            Kind::FreeMolecular | Kind::Homogeneous(_) | Kind::Atmospheric | Kind::Gravitational(_)
         )
     }
 
     fn low_rank_is_loose(&self) -> bool {
-        self.kind == Kind::Atmospheric
+        matches!(self.kind, Kind::Atmospheric | Kind::Gravitational(_))
     }
 
     fn integer_sizes(&self) -> bool {
@@ -476,7 +524,7 @@ impl CoagulationKernel for Coagulation {
     fn low_rank_floor(&self) -> f64 {
         match self.kind {
             Kind::FreeMolecular => core::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-12),
-            Kind::Homogeneous(_) | Kind::Atmospheric => 0.0,
+            Kind::Homogeneous(_) | Kind::Atmospheric | Kind::Gravitational(_) => 0.0,
             _ => 1.0,
         }
     }
@@ -488,6 +536,9 @@ impl CoagulationKernel for Coagulation {
         if self.kind == Kind::Atmospheric {
             return Some(self.scale * atmospheric::sup_block(lo, hi, lo, hi));
         }
+        if let Kind::Gravitational(_) = self.kind {
+            return self.sup_block(lo, hi, lo, hi);
+        }
         let corners = [self.rate(lo, lo), self.rate(lo, hi), self.rate(hi, hi)];
         Some(corners.into_iter().fold(0.0, f64::max))
     }
@@ -498,6 +549,11 @@ impl CoagulationKernel for Coagulation {
     fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
         if self.kind == Kind::Atmospheric {
             return Some(self.scale * atmospheric::sup_block(x0, x1, y0, y1));
+        }
+        if let Kind::Gravitational(r0) = self.kind {
+            let r = |x: f64| r0 * cbrt(x);
+            let b = gravitational::bound_of_radii(r(x0), r(x1), r(y0), r(y1));
+            return Some(self.scale * b);
         }
         let corners = [
             self.rate(x0, y0),
@@ -527,12 +583,14 @@ impl Coagulation {
             }
             Kind::Brownian => (cbrt(x) + cbrt(y)) * (1.0 / cbrt(x) + 1.0 / cbrt(y)),
             Kind::Atmospheric => atmospheric::rate(x, y, cbrt_of(x), cbrt_of(y)),
+            Kind::Gravitational(r0) => gravitational::rate_of_radii(r0 * cbrt(x), r0 * cbrt(y)),
         }
     }
 
     /// The majorant with coefficient 1.
     fn unit_majorant(&self, x: f64) -> Option<f64> {
         Some(match self.kind {
+            Kind::Gravitational(_) => return None,
             Kind::Constant(k0) => sqrt(k0),
             Kind::Additive => x + self.c,
             Kind::Multiplicative => x,
@@ -596,6 +654,19 @@ impl Coagulation {
                 a[1] = c;
                 b[1] = 1.0 / c;
             }
+            Kind::Gravitational(r0) => {
+                // A(x, y) = c (r_x² v_x + r_x² v_y + 2 r_x v_x r_y), c = E_max π:
+                // A + Aᵀ = c (r_x + r_y)² (v_x + v_y)
+                let r = r0 * cbrt(x);
+                let v = gravitational::velocity(r);
+                let c = gravitational::E_MAX * core::f64::consts::PI;
+                a[0] = c * r * r * v;
+                b[0] = 1.0;
+                a[1] = c * r * r;
+                b[1] = v;
+                a[2] = 2.0 * c * r * v;
+                b[2] = r;
+            }
             Kind::Atmospheric => {
                 let p = pow(x, 2.0 / 9.0);
                 a[0] = atmospheric::A0 * pow(x, -5.0 / 9.0);
@@ -608,5 +679,6 @@ impl Coagulation {
 }
 
 pub mod atmospheric;
+pub mod gravitational;
 #[cfg(test)]
 mod tests;

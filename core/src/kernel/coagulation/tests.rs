@@ -315,3 +315,59 @@ fn additive_shift_is_tight_at_the_minimum_size() {
     // for s = 0 the shift is 1
     assert_eq!(Coagulation::additive().majorant(0.0), Some(1.0));
 }
+
+/// The gravitational kernel through `Coagulation`: its rank-3 bound holds (and is
+/// loose: below 1 % at near-equal small drops), its block bound holds on integer
+/// blocks, a change of size unit is the same kernel, and bad radii are refused.
+#[test]
+fn gravitational_bounds_and_units() {
+    let k = Coagulation::gravitational(1e-5).unwrap();
+    assert_eq!(k.name(), "gravitational");
+    assert!(k.low_rank_is_loose() && !k.low_rank_is_exact() && !k.integer_sizes());
+    assert!(k.majorant(2.0).is_none());
+    let (mut a, mut b, mut c, mut d) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
+    let mut worst = f64::INFINITY;
+    for i in 0..60 {
+        for j in 0..60 {
+            let (x, y) = (1.2f64.powi(i), 1.2f64.powi(j));
+            k.factors(x, &mut a, &mut b);
+            k.factors(y, &mut c, &mut d);
+            let bound: f64 = (0..3).map(|q| a[q] * d[q] + c[q] * b[q]).sum();
+            let r = k.rate(x, y);
+            assert!(r <= bound * (1.0 + 1e-12), "{x} {y}: {r} > {bound}");
+            if i != j {
+                worst = worst.min(r / bound);
+            }
+        }
+    }
+    assert!(worst < 0.01, "{worst}");
+    for &(x0, x1, y0, y1) in &[
+        (1.0, 4.0, 5.0, 8.0),
+        (1.0, 4.0, 1.0, 4.0),
+        (30.0, 60.0, 1.0, 2.0),
+    ] {
+        let sup = k.sup_block(x0, x1, y0, y1).unwrap();
+        for x in x0 as u32..=x1 as u32 {
+            for y in y0 as u32..=y1 as u32 {
+                assert!(k.rate(f64::from(x), f64::from(y)) <= sup);
+            }
+        }
+    }
+    // sizes in units of 8: the unit radius doubles
+    let k8 = k.in_size_unit(8.0).unwrap();
+    assert_eq!(
+        k8.rate(1.0, 3.0),
+        Coagulation::gravitational(2e-5).unwrap().rate(1.0, 3.0)
+    );
+    assert!((k8.rate(1.0, 3.0) / k.rate(8.0, 24.0) - 1.0).abs() < 1e-12);
+    assert_ne!(k.fingerprint(), k8.fingerprint());
+    for bad in [0.0, -1e-6, 1.0, f64::NAN] {
+        assert!(Coagulation::gravitational(bad).is_err(), "{bad}");
+    }
+    // the homogeneous kernels: in_size_unit is the coefficient δ^λ
+    let add = Coagulation::additive().in_size_unit(2.0).unwrap();
+    assert_eq!(
+        add.rate(1.0, 2.0),
+        2.0 * Coagulation::additive().rate(1.0, 2.0)
+    );
+}
