@@ -323,7 +323,7 @@ fn additive_shift_is_tight_at_the_minimum_size() {
 fn gravitational_bounds_and_units() {
     let k = Coagulation::gravitational(1e-5).unwrap();
     assert_eq!(k.name(), "gravitational");
-    assert!(k.low_rank_is_loose() && !k.low_rank_is_exact() && !k.integer_sizes());
+    assert!(!k.low_rank_is_loose() && !k.low_rank_is_exact() && !k.integer_sizes());
     assert!(k.majorant(2.0).is_none());
     let (mut a, mut b, mut c, mut d) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
     let mut worst = f64::INFINITY;
