@@ -10,14 +10,15 @@
 //! (`partition`): small next to the diagonal, growing away from it, each block a row
 //! strip and a column strip of the tree. A block's bound is the kernel's supremum over
 //! it (`CoagulationKernel::sup_block`), and its intensity `I_b = sup_b R_b C_b` (rows
-//! and columns the strips' particle numbers, read from the count tree), `sup_b R_b²/2`
-//! on the diagonal, where ordered pairs are drawn.
+//! and columns the strips' particle numbers, read from the count tree),
+//! `sup_b R_b (R_b − 1)/2` on the diagonal (its pairs of distinct particles).
 //!
 //! **Proposals.** A block b is chosen in proportion to a majorant `Î_b ≥ I_b` from a
 //! 4-ary sum tree (`sums`) and kept with probability `I_b / Î_b`; a row size and a
 //! column size are drawn by count, descending the count tree from the strips' nodes
-//! (on the diagonal a particle paired with itself is rejected, probability `1/N_i` when
-//! the sizes coincide). Proposals arrive at rate `Σ_b Î_b / V`, so each unordered pair of
+//! (on the diagonal an ordered pair of distinct particles of the strip, uniform: the
+//! second drawn among the other `R_b − 1`, so no proposal pairs a particle with
+//! itself). Proposals arrive at rate `Σ_b Î_b / V`, so each unordered pair of
 //! distinct particles in block b is proposed at rate `sup_b / V`; the rule accepts with
 //! `K / sup_b`, giving rate `K / V` (Osinsky 2023 §2's law).
 //!
@@ -82,7 +83,8 @@ pub struct BlockEngine {
 #[inline]
 fn intensity(b: &Block, sup: f64, rows: u64, cols: u64) -> f64 {
     if b.diagonal() {
-        sup * (0.5 * rows as f64 * rows as f64)
+        // the unordered pairs of distinct particles
+        sup * (0.5 * rows as f64 * rows.saturating_sub(1) as f64)
     } else {
         sup * (rows as f64 * cols as f64)
     }
@@ -211,10 +213,9 @@ impl BlockEngine {
         self.changed |= changed;
     }
 
-    /// A size index drawn by count below node `n` (whose count is `total > 0`).
+    /// The size index of the `u`-th particle below node `n` (`u` below its count).
     #[inline]
-    fn descend<G: Rng + ?Sized>(&self, mut n: usize, total: u64, rng: &mut G) -> u64 {
-        let mut u = below(rng, total);
+    fn descend(&self, mut n: usize, mut u: u64) -> u64 {
         let m = self.m as usize;
         while n < m {
             let left = self.tree[2 * n];
@@ -277,12 +278,21 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
             }
             return None;
         }
-        let x = self.descend(rn, rows, rng);
-        let y = self.descend(cn, cols, rng);
-        if x == y && (self.tree[(self.m + x) as usize] as f64) * open_unit(rng) <= 1.0 {
-            // the particle with itself, probability 1/N_x
-            return None;
-        }
+        let (x, y) = if b.diagonal() {
+            // an ordered pair of distinct particles of the strip, uniform
+            let p = below(rng, rows);
+            let mut q = below(rng, rows - 1);
+            if q >= p {
+                q += 1;
+            }
+            (self.descend(rn, p), self.descend(rn, q))
+        } else {
+            // (disjoint strips)
+            (
+                self.descend(rn, below(rng, rows)),
+                self.descend(cn, below(rng, cols)),
+            )
+        };
         Some(Candidate {
             x: x + 1,
             y: y + 1,
@@ -335,8 +345,18 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
         for c in &mut self.tree {
             *c *= 2;
         }
-        // every intensity and majorant times 4, exactly
+        // every off-diagonal intensity and majorant times 4, exactly; a diagonal
+        // block's pairs of distinct particles more than that (2R (2R − 1) = 4 R (R − 1)
+        // + 2R), so its majorant is raised where the scaled one falls short
         self.hats.scale(4.0);
+        for id in 0..self.part.blocks.len() {
+            if self.part.blocks[id].diagonal() {
+                let i = self.intensity_of(id);
+                if i > self.hats.leaf(id) {
+                    self.hats.set(id, hat_for(i));
+                }
+            }
+        }
         self.changed = true;
     }
 
