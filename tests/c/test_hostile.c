@@ -488,7 +488,9 @@ static void reproducers(const coag_kernel *k) {
             s = make(m, k, vols[v]);
             /* (a gas, or a temperature model with its bounces, at volume DBL_MIN
              * collides at finite rates near DBL_MAX: it runs, in steps of 1e-310 and
-             * less; the work limit ends it) */
+             * less; the work limit ends it. So does a coagulation scheme whose bound is
+             * tight enough that its proposal rate stays below DBL_MAX there: the block
+             * majorants, whose total stays finite where the coarser bounds overflow) */
             OK(coag_sim_set_work_limit(s, quick ? 20000 : 200000));
             /* observables that overflow a double are COAG_CAPACITY, never inf */
             double obs;
@@ -499,8 +501,8 @@ static void reproducers(const coag_kernel *k) {
             double tv = -1.0;
             OK(coag_sim_time(s, &tv));
             CHECK(st == COAG_INVALID_RATE || st == COAG_CAPACITY ||
-                      (schemes[m].model != COAG_MODEL_COAGULATION && v == 1 && st == COAG_INTERRUPTED && tv > 0.0 &&
-                       tv < 1.0),
+                      ((schemes[m].model != COAG_MODEL_COAGULATION || strcmp(NAME(m), "lowrank-blocks") == 0) &&
+                       v == 1 && st == COAG_INTERRUPTED && tv > 0.0 && tv < 1.0),
                   "%s volume %g: %s at t = %g", NAME(m), vols[v], coag_status_name(st), tv);
             coag_sim_free(s);
         }

@@ -27,6 +27,9 @@ pub fn estimate(
         _ => 0,
     };
     let mut reach = Reach::at_start(&init, rank);
+    if let Model::Coagulation { kernel, .. } = &plan.model {
+        reach.blocks = coagula_core::scheme::lowrank::prefers_blocks(kernel);
+    }
     let end = plan.times.last().copied().unwrap_or(0.0);
     plan.memory_basis = "at start".into();
     let grows =

@@ -10,15 +10,18 @@
 //! * Collision efficiency: Long (1974, J. Atmos. Sci. 31:1040) in Simmel's form, as
 //!   Shima et al. (2009, Q. J. R. Meteorol. Soc. 135:1307) used it, radii in cm:
 //!   `E = max(4.5·10⁴ R² (1 − 3·10⁻⁴ / r), 10⁻³)` for R ≤ 50 µm, 1 above
-//!   (coalescence efficiency 1). It reaches 1.125 at R = 50 µm.
+//!   (coalescence efficiency 1). Its largest value is 1.0575, at R = r = 50 µm; the
+//!   bounds use 1.125 (the formula's factor at R = 50 µm).
 //!
 //! The kernel vanishes on the diagonal (equal drops fall together) and `E` is 10⁻³
 //! for small drops, so the low-rank bound `E_max π (r_x + r_y)² (v_x + v_y)` (rank 3,
 //! `E_max` = 1.125) is loose by orders of magnitude there: block majorants
-//! (`docs/design/block-majorants.md`). `v`, `E` and `(r_x + r_y)²` are non-decreasing
-//! in each size, so over a block `[x0, x1] × [y0, y1]` the kernel is at most
-//! `E(x1, y1) π (r_x1 + r_y1)² (v_hi − v_lo)` with `v_hi − v_lo` the largest velocity
-//! difference of the block's corners — a bound, not the supremum.
+//! (`docs/design/block-majorants.md`). `v` and `(r_x + r_y)²` are non-decreasing in
+//! each size, and `E` is up to R = 50 µm (it falls to 1 past it), so over a block
+//! `[x0, x1] × [y0, y1]` the kernel is at most `E_b π (r_x1 + r_y1)² (v_hi − v_lo)`:
+//! `E_b` the efficiency at the block's largest radii clamped to 50 µm (and at least 1
+//! when the block reaches past 50 µm), `v_hi − v_lo` the largest velocity difference
+//! of its corners — a bound, not the supremum.
 
 use libm::{cbrt, pow};
 
@@ -26,8 +29,8 @@ use libm::{cbrt, pow};
 const RHO: f64 = 1.0;
 /// Long's efficiency formula holds for collector radii up to this (cm).
 const LONG_R_MAX: f64 = 50e-4;
-/// The largest efficiency: Long's formula at R = 50 µm, r → R (1.125 (1 − 3e-4/r) <
-/// 1.125).
+/// A bound on the efficiency: Long's factor `4.5·10⁴ R²` at R = 50 µm (the efficiency
+/// itself reaches 1.0575 there, at r = R).
 pub const E_MAX: f64 = 4.5e4 * LONG_R_MAX * LONG_R_MAX;
 
 /// Terminal velocity (m/s) of a drop of radius `r` (m): Simmel et al. 2002, Table 2.

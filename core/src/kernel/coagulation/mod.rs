@@ -239,9 +239,16 @@ impl Coagulation {
     /// `K'(i, j) = K(i·unit, j·unit)` — for a homogeneous kernel the coefficient times
     /// `unit^λ` ([`homogeneity`](Self::homogeneity)), for the gravitational one the unit
     /// radius times `unit^{1/3}`.
+    /// Errors: a unit that is not positive, and any unit but 1 for the atmospheric
+    /// kernel, which is defined on integer sizes only.
     pub fn in_size_unit(self, unit: f64) -> Result<Self> {
         positive("size unit", unit)?;
         match self.kind {
+            Kind::Atmospheric if unit != 1.0 => Err(Error::OutOfRange {
+                name: "size unit of the atmospheric kernel (integer sizes: start from counts at resolution 1)",
+                value: unit,
+                range: "1",
+            }),
             Kind::Gravitational(r0) => Ok(Coagulation {
                 kind: Kind::Gravitational(Self::gravitational(r0 * cbrt(unit))?.unit_radius()),
                 ..self

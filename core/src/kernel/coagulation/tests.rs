@@ -364,6 +364,9 @@ fn gravitational_bounds_and_units() {
     for bad in [0.0, -1e-6, 1.0, f64::NAN] {
         assert!(Coagulation::gravitational(bad).is_err(), "{bad}");
     }
+    // the atmospheric kernel lives on integer sizes: no other unit
+    assert!(Coagulation::atmospheric().in_size_unit(1.0 / 64.0).is_err());
+    assert!(Coagulation::atmospheric().in_size_unit(1.0).is_ok());
     // the homogeneous kernels: in_size_unit is the coefficient δ^λ
     let add = Coagulation::additive().in_size_unit(2.0).unwrap();
     assert_eq!(

@@ -40,6 +40,9 @@ pub struct Reach {
     /// The rank of the kernel's low-rank bound (0: none), which sizes the per-size
     /// factor tables of the tree layouts.
     pub rank: usize,
+    /// Whether the kernel runs on block majorants where the scheme chooses its engine
+    /// (`lowrank`; see `lowrank::prefers_blocks`): their tables, not the bucketed ones.
+    pub blocks: bool,
 }
 
 impl Reach {
@@ -71,6 +74,7 @@ impl Reach {
             m2_over_m1: 0.0,
             sparse: 0,
             rank,
+            blocks: false,
         }
     }
 

@@ -27,8 +27,9 @@ use rand_core::Rng;
 
 pub use crate::scheme::facade::BucketMode;
 
-/// The bucketed layout with its engine chosen by the initial particle number, or pinned
-/// (see the module docs). `W` must be `2R`.
+/// The low-rank scheme with its engine chosen by the kernel (block majorants, see
+/// [`prefers_blocks`]) and the initial particle number, or pinned (see the module
+/// docs). `W` must be `2R`.
 ///
 /// # Example
 /// ```
@@ -136,7 +137,7 @@ impl<K: CoagulationKernel + Clone, const R: usize, const W: usize> AutoBucketed<
     }
 
     /// [`new_with_memory_budget`](Self::new_with_memory_budget) on the engine `pin`
-    /// (`None`: chosen by the particle number), pinned as by
+    /// (`None`: chosen by the kernel and the particle number), pinned as by
     /// [`with_mode`](Self::with_mode).
     pub fn new_with_mode(
         kernel: K,

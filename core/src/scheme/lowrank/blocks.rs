@@ -31,7 +31,7 @@
 //! touched; the thinning by `I_b / Î_b` keeps the law exact (`Î` changes only at
 //! proposals, from the state: a predictable majorant).
 //!
-//! Memory: `16 M` bytes for the count tree and about 40 bytes a block. Growth of M
+//! Memory: `16 M` bytes for the count tree and about 64 bytes a block. Growth of M
 //! (a merged size beyond it) and particle doubling rebuild or rescale the structures.
 
 mod partition;
@@ -199,7 +199,7 @@ impl BlockEngine {
             for b in members {
                 // as `intensity`, bit for bit
                 let i = if u64::from(b.other) == strip {
-                    b.sup * (0.5 * mine * mine)
+                    b.sup * (0.5 * mine * tree[base + strip as usize].saturating_sub(1) as f64)
                 } else {
                     b.sup * (mine * tree[base + b.other as usize] as f64)
                 };
@@ -319,8 +319,10 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
                 name: "maximum particle size",
                 capacity: usize::MAX,
             })?;
+            // (the old engine stays alive beside the new one while it is built)
+            let old = Self::bytes_for(self.m, self.part.blocks.len()).unwrap_or(usize::MAX);
             let counts = &self.tree[self.m as usize..];
-            *self = Self::with_size(kernel, counts, m, pop.memory_budget)?;
+            *self = Self::with_size(kernel, counts, m, pop.memory_budget.saturating_sub(old))?;
         }
         Ok(())
     }

@@ -74,7 +74,11 @@ const COUNT_OPTIONS: &[&str] = &["size-limit", "memory-budget", "batched-clock"]
 /// particle; up to [`COUNTED_UP_TO`] particles (or pinned) the counted engine, with a
 /// dense `u64` a size and a list entry per particle.
 fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
-    if opts.engine() == Some(BucketMode::Blocks) {
+    let blocks = match opts.engine() {
+        Some(mode) => mode == BucketMode::Blocks,
+        None => reach.blocks,
+    };
+    if blocks {
         return blocks_memory(reach);
     }
     let first = reach.start.max(1).next_power_of_two().max(64);
@@ -90,15 +94,13 @@ fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
 }
 
 /// Block majorants: the count tree (16 bytes a size) and the blocks (about
-/// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 40 bytes each).
+/// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 64 bytes each: the block,
+/// two list entries, its bound and its majorant in the sum tree), and while M doubles
+/// the old tables beside the new ones (half as many).
 fn blocks_memory(reach: &Reach) -> u64 {
-    let first = reach.start.max(8).next_power_of_two();
-    reach.bytes(
-        first,
-        16 + (40.0 * super::blocks::BLOCKS_PER_SIZE) as u64,
-        0,
-        0,
-    )
+    let first = reach.start.max(64).next_power_of_two();
+    let per = (16.0 + 64.0 * super::blocks::BLOCKS_PER_SIZE) * 1.5;
+    reach.bytes(first, per as u64, 0, 0)
 }
 
 /// Per-size segment trees, 8-ary: a count and 2R factors a size, the tree's 2R

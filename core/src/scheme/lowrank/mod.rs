@@ -70,7 +70,7 @@ pub mod trees;
 pub mod uniform;
 
 pub use super::population::{DEFAULT_MEMORY_BUDGET, DEFAULT_SIZE_LIMIT};
-pub use auto::{AutoBucketed, BucketMode};
+pub use auto::{AutoBucketed, BucketMode, prefers_blocks};
 pub use blocks::BlockEngine;
 pub use bound::MAX_PARTICLES;
 pub use bucketed::BucketedEngine;

@@ -176,7 +176,13 @@ pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
         let u = bound * open_unit(rng);
         let under = u <= squeeze;
         !under && {
-            let k = bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+            let k = bounded_rate(
+                kernel,
+                x,
+                y,
+                bound,
+                "proposal bound (low-rank A + Aᵀ, or a block's sup_block)",
+            )?;
             if u > k {
                 return Ok(false);
             }
@@ -187,7 +193,13 @@ pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
         // accepted without K: a spot check now and then, of the bound and of the floor
         // the acceptance relied on (a kernel below it, e.g. an exact low-rank claim
         // whose A + Aᵀ is twice the kernel, would be simulated at the wrong rate)
-        let k = bounded_rate(kernel, x, y, bound, "low-rank bound")?;
+        let k = bounded_rate(
+            kernel,
+            x,
+            y,
+            bound,
+            "proposal bound (low-rank A + Aᵀ, or a block's sup_block)",
+        )?;
         let relied = squeeze.min(bound);
         if k < relied * (1.0 - 1e-9) {
             return Err(crate::Error::BoundExceeded {

@@ -68,7 +68,8 @@ pub enum BucketMode {
     Counted,
     /// Block majorants over the size-pair matrix (`docs/design/block-majorants.md`):
     /// for kernels whose low-rank bound is loose or missing. Chosen when the kernel
-    /// says its low-rank bound is loose and it bounds blocks.
+    /// says its low-rank bound is loose, or has none or one of rank above 4, and it
+    /// bounds blocks (`lowrank::prefers_blocks`).
     Blocks,
 }
 

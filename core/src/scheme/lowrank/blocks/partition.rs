@@ -89,12 +89,14 @@ impl Partition {
         n
     }
 
-    /// Bytes of a partition of `b` blocks over `2^levels` sizes (blocks, member
-    /// lists, and the list starts, about `2^levels / 2^min_level · 2` of them).
+    /// Bytes of a partition of `b` blocks over `2^levels` sizes: the blocks, their
+    /// members in the lists of their row and their column strip (at most two, a
+    /// `Member` each), and the list starts, about `2^levels / 2^min_level · 2` of them.
     pub fn bytes(levels: u32, min_level: u32, b: usize) -> Option<usize> {
         let strips = (2usize << levels) >> min_level.min(levels);
-        b.checked_mul(12 + 8)?
-            .checked_add(strips.checked_add(1)? * 4)
+        let per = core::mem::size_of::<Block>() + 2 * core::mem::size_of::<Member>();
+        b.checked_mul(per)?
+            .checked_add(strips.checked_add(1)?.checked_mul(4)?)
     }
 
     pub fn new(levels: u32, min_level: u32, sep: u64) -> Result<Partition> {

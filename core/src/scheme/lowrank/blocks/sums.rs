@@ -108,7 +108,8 @@ impl QuadSums {
 
     /// The leaf where `u ∈ [0, total)` falls: at each node the child whose prefix sums
     /// enclose u. Rounding past a node's end lands on its last child, which may be a
-    /// zero leaf or padding (the caller rejects it).
+    /// zero leaf or padding: a padding node (of any level) ends the descent at `len`,
+    /// a ghost the caller rejects, and a zero leaf is rejected by its thinning.
     #[inline]
     pub fn find(&self, mut u: f64) -> usize {
         let mut i = 0usize;
@@ -121,6 +122,15 @@ impl QuadSums {
             let k = usize::from(u >= c0) + usize::from(u >= c1) + usize::from(u >= c2);
             u -= [0.0, c0, c1, c2][k];
             i = 4 * i + k;
+            // the real nodes of level l: the leaves, or a quarter of the level below
+            let real = if l == 0 {
+                self.len
+            } else {
+                (self.starts[l] - self.starts[l - 1]) / 4
+            };
+            if i >= real {
+                return self.len;
+            }
         }
         i
     }
@@ -129,6 +139,34 @@ impl QuadSums {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Rounding at the top of the range never leaves the tree: with the mass at the two
+    /// ends of a tree whose last internal node is padded, `u` just below the total could
+    /// walk into a padding node and on past the vector (an independent review found it
+    /// with 298 leaves); now it ends at a real leaf or at the ghost index `len`.
+    #[test]
+    fn rounding_past_the_end_stays_in_the_tree() {
+        for n in [5usize, 17, 70, 298, 1000, 4097] {
+            for (a, b) in [(0.990_71, 1.009_29), (1.0, 1.0), (1e-300, 3.0), (0.5, 0.0)] {
+                let mut leaves = alloc::vec![0.0; n];
+                leaves[0] = a;
+                leaves[n - 1] = b;
+                let t = QuadSums::new(&leaves).unwrap();
+                for u in [
+                    t.total(),
+                    t.total() * (1.0 - f64::EPSILON / 2.0),
+                    f64::from_bits(t.total().to_bits() - 1),
+                    0.0,
+                ] {
+                    let i = t.find(u);
+                    assert!(i <= n, "{n} {a} {b} {u}: {i}");
+                    if i < n && u < t.total() {
+                        assert!(leaves[i] > 0.0 || i == n - 1, "{n}: {i}");
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn sums_and_descents() {
