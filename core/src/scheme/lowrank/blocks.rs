@@ -82,7 +82,13 @@ pub struct BlockEngine {
 /// first: an empty strip gives 0, never `∞ · 0`).
 #[inline]
 fn intensity(b: &Block, sup: f64, rows: u64, cols: u64) -> f64 {
-    if b.diagonal() {
+    intensity_of_pairs(b.diagonal(), sup, rows, cols)
+}
+
+/// [`intensity`] of a block given as diagonal or not (what a member list knows).
+#[inline]
+fn intensity_of_pairs(diagonal: bool, sup: f64, rows: u64, cols: u64) -> f64 {
+    if diagonal {
         // the unordered pairs of distinct particles
         sup * (0.5 * rows as f64 * rows.saturating_sub(1) as f64)
     } else {
@@ -195,14 +201,10 @@ impl BlockEngine {
         let mut changed = false;
         self.part.each_meeting(p, |l, strip, members| {
             let base = (m >> l) as usize;
-            let mine = tree[base + strip as usize] as f64;
+            let mine = tree[base + strip as usize];
             for b in members {
-                // as `intensity`, bit for bit
-                let i = if u64::from(b.other) == strip {
-                    b.sup * (0.5 * mine * tree[base + strip as usize].saturating_sub(1) as f64)
-                } else {
-                    b.sup * (mine * tree[base + b.other as usize] as f64)
-                };
+                let diagonal = u64::from(b.other) == strip;
+                let i = intensity_of_pairs(diagonal, b.sup, mine, tree[base + b.other as usize]);
                 let id = b.id as usize;
                 if i > hats.leaf(id) {
                     hats.set(id, hat_for(i));
