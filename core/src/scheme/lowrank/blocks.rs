@@ -54,10 +54,10 @@ use sums::QuadSums;
 pub const MIN_LEVEL: u32 = 2;
 /// A block is kept whole once its gap to the diagonal is at least this many sides.
 pub const SEPARATION: u64 = 1;
-/// Blocks per size of the partition of M sizes with the constants above, approached
-/// from below as M grows (1.22 at M = 2^10, 1.25 at 2^17; the partition's tests check
-/// it). What the memory estimate assumes.
-pub const BLOCKS_PER_SIZE: f64 = 1.25;
+/// Blocks per size of the partition of M sizes with the constants above, at most (1.32
+/// at M = 2^8, 1.25 from 2^17; the partition's tests check it for M = 2^6 … 2^21).
+/// What the memory estimate assumes.
+pub const BLOCKS_PER_SIZE: f64 = 1.33;
 /// The lazy majorant's band m (see the module docs).
 pub const BAND: f64 = 0.05;
 
@@ -119,12 +119,18 @@ impl BlockEngine {
         ((self.m >> level) + u64::from(strip)) as usize
     }
 
+    /// The count-tree nodes of the block's row and column strips.
+    #[inline]
+    fn nodes(&self, b: &Block) -> (usize, usize) {
+        (self.node(b.row_level, b.row), self.node(b.col_level, b.col))
+    }
+
     /// The block's intensity now.
     #[inline]
     fn intensity_of(&self, id: usize) -> f64 {
         let b = &self.part.blocks[id];
-        let rows = self.tree[self.node(b.level, b.row)];
-        let cols = self.tree[self.node(b.level, b.col)];
+        let (rn, cn) = self.nodes(b);
+        let (rows, cols) = (self.tree[rn], self.tree[cn]);
         intensity(b, self.sup[id], rows, cols)
     }
 
@@ -150,10 +156,10 @@ impl BlockEngine {
         let mut sup = Vec::new();
         try_reserve(&mut sup, nb)?;
         for b in &part.blocks {
-            let s = 1u64 << b.level;
-            let (r0, c0) = (u64::from(b.row) * s + 1, u64::from(b.col) * s + 1);
+            // (sizes are indices + 1)
+            let ((r0, r1), (c0, c1)) = b.ranges();
             let v = kernel
-                .sup_block(r0 as f64, (r0 + s - 1) as f64, c0 as f64, (c0 + s - 1) as f64)
+                .sup_block((r0 + 1) as f64, r1 as f64, (c0 + 1) as f64, c1 as f64)
                 .ok_or(Error::Unsupported {
                     what: "block majorants need the kernel's supremum over a block of sizes (sup_block)",
                 })?;
@@ -200,11 +206,11 @@ impl BlockEngine {
         let (tree, hats, m) = (&self.tree, &mut self.hats, self.m);
         let mut changed = false;
         self.part.each_meeting(p, |l, strip, members| {
-            let base = (m >> l) as usize;
-            let mine = tree[base + strip as usize];
+            let node = (m >> l) as usize + strip as usize;
+            let mine = tree[node];
             for b in members {
-                let diagonal = u64::from(b.other) == strip;
-                let i = intensity_of_pairs(diagonal, b.sup, mine, tree[base + b.other as usize]);
+                let diagonal = b.other as usize == node;
+                let i = intensity_of_pairs(diagonal, b.sup, mine, tree[b.other as usize]);
                 let id = b.id as usize;
                 if i > hats.leaf(id) {
                     hats.set(id, hat_for(i));
@@ -265,7 +271,7 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
         // (padding, reached only by rounding: a ghost the thinning rejects)
         let b = *self.part.blocks.get(id)?;
         let hat = self.hats.leaf(id);
-        let (rn, cn) = (self.node(b.level, b.row), self.node(b.level, b.col));
+        let (rn, cn) = self.nodes(&b);
         let (rows, cols) = (self.tree[rn], self.tree[cn]);
         let i = intensity(&b, self.sup[id], rows, cols);
         // the lazy majorant's thinning (an empty block, or a rounding ghost, too); a

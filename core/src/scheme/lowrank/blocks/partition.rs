@@ -4,24 +4,36 @@
 //! the diagonal is at least `separation` times its side, split otherwise down to side
 //! `2^min_level`.
 //!
-//! A block at level ℓ is a pair of aligned strips of `2^ℓ` sizes, rows `a` and columns
-//! `c ≥ a` (`c = a`: a diagonal block, which holds both orders of its pairs). Every
-//! unordered pair of sizes lies in exactly one block. For each level and strip the
-//! partition lists the blocks that meet it (as rows, or as columns off the diagonal), so
-//! a count change finds the blocks whose sums it moves.
+//! A block is a row strip and a column strip, each an aligned strip of the count tree.
+//! The quad-tree's blocks are square: strips of `2^ℓ` sizes, rows `a` and columns
+//! `c ≥ a` (`c = a`: a diagonal block, which holds both orders of its pairs). A square
+//! kept whole whose rows are the first strip (sizes `1 ..= 2^ℓ`) has its rows cut where
+//! the size doubles (1, 2, 3..4, ..., `2^(ℓ−1)+1 ..= 2^ℓ`), each piece against the whole
+//! column strip: a kernel that goes as a power of the smaller size (the atmospheric
+//! kernel as `x^{-5/9}`) would otherwise be bounded at size 1 across rows that reach
+//! `2^ℓ`, and late in a run, when most particles are large, such blocks accepted
+//! 1–3 % of their proposals. So every block's rows and columns span sizes within a
+//! factor 2, apart from the finest level next to the diagonal.
+//!
+//! Every unordered pair of sizes lies in exactly one block. For each strip the partition
+//! lists the blocks that meet it (as rows, or as columns off the diagonal), so a count
+//! change finds the blocks whose sums it moves.
 
 use crate::error::Result;
 use crate::memory::try_reserve;
 use alloc::vec::Vec;
 
-/// One block: its level and its row and column strips at that level.
+/// One block: a row strip and a column strip, each an aligned strip of sizes (a node of
+/// the count tree) given by its level and index.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Block {
-    /// Side `2^level` sizes.
-    pub level: u8,
-    /// Row strip: sizes (indices) `row·2^level .. (row + 1)·2^level`.
+    /// The row strip's level: `2^row_level` sizes.
+    pub row_level: u8,
+    /// The column strip's level.
+    pub col_level: u8,
+    /// Row strip: size indices `row·2^row_level .. (row + 1)·2^row_level`.
     pub row: u32,
-    /// Column strip, `col ≥ row`.
+    /// Column strip, at or after the rows.
     pub col: u32,
 }
 
@@ -29,13 +41,19 @@ impl Block {
     /// Whether the block straddles the diagonal (rows and columns the same strip).
     #[inline]
     pub fn diagonal(&self) -> bool {
-        self.row == self.col
+        self.row == self.col && self.row_level == self.col_level
+    }
+
+    /// The first and one past the last size index of the rows and of the columns.
+    pub fn ranges(&self) -> ((u64, u64), (u64, u64)) {
+        let span = |l: u8, s: u32| (u64::from(s) << l, u64::from(s + 1) << l);
+        (span(self.row_level, self.row), span(self.col_level, self.col))
     }
 }
 
-/// A block in the list of a strip it meets: the block, the strip on its other side
-/// (itself on the diagonal) and the block's bound, kept here so that a count change
-/// reads its blocks from one run of memory.
+/// A block in the list of a strip it meets: the block, the count-tree node of the strip
+/// on its other side (its own on the diagonal) and the block's bound, kept here so that
+/// a count change reads its blocks from one run of memory.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Member {
     pub id: u32,
@@ -44,15 +62,16 @@ pub(crate) struct Member {
 }
 
 /// The partition of a matrix of `2^levels` sizes (see the module docs). Blocks are
-/// numbered by level, row strip and column strip, so that the blocks of a row strip
-/// are neighbours.
+/// numbered by row strip and column strip, so that the blocks of a row strip are
+/// neighbours.
 #[derive(Clone, Debug)]
 pub(crate) struct Partition {
     pub blocks: Vec<Block>,
     /// `log2 M`.
     pub levels: u32,
     pub min_level: u32,
-    /// Per (level, strip), from `min_level` up, the range of `members` meeting it.
+    /// Per (level, strip), from `min_level` up, then strips 0 and 1 of the levels below
+    /// it, the range of `members` meeting it.
     starts: Vec<u32>,
     members: Vec<Member>,
 }
@@ -61,10 +80,23 @@ pub(crate) struct Partition {
 fn visit(levels: u32, min_level: u32, sep: u64, f: &mut dyn FnMut(Block)) {
     fn go(l: u32, a: u64, c: u64, min: u32, sep: u64, f: &mut dyn FnMut(Block)) {
         // (gap c − a − 1 at least sep)
-        let whole = l == min || (c > a && c - a > sep);
-        if whole {
+        let apart = c > a && c - a > sep;
+        if apart && a == 0 && l > 0 {
+            // rows 1 ..= 2^l: the kernel may vary as a power of the smaller size, so
+            // the rows are cut where they double (sizes 1, 2, 3..4, 5..8, ...), each
+            // against the whole column strip
+            for (rl, row) in core::iter::once((0, 0)).chain((0..l).map(|k| (k, 1))) {
+                f(Block {
+                    row_level: rl as u8,
+                    col_level: l as u8,
+                    row,
+                    col: c as u32,
+                });
+            }
+        } else if l == min || apart {
             f(Block {
-                level: l as u8,
+                row_level: l as u8,
+                col_level: l as u8,
                 row: a as u32,
                 col: c as u32,
             });
@@ -89,37 +121,53 @@ impl Partition {
         n
     }
 
+    /// The member lists' keys: every strip from `min_level` up, then strips 0 and 1 of
+    /// each level below it.
+    fn keys(levels: u32, min_level: u32) -> usize {
+        let min_level = min_level.min(levels);
+        ((2usize << levels) >> min_level) + 2 * min_level as usize
+    }
+
     /// Bytes of a partition of `b` blocks over `2^levels` sizes: the blocks, their
     /// members in the lists of their row and their column strip (at most two, a
-    /// `Member` each), and the list starts, about `2^levels / 2^min_level · 2` of them.
+    /// `Member` each), and the list starts.
     pub fn bytes(levels: u32, min_level: u32, b: usize) -> Option<usize> {
-        let strips = (2usize << levels) >> min_level.min(levels);
         let per = core::mem::size_of::<Block>() + 2 * core::mem::size_of::<Member>();
         b.checked_mul(per)?
-            .checked_add(strips.checked_add(1)?.checked_mul(4)?)
+            .checked_add(Self::keys(levels, min_level).checked_add(1)?.checked_mul(4)?)
     }
 
     pub fn new(levels: u32, min_level: u32, sep: u64) -> Result<Partition> {
+        if levels > 31 {
+            // (member lists name count-tree nodes, below 2^32)
+            return Err(crate::error::Error::Capacity {
+                name: "maximum particle size",
+                capacity: 1 << 31,
+            });
+        }
         let min_level = min_level.min(levels);
         let mut blocks = Vec::new();
         try_reserve(&mut blocks, Self::count(levels, min_level, sep))?;
         visit(levels, min_level, sep, &mut |b| blocks.push(b));
-        blocks.sort_unstable_by_key(|b| (b.level, b.row, b.col));
-        // the strips of each level, from min_level up
-        let mut base = Vec::new();
-        let mut strips = 0usize;
-        for l in min_level..=levels {
-            base.push(strips);
-            strips += 1usize << (levels - l);
-        }
-        let key = |l: u32, s: u32| base[(l - min_level) as usize] + s as usize;
+        blocks.sort_unstable_by_key(|b| (b.row_level, b.row, b.col_level, b.col));
+        let strips = Self::keys(levels, min_level);
         let mut starts = Vec::new();
         try_reserve(&mut starts, strips + 1)?;
         starts.resize(strips + 1, 0u32);
+        let node = |l: u8, s: u32| ((1u32 << levels) >> l) + s;
         let meets = |b: &Block, f: &mut dyn FnMut(usize, u32)| {
-            f(key(u32::from(b.level), b.row), b.col);
-            if !b.diagonal() {
-                f(key(u32::from(b.level), b.col), b.row);
+            let (rk, ck) = (
+                Self::key(levels, min_level, u32::from(b.row_level), u64::from(b.row)),
+                Self::key(levels, min_level, u32::from(b.col_level), u64::from(b.col)),
+            );
+            // (every strip a block uses has a key)
+            if let Some(k) = rk {
+                f(k, node(b.col_level, b.col));
+            }
+            if !b.diagonal()
+                && let Some(k) = ck
+            {
+                f(k, node(b.row_level, b.row));
             }
         };
         for b in &blocks {
@@ -156,6 +204,18 @@ impl Partition {
         })
     }
 
+    /// The member list of strip `strip` of level `l`, if strips of that level and index
+    /// can hold blocks.
+    #[inline]
+    fn key(levels: u32, min_level: u32, l: u32, strip: u64) -> Option<usize> {
+        if l >= min_level {
+            let base = ((2usize << levels) >> min_level) - ((2usize << levels) >> l);
+            Some(base + strip as usize)
+        } else {
+            (strip <= 1).then(|| ((2usize << levels) >> min_level) + 2 * l as usize + strip as usize)
+        }
+    }
+
     /// Sets every member's bound from the blocks' (`sup[id]`).
     pub fn set_sups(&mut self, sup: &[f64]) {
         for m in &mut self.members {
@@ -167,6 +227,17 @@ impl Partition {
     /// size index `p` among their rows or columns (`strip`: p's strip at that level).
     #[inline]
     pub fn each_meeting(&self, p: u64, mut f: impl FnMut(u32, u64, &[Member])) {
+        // the cut rows of the first column strips (sizes below 2^min_level)
+        for l in 0..self.min_level {
+            if p >> l <= 1 {
+                let k = Self::key(self.levels, self.min_level, l, p >> l).unwrap_or(0);
+                f(
+                    l,
+                    p >> l,
+                    &self.members[self.starts[k] as usize..self.starts[k + 1] as usize],
+                );
+            }
+        }
         let mut base = 0usize;
         for l in self.min_level..=self.levels {
             let strip = p >> l;
@@ -189,16 +260,16 @@ mod tests {
     /// each of its sizes.
     #[test]
     fn blocks_cover_each_pair_once() {
-        for (levels, min, sep) in [(3, 3, 2), (5, 0, 2), (6, 2, 2), (6, 1, 1), (7, 3, 3)] {
+        for (levels, min, sep) in [(3, 3, 2), (5, 0, 2), (6, 2, 2), (6, 1, 1), (7, 3, 3), (7, 2, 1)] {
             let p = Partition::new(levels, min, sep).unwrap();
             let m = 1u64 << levels;
+            let node = |l: u8, s: u32| ((m >> l) + u64::from(s)) as u32;
             let mut seen = alloc::vec![0u32; (m * m) as usize];
             for b in &p.blocks {
-                let s = 1u64 << b.level;
-                assert!(b.col >= b.row);
-                for i in 0..s {
-                    for j in 0..s {
-                        let (x, y) = (u64::from(b.row) * s + i, u64::from(b.col) * s + j);
+                let ((r0, r1), (c0, c1)) = b.ranges();
+                assert!(c0 >= r0 && (c0 >= r1 || b.diagonal()), "{b:?}");
+                for x in r0..r1 {
+                    for y in c0..c1 {
                         if x <= y {
                             seen[(x * m + y) as usize] += 1;
                         }
@@ -213,23 +284,22 @@ mod tests {
             for x in 0..m {
                 let mut found = alloc::vec::Vec::new();
                 p.each_meeting(x, |l, strip, ms| {
-                    for m in ms {
-                        let b = p.blocks[m.id as usize];
-                        assert_eq!(u32::from(b.level), l);
-                        let (mine, other) = if u64::from(b.row) == strip {
-                            (b.row, b.col)
+                    for mb in ms {
+                        let b = p.blocks[mb.id as usize];
+                        let here = (l as u8, strip as u32);
+                        let other = if (b.row_level, b.row) == here {
+                            node(b.col_level, b.col)
                         } else {
-                            (b.col, b.row)
+                            assert_eq!((b.col_level, b.col), here);
+                            node(b.row_level, b.row)
                         };
-                        assert_eq!((u64::from(mine), m.other), (strip, other));
-                        found.push(m.id as usize);
+                        assert_eq!(mb.other, other);
+                        found.push(mb.id as usize);
                     }
                 });
                 for (id, b) in p.blocks.iter().enumerate() {
-                    let s = 1u64 << b.level;
-                    let holds =
-                        |strip: u32| (u64::from(strip) * s..u64::from(strip + 1) * s).contains(&x);
-                    let meets = holds(b.row) || holds(b.col);
+                    let ((r0, r1), (c0, c1)) = b.ranges();
+                    let meets = (r0..r1).contains(&x) || (c0..c1).contains(&x);
                     assert_eq!(found.contains(&id), meets, "size {x} block {b:?}");
                 }
                 let mut unique = found.clone();
@@ -239,15 +309,31 @@ mod tests {
             }
             assert_eq!(Partition::count(levels, min, sep), p.blocks.len());
         }
-        // what the memory estimate assumes
-        for levels in [10, 14, 17] {
+    }
+
+    /// The rows of a block hold sizes within a factor 2 of each other (sizes are
+    /// indices + 1), apart from the diagonal blocks and their neighbours at the finest
+    /// level; columns too.
+    #[test]
+    fn strips_within_a_factor_two() {
+        let p = Partition::new(12, 2, 1).unwrap();
+        for b in &p.blocks {
+            let ((r0, r1), (c0, c1)) = b.ranges();
+            if usize::from(b.row_level) > 2 || b.col - b.row > 1 {
+                assert!(r1 <= 2 * (r0 + 1), "{b:?}");
+                assert!(c1 <= 2 * (c0 + 1), "{b:?}");
+            }
+        }
+    }
+
+    /// What the memory estimate assumes.
+    #[test]
+    fn blocks_per_size() {
+        for levels in 6..=21 {
             let per = Partition::count(levels, super::super::MIN_LEVEL, super::super::SEPARATION)
                 as f64
                 / (1u64 << levels) as f64;
-            assert!(
-                per <= super::super::BLOCKS_PER_SIZE && per > 0.95 * super::super::BLOCKS_PER_SIZE,
-                "{per}"
-            );
+            assert!(per <= super::super::BLOCKS_PER_SIZE, "{levels}: {per}");
         }
     }
 }
