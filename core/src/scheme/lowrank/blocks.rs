@@ -22,20 +22,29 @@
 //! distinct particles in block b is proposed at rate `sup_b / V`; the rule accepts with
 //! `K / sup_b`, giving rate `K / V` (Osinsky 2023 §2's law).
 //!
-//! **The lazy majorant.** After an event, the blocks that meet the merged size (whose
-//! count rose) recompute `I_b`, and the tree's `Î_b` is raised to `I_b (1 + m)` only
-//! when `I_b > Î_b` (m = [`BAND`]); counts that fall leave `Î_b ≥ I_b`. A block that
-//! the thinning by `I_b / Î_b` rejects while `I_b (1 + m)² < Î_b` is tightened to
-//! `I_b (1 + m)`, and the proposals after it come at the new total rate. Most events
-//! move a block's sums by a fraction far inside the band, so the tree is seldom
-//! touched; the thinning by `I_b / Î_b` keeps the law exact (`Î` changes only at
+//! **The lazy majorant.** After an event, a block meeting the merged size (whose count
+//! rose) has its `Î_b` raised to `I_b (1 + m)` when `I_b > Î_b` (m = [`BAND`]); counts
+//! that fall leave `Î_b ≥ I_b`. A block that the thinning by `I_b / Î_b` rejects while
+//! `I_b (1 + m)² < Î_b` is tightened to `I_b (1 + m)`, and the proposals after it come
+//! at the new total rate. The thinning keeps the law exact (`Î` changes only at
 //! proposals, from the state: a predictable majorant).
 //!
-//! Memory: `16 M` bytes for the count tree and about 64 bytes a block. Growth of M
-//! (a merged size beyond it) and particle doubling rebuild or rescale the structures.
+//! **Allowances.** Each side of a block holds an allowance, the two within `Î_b`
+//! (`sup_b · pairs ≤ Î_b`), and each strip of the count tree a cap, the least allowance
+//! of its blocks; a count that passes its cap has its strip's blocks looked at (raised
+//! if `I_b > Î_b`, the headroom split afresh). So `I_b ≤ Î_b` holds between looks, the
+//! raises happen exactly when checking every block after every event would make them,
+//! and a strip of many particles is looked at once in many events (the whole run of
+//! the canonical case: 11 % less time than checking every block).
+//!
+//! Memory: `24 M` bytes for the count tree and its caps, and about 64 bytes a block.
+//! Growth of M (a merged size beyond it) and particle doubling rebuild or rescale the
+//! structures.
 
 mod partition;
 mod sums;
+#[cfg(test)]
+mod tests;
 
 use super::proposal::{Candidate, Outcome, ProposalEngine};
 use crate::checkpoint::{Reader, Writer};
@@ -74,6 +83,9 @@ pub struct BlockEngine {
     sup: Vec<f64>,
     /// `Î_b`.
     hats: QuadSums,
+    /// Per count-tree node, the least allowance of the blocks in its strip's list (at
+    /// most `u32::MAX`): a count that rises past it has its list looked at.
+    caps: Vec<u32>,
     /// The tree's total changed since the last refresh.
     changed: bool,
 }
@@ -88,12 +100,7 @@ fn intensity(b: &Block, sup: f64, rows: u64, cols: u64) -> f64 {
 /// [`intensity`] of a block given as diagonal or not (what a member list knows).
 #[inline]
 fn intensity_of_pairs(diagonal: bool, sup: f64, rows: u64, cols: u64) -> f64 {
-    if diagonal {
-        // the unordered pairs of distinct particles
-        sup * (0.5 * rows as f64 * rows.saturating_sub(1) as f64)
-    } else {
-        sup * (rows as f64 * cols as f64)
-    }
+    sup * pairs(diagonal, rows, cols)
 }
 
 /// The lazy majorant for intensity `i`.
@@ -102,13 +109,61 @@ fn hat_for(i: f64) -> f64 {
     i * (1.0 + BAND)
 }
 
+/// The unordered pairs of distinct particles of a block given as diagonal or not.
+#[inline]
+fn pairs(diagonal: bool, rows: u64, cols: u64) -> f64 {
+    if diagonal {
+        0.5 * rows as f64 * rows.saturating_sub(1) as f64
+    } else {
+        rows as f64 * cols as f64
+    }
+}
+
+/// The allowances `(a, b) ≥ (r, c)` of a block's two sides (the same on the diagonal),
+/// such that `sup · pairs(a, b) ≤ hat`: the headroom of `Î` split between the sides in
+/// proportion to their counts. Needs `sup · pairs(r, c) ≤ hat`.
+fn allot(diagonal: bool, sup: f64, hat: f64, r: u64, c: u64) -> (u64, u64) {
+    if !(sup > 0.0 && hat < f64::INFINITY) {
+        // (a block of bound 0 never has an intensity; an infinite Î is never passed)
+        return (u64::MAX, u64::MAX);
+    }
+    let p = hat / sup;
+    // (float-to-integer casts saturate)
+    let (mut a, mut b) = if diagonal {
+        let n = (0.5 * (1.0 + libm::sqrt(1.0 + 8.0 * p))) as u64;
+        (n, n)
+    } else if r == 0 && c == 0 {
+        (0, 0)
+    } else if r == 0 {
+        ((p / c as f64) as u64, c)
+    } else if c == 0 {
+        (r, (p / r as f64) as u64)
+    } else {
+        let t = libm::sqrt(p / (r as f64 * c as f64));
+        ((r as f64 * t) as u64, (c as f64 * t) as u64)
+    };
+    (a, b) = (a.max(r), b.max(c));
+    // against rounding: back towards (r, c), where the bound holds
+    while sup * pairs(diagonal, a, b) > hat && (a > r || b > c) {
+        a = r + (a - r) / 2;
+        b = c + (b - c) / 2;
+    }
+    if diagonal { (a, a) } else { (a, b) }
+}
+
+/// An allowance as a cap (saturated).
+#[inline]
+fn cap_of(allow: u64) -> u32 {
+    allow.min(u64::from(u32::MAX)) as u32
+}
+
 impl BlockEngine {
     /// Bytes of the engine over M sizes with `b` blocks.
     fn bytes_for(m: u64, b: usize) -> Option<usize> {
         let levels = m.trailing_zeros();
         usize::try_from(m)
             .ok()?
-            .checked_mul(16)?
+            .checked_mul(24)?
             .checked_add(Partition::bytes(levels, MIN_LEVEL, b)?)?
             .checked_add(b.checked_mul(8)?)?
             .checked_add(QuadSums::bytes(b)?)
@@ -171,21 +226,87 @@ impl BlockEngine {
             }
             sup.push(v);
         }
-        let mut part = part;
-        part.set_sups(&sup);
+        let mut caps = Vec::new();
+        try_reserve(&mut caps, 2 * mu)?;
+        caps.resize(2 * mu, u32::MAX);
         let mut s = BlockEngine {
             m,
             tree,
             part,
             sup,
             hats: QuadSums::new(&[])?,
+            caps,
             changed: true,
         };
         let mut leaves = Vec::new();
         try_reserve(&mut leaves, nb)?;
         leaves.extend((0..nb).map(|id| hat_for(s.intensity_of(id))));
         s.hats = QuadSums::new(&leaves)?;
+        s.allot_all();
         Ok(s)
+    }
+
+    /// Sets block `id`'s allowance in the list of `node` (lowering the node's cap to
+    /// it; a cap left below the least allowance only costs a look).
+    fn give(&mut self, node: usize, id: usize, allow: u64) {
+        if let Some(k) = self.part.find(node as u32, id) {
+            self.part.members[k].allow = allow;
+        }
+        self.caps[node] = self.caps[node].min(cap_of(allow));
+    }
+
+    /// Splits block `id`'s headroom between its sides afresh.
+    fn allot(&mut self, id: usize) {
+        let b = self.part.blocks[id];
+        let (rn, cn) = self.nodes(&b);
+        let (r, c) = (self.tree[rn], self.tree[cn]);
+        let (x, y) = allot(b.diagonal(), self.sup[id], self.hats.leaf(id), r, c);
+        self.give(rn, id, x);
+        if !b.diagonal() {
+            self.give(cn, id, y);
+        }
+    }
+
+    /// Every block's allowances and every cap afresh (after a build, a doubling, a
+    /// restore).
+    fn allot_all(&mut self) {
+        self.caps.fill(u32::MAX);
+        for id in 0..self.part.blocks.len() {
+            self.allot(id);
+        }
+    }
+
+    /// After the count of `node` rose past its cap: the blocks of its list whose
+    /// allowance it passed have `Î` raised to `I (1 + m)` if `I > Î`, and their
+    /// headroom split afresh; the cap becomes the least allowance.
+    fn look(&mut self, node: usize) {
+        let mine = self.tree[node];
+        let mut cap = u64::MAX;
+        for k in self.part.list(node as u32) {
+            let mb = self.part.members[k];
+            if mine <= mb.allow {
+                cap = cap.min(mb.allow);
+                continue;
+            }
+            let (id, other) = (mb.id as usize, mb.other as usize);
+            let diagonal = other == node;
+            let theirs = self.tree[other];
+            let sup = self.sup[id];
+            let i = intensity_of_pairs(diagonal, sup, mine, theirs);
+            let mut hat = self.hats.leaf(id);
+            if i > hat {
+                hat = hat_for(i);
+                self.hats.set(id, hat);
+                self.changed = true;
+            }
+            let (x, y) = allot(diagonal, sup, hat, mine, theirs);
+            self.part.members[k].allow = x;
+            cap = cap.min(x);
+            if !diagonal {
+                self.give(other, id, y);
+            }
+        }
+        self.caps[node] = cap_of(cap);
     }
 
     /// Adds `d` (±1, or −2) to the count of size index `p` along its path.
@@ -198,27 +319,27 @@ impl BlockEngine {
         }
     }
 
-    /// After the count of size index `p` rose: raises `Î` of the blocks meeting it
-    /// whose intensity passed it (to `I (1 + m)`). A count that falls leaves `Î ≥ I`;
-    /// a block whose `Î` has become loose is tightened when it is next drawn.
+    /// Adds 1 to the count of size index `p` along its path; a strip whose count passes
+    /// its cap has its blocks looked at ([`Self::look`]): `Î` of a block whose intensity
+    /// passed it is raised to `I (1 + m)`. A count that falls leaves `Î ≥ I`; a block
+    /// whose `Î` has become loose is tightened when it is next drawn.
+    ///
+    /// Each side of a block holds an allowance, the pair of them within `Î`; a strip's
+    /// count stays at or below the least allowance of its blocks, so `I ≤ Î` holds
+    /// without reading `Î`, and a look comes only when a count passes its cap — seldom
+    /// for strips of many particles. `Î` is raised exactly when `I > Î`, as by checking
+    /// every block meeting `p` after every event.
     #[inline]
-    fn raise(&mut self, p: u64) {
-        let (tree, hats, m) = (&self.tree, &mut self.hats, self.m);
-        let mut changed = false;
-        self.part.each_meeting(p, |l, strip, members| {
-            let node = (m >> l) as usize + strip as usize;
-            let mine = tree[node];
-            for b in members {
-                let diagonal = b.other as usize == node;
-                let i = intensity_of_pairs(diagonal, b.sup, mine, tree[b.other as usize]);
-                let id = b.id as usize;
-                if i > hats.leaf(id) {
-                    hats.set(id, hat_for(i));
-                    changed = true;
-                }
+    fn rise(&mut self, p: u64) {
+        let mut n = (self.m + p) as usize;
+        while n >= 1 {
+            self.tree[n] += 1;
+            // (the strips a look reads are disjoint from this one's, so not on the path)
+            if self.tree[n] > u64::from(self.caps[n]) {
+                self.look(n);
             }
-        });
-        self.changed |= changed;
+            n /= 2;
+        }
     }
 
     /// The size index of the `u`-th particle below node `n` (`u` below its count).
@@ -282,6 +403,7 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
         if !(i > 0.0 && open_unit(rng) * hat <= i) {
             if hat_for(hat_for(i)) < hat {
                 self.hats.set(id, hat_for(i));
+                self.allot(id);
                 self.changed = true;
             }
             return None;
@@ -347,8 +469,7 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
             self.change(x, -1);
             self.change(y, -1);
         }
-        self.change(z, 1);
-        self.raise(z);
+        self.rise(z);
     }
 
     fn double(&mut self, _pop: &Population) {
@@ -367,6 +488,7 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
                 }
             }
         }
+        self.allot_all();
         self.changed = true;
     }
 
@@ -440,6 +562,7 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
             leaves.push(h);
         }
         s.hats = QuadSums::new(&leaves)?;
+        s.allot_all();
         s.changed = changed;
         Ok(s)
     }

@@ -22,6 +22,7 @@
 use crate::error::Result;
 use crate::memory::try_reserve;
 use alloc::vec::Vec;
+use core::ops::Range;
 
 /// One block: a row strip and a column strip, each an aligned strip of sizes (a node of
 /// the count tree) given by its level and index.
@@ -47,18 +48,22 @@ impl Block {
     /// The first and one past the last size index of the rows and of the columns.
     pub fn ranges(&self) -> ((u64, u64), (u64, u64)) {
         let span = |l: u8, s: u32| (u64::from(s) << l, u64::from(s + 1) << l);
-        (span(self.row_level, self.row), span(self.col_level, self.col))
+        (
+            span(self.row_level, self.row),
+            span(self.col_level, self.col),
+        )
     }
 }
 
 /// A block in the list of a strip it meets: the block, the count-tree node of the strip
-/// on its other side (its own on the diagonal) and the block's bound, kept here so that
-/// a count change reads its blocks from one run of memory.
+/// on its other side (its own on the diagonal) and the strip's allowance in the block
+/// (the particle number this side may reach before the block's majorant must be
+/// looked at; kept by the engine).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Member {
     pub id: u32,
     pub other: u32,
-    pub sup: f64,
+    pub allow: u64,
 }
 
 /// The partition of a matrix of `2^levels` sizes (see the module docs). Blocks are
@@ -73,7 +78,7 @@ pub(crate) struct Partition {
     /// Per (level, strip), from `min_level` up, then strips 0 and 1 of the levels below
     /// it, the range of `members` meeting it.
     starts: Vec<u32>,
-    members: Vec<Member>,
+    pub members: Vec<Member>,
 }
 
 /// Calls `f` for every block of the partition of `2^levels` sizes, in a fixed order.
@@ -133,8 +138,11 @@ impl Partition {
     /// `Member` each), and the list starts.
     pub fn bytes(levels: u32, min_level: u32, b: usize) -> Option<usize> {
         let per = core::mem::size_of::<Block>() + 2 * core::mem::size_of::<Member>();
-        b.checked_mul(per)?
-            .checked_add(Self::keys(levels, min_level).checked_add(1)?.checked_mul(4)?)
+        b.checked_mul(per)?.checked_add(
+            Self::keys(levels, min_level)
+                .checked_add(1)?
+                .checked_mul(4)?,
+        )
     }
 
     pub fn new(levels: u32, min_level: u32, sep: u64) -> Result<Partition> {
@@ -181,7 +189,7 @@ impl Partition {
         let none = Member {
             id: 0,
             other: 0,
-            sup: 0.0,
+            allow: 0,
         };
         members.resize(starts[strips] as usize, none);
         let mut fill = starts.clone();
@@ -190,7 +198,7 @@ impl Partition {
                 members[fill[k] as usize] = Member {
                     id: id as u32,
                     other,
-                    sup: 0.0,
+                    allow: 0,
                 };
                 fill[k] += 1;
             });
@@ -212,42 +220,36 @@ impl Partition {
             let base = ((2usize << levels) >> min_level) - ((2usize << levels) >> l);
             Some(base + strip as usize)
         } else {
-            (strip <= 1).then(|| ((2usize << levels) >> min_level) + 2 * l as usize + strip as usize)
+            (strip <= 1)
+                .then(|| ((2usize << levels) >> min_level) + 2 * l as usize + strip as usize)
         }
     }
 
-    /// Sets every member's bound from the blocks' (`sup[id]`).
-    pub fn set_sups(&mut self, sup: &[f64]) {
-        for m in &mut self.members {
-            m.sup = sup[m.id as usize];
-        }
+    /// The range in `members` of the list of count-tree node `node` (empty for a node
+    /// no block uses).
+    #[inline]
+    pub fn list(&self, node: u32) -> Range<usize> {
+        let top = 31 - node.leading_zeros();
+        let l = self.levels - top;
+        let strip = u64::from(node - (1 << top));
+        Self::key(self.levels, self.min_level, l, strip).map_or(0..0, |k| {
+            self.starts[k] as usize..self.starts[k + 1] as usize
+        })
+    }
+
+    /// The position in `members` of block `id`'s entry in the list of `node`.
+    pub fn find(&self, node: u32, id: usize) -> Option<usize> {
+        self.list(node).find(|&k| self.members[k].id as usize == id)
     }
 
     /// Calls `f(level, strip, members)` for every level, with the blocks that hold
     /// size index `p` among their rows or columns (`strip`: p's strip at that level).
-    #[inline]
+    #[cfg(test)]
     pub fn each_meeting(&self, p: u64, mut f: impl FnMut(u32, u64, &[Member])) {
-        // the cut rows of the first column strips (sizes below 2^min_level)
-        for l in 0..self.min_level {
-            if p >> l <= 1 {
-                let k = Self::key(self.levels, self.min_level, l, p >> l).unwrap_or(0);
-                f(
-                    l,
-                    p >> l,
-                    &self.members[self.starts[k] as usize..self.starts[k + 1] as usize],
-                );
-            }
-        }
-        let mut base = 0usize;
-        for l in self.min_level..=self.levels {
-            let strip = p >> l;
-            let k = base + strip as usize;
-            f(
-                l,
-                strip,
-                &self.members[self.starts[k] as usize..self.starts[k + 1] as usize],
-            );
-            base += 1usize << (self.levels - l);
+        for top in 0..=self.levels {
+            let l = self.levels - top;
+            let node = (1u32 << top) + (p >> l) as u32;
+            f(l, p >> l, &self.members[self.list(node)]);
         }
     }
 }
@@ -260,7 +262,14 @@ mod tests {
     /// each of its sizes.
     #[test]
     fn blocks_cover_each_pair_once() {
-        for (levels, min, sep) in [(3, 3, 2), (5, 0, 2), (6, 2, 2), (6, 1, 1), (7, 3, 3), (7, 2, 1)] {
+        for (levels, min, sep) in [
+            (3, 3, 2),
+            (5, 0, 2),
+            (6, 2, 2),
+            (6, 1, 1),
+            (7, 3, 3),
+            (7, 2, 1),
+        ] {
             let p = Partition::new(levels, min, sep).unwrap();
             let m = 1u64 << levels;
             let node = |l: u8, s: u32| ((m >> l) + u64::from(s)) as u32;
