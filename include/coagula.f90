@@ -49,6 +49,13 @@ module coagula
        type(coag_user_kernel), intent(in) :: desc
        type(c_ptr), intent(out) :: out
      end function
+     integer(c_int32_t) function coag_kernel_set_user_blocks(kernel, sup_block, low_rank_loose) &
+         bind(c, name="coag_kernel_set_user_blocks")
+       import
+       type(c_ptr), value :: kernel
+       type(c_funptr), value :: sup_block
+       integer(c_int32_t), value :: low_rank_loose
+     end function
      integer(c_int32_t) function coag_kernel_rate(kernel, x, y, out) bind(c, name="coag_kernel_rate")
        import
        type(c_ptr), value :: kernel

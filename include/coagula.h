@@ -393,6 +393,11 @@ typedef struct {
 } coag_user_kernel;
 
 /*
+ `sup K(x, y)` over the block `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1` from C (block majorants).
+ */
+typedef double (*coag_block_sup_fn)(double x0, double x1, double y0, double y1, void *user_data);
+
+/*
  `F̂_x⁻¹(u)` (size of the followed piece after a break-up of x) from C.
  */
 typedef double (*coag_piece_fn)(double x, double u, void *user_data);
@@ -889,6 +894,24 @@ int32_t coag_kernel_new(const char *name, const double *params, size_t n, coag_k
  valid while any handle made from this kernel is alive.
  */
 int32_t coag_kernel_new_user(const coag_user_kernel *desc, coag_kernel **out);
+
+/*
+ Gives a user kernel (`coag_kernel_new_user`) its supremum over blocks of sizes, for
+ block majorants (`lowrank-blocks`, and `lowrank` when it picks them:
+ docs/design/block-majorants.md), and says whether its low-rank bound is loose
+ (non-zero `low_rank_loose`: `lowrank` then picks block majorants when `sup_block` is
+ given). `sup_block(x0, x1, y0, y1)` must bound `K(x, y)` over `x0 ≤ x ≤ x1`,
+ `y0 ≤ y ≤ y1`; a bound the kernel passes at run time makes `coag_sim_advance_to`
+ fail with `COAG_INVALID_RATE`. NULL `sup_block` restores the default (the `sup`
+ callback on the square around a block). Sims built from the handle before the call
+ keep what they had. Errors: a NULL handle (`COAG_INVALID_ARGUMENT`), a handle that
+ is not a user kernel (`COAG_UNSUPPORTED`); the handle is then unchanged.
+
+ # Safety
+ `kernel` must be NULL or a live handle not used by another thread meanwhile;
+ `sup_block` must stay valid while any sim made from the kernel is alive.
+ */
+int32_t coag_kernel_set_user_blocks(coag_kernel *kernel, coag_block_sup_fn sup_block, int32_t low_rank_loose);
 
 /*
  Evaluates `K(x, y)` of a coagulation kernel handle (`COAG_UNSUPPORTED` for a

@@ -275,6 +275,14 @@ class Kernel {
         return Kernel(k);
     }
 
+    /// A user kernel's supremum over blocks of sizes, for block majorants, and whether
+    /// its low-rank bound is loose (see coag_kernel_set_user_blocks); sims made before
+    /// keep what they had.
+    Kernel &set_user_blocks(coag_block_sup_fn sup_block, bool low_rank_loose) {
+        check(coag_kernel_set_user_blocks(k_.get(), sup_block, low_rank_loose ? 1 : 0));
+        return *this;
+    }
+
     /// K(x, y) of a coagulation kernel (COAG_UNSUPPORTED for a temperature model or a gas).
     double rate(double x, double y) const {
         double v;

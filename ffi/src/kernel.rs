@@ -20,6 +20,9 @@ pub type coag_factors_fn =
 /// `sup K(x, y)` over `lo ≤ x, y ≤ hi` from C (acceptance–rejection).
 pub type coag_sup_fn =
     Option<unsafe extern "C" fn(lo: f64, hi: f64, user_data: *mut c_void) -> f64>;
+/// `sup K(x, y)` over the block `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1` from C (block majorants).
+pub type coag_block_sup_fn =
+    Option<unsafe extern "C" fn(x0: f64, x1: f64, y0: f64, y1: f64, user_data: *mut c_void) -> f64>;
 /// `F̂_x⁻¹(u)` (size of the followed piece after a break-up of x) from C.
 pub type coag_piece_fn =
     Option<unsafe extern "C" fn(x: f64, u: f64, user_data: *mut c_void) -> f64>;
@@ -72,11 +75,19 @@ pub struct coag_user_fragmentation {
 // SAFETY: as for `coag_user_kernel`.
 unsafe impl Send for coag_user_fragmentation {}
 
-/// A coagulation kernel as a sim holds it: built in, or a C callback.
+/// A coagulation kernel as a sim holds it: built in, or a C callback (with what
+/// `coag_kernel_set_user_blocks` added).
 #[derive(Clone, Copy, Debug)]
 pub enum Kernel {
     Builtin(Coagulation),
-    User(coag_user_kernel),
+    User(coag_user_kernel, UserBlocks),
+}
+
+/// A C kernel's supremum over blocks and whether its low-rank bound is loose.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct UserBlocks {
+    sup_block: coag_block_sup_fn,
+    loose: bool,
 }
 
 /// What a `coag_kernel` handle holds: a coagulation kernel, or the physics of the
@@ -120,13 +131,15 @@ impl CoagulationKernel for Kernel {
     fn fingerprint(&self) -> u64 {
         match self {
             Kernel::Builtin(c) => c.fingerprint(),
-            Kernel::User(u) => coagula_core::checkpoint::fingerprint([
+            Kernel::User(u, b) => coagula_core::checkpoint::fingerprint([
                 0x5553_4552, // "USER"
                 u64::from(u.rank),
                 u.low_rank_exact as u64,
                 u64::from(u.majorant.is_some()),
                 u64::from(u.factors.is_some()),
                 u64::from(u.sup.is_some()),
+                u64::from(b.sup_block.is_some()),
+                u64::from(b.loose),
             ]),
         }
     }
@@ -136,20 +149,20 @@ impl CoagulationKernel for Kernel {
             Kernel::Builtin(k) => k.rate(x, y),
             // SAFETY: validated non-null at construction; the host keeps the function
             // and its user_data valid (documented contract).
-            Kernel::User(u) => u.rate.map_or(f64::NAN, |f| unsafe { f(x, y, u.user_data) }),
+            Kernel::User(u, _) => u.rate.map_or(f64::NAN, |f| unsafe { f(x, y, u.user_data) }),
         }
     }
     fn majorant(&self, x: f64) -> Option<f64> {
         match self {
             Kernel::Builtin(k) => k.majorant(x),
             // SAFETY: as for `rate`.
-            Kernel::User(u) => u.majorant.map(|f| unsafe { f(x, u.user_data) }),
+            Kernel::User(u, _) => u.majorant.map(|f| unsafe { f(x, u.user_data) }),
         }
     }
     fn rank(&self) -> usize {
         match self {
             Kernel::Builtin(k) => k.rank(),
-            Kernel::User(u) => {
+            Kernel::User(u, _) => {
                 if u.factors.is_some() {
                     u.rank as usize
                 } else {
@@ -161,7 +174,7 @@ impl CoagulationKernel for Kernel {
     fn factors(&self, x: f64, a: &mut [f64], b: &mut [f64]) {
         match self {
             Kernel::Builtin(k) => k.factors(x, a, b),
-            Kernel::User(u) => {
+            Kernel::User(u, _) => {
                 if let Some(f) = u.factors {
                     // the callback writes `rank` values into each buffer; give it
                     // full-size scratch so a sloppy callback cannot overrun
@@ -179,45 +192,49 @@ impl CoagulationKernel for Kernel {
     fn low_rank_is_exact(&self) -> bool {
         match self {
             Kernel::Builtin(k) => k.low_rank_is_exact(),
-            Kernel::User(u) => u.low_rank_exact != 0,
+            Kernel::User(u, _) => u.low_rank_exact != 0,
         }
     }
     fn low_rank_floor(&self) -> f64 {
         match self {
             Kernel::Builtin(k) => k.low_rank_floor(),
-            Kernel::User(u) => f64::from(u8::from(u.low_rank_exact != 0)),
+            Kernel::User(u, _) => f64::from(u8::from(u.low_rank_exact != 0)),
         }
     }
     fn sup_rate(&self, lo: f64, hi: f64) -> Option<f64> {
         match self {
             Kernel::Builtin(k) => k.sup_rate(lo, hi),
             // SAFETY: as for `rate`.
-            Kernel::User(u) => u.sup.map(|f| unsafe { f(lo, hi, u.user_data) }),
+            Kernel::User(u, _) => u.sup.map(|f| unsafe { f(lo, hi, u.user_data) }),
         }
     }
     fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
         match self {
             Kernel::Builtin(k) => k.sup_block(x0, x1, y0, y1),
-            // a user kernel's supremum over the square around the block
-            Kernel::User(_) => self.sup_rate(x0.min(y0), x1.max(y1)),
+            // SAFETY: as for `rate`.
+            Kernel::User(u, b) => match b.sup_block {
+                Some(f) => Some(unsafe { f(x0, x1, y0, y1, u.user_data) }),
+                // the supremum over the square around the block
+                None => self.sup_rate(x0.min(y0), x1.max(y1)),
+            },
         }
     }
     fn low_rank_is_loose(&self) -> bool {
         match self {
             Kernel::Builtin(k) => k.low_rank_is_loose(),
-            Kernel::User(_) => false,
+            Kernel::User(_, b) => b.loose,
         }
     }
     fn integer_sizes(&self) -> bool {
         match self {
             Kernel::Builtin(k) => k.integer_sizes(),
-            Kernel::User(_) => false,
+            Kernel::User(..) => false,
         }
     }
     fn min_size(&self) -> f64 {
         match self {
             Kernel::Builtin(k) => k.min_size(),
-            Kernel::User(_) => 0.0,
+            Kernel::User(..) => 0.0,
         }
     }
     /// A built-in kernel's claim passes on (its buckets are bounded from their two
@@ -225,7 +242,7 @@ impl CoagulationKernel for Kernel {
     fn monotone_factors(&self) -> bool {
         match self {
             Kernel::Builtin(k) => k.monotone_factors(),
-            Kernel::User(_) => false,
+            Kernel::User(..) => false,
         }
     }
 }
@@ -364,7 +381,52 @@ pub unsafe extern "C" fn coag_kernel_new_user(
             );
         }
         // SAFETY: `out` checked non-null above; writable (caller contract).
-        unsafe { new_kernel(Physics::Coagulation(Kernel::User(d)), out) }
+        unsafe {
+            new_kernel(
+                Physics::Coagulation(Kernel::User(d, UserBlocks::default())),
+                out,
+            )
+        }
+    })
+}
+
+/// Gives a user kernel (`coag_kernel_new_user`) its supremum over blocks of sizes, for
+/// block majorants (`lowrank-blocks`, and `lowrank` when it picks them:
+/// docs/design/block-majorants.md), and says whether its low-rank bound is loose
+/// (non-zero `low_rank_loose`: `lowrank` then picks block majorants when `sup_block` is
+/// given). `sup_block(x0, x1, y0, y1)` must bound `K(x, y)` over `x0 ≤ x ≤ x1`,
+/// `y0 ≤ y ≤ y1`; a bound the kernel passes at run time makes `coag_sim_advance_to`
+/// fail with `COAG_INVALID_RATE`. NULL `sup_block` restores the default (the `sup`
+/// callback on the square around a block). Sims built from the handle before the call
+/// keep what they had. Errors: a NULL handle (`COAG_INVALID_ARGUMENT`), a handle that
+/// is not a user kernel (`COAG_UNSUPPORTED`); the handle is then unchanged.
+///
+/// # Safety
+/// `kernel` must be NULL or a live handle not used by another thread meanwhile;
+/// `sup_block` must stay valid while any sim made from the kernel is alive.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn coag_kernel_set_user_blocks(
+    kernel: *mut coag_kernel,
+    sup_block: coag_block_sup_fn,
+    low_rank_loose: i32,
+) -> i32 {
+    guard(|| {
+        non_null(kernel, "kernel")?;
+        // SAFETY: checked non-null; a live handle by contract, not shared meanwhile.
+        let k = unsafe { &mut *kernel };
+        match &mut k.k {
+            Physics::Coagulation(Kernel::User(_, b)) => {
+                *b = UserBlocks {
+                    sup_block,
+                    loose: low_rank_loose != 0,
+                };
+                Ok(())
+            }
+            _ => fail(
+                COAG_UNSUPPORTED,
+                "kernel: only a user kernel (coag_kernel_new_user) takes a block supremum",
+            ),
+        }
     })
 }
 

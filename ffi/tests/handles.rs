@@ -24,7 +24,7 @@ mod kernels {
             sup: None,
             user_data: core::ptr::null_mut(),
         };
-        assert!(!Kernel::User(user).monotone_factors());
+        assert!(!Kernel::User(user, Default::default()).monotone_factors());
     }
 }
 

@@ -100,6 +100,8 @@ pub(crate) struct UserFns {
     rank: usize,
     exact: bool,
     sup: Option<Py<PyAny>>,
+    sup_block: Option<Py<PyAny>>,
+    loose: bool,
     pub(crate) raised: Raised,
 }
 
@@ -181,14 +183,17 @@ impl CoagulationKernel for PyCoag {
     fn sup_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> Option<f64> {
         match self {
             PyCoag::Builtin(k) => k.sup_block(x0, x1, y0, y1),
-            // a user kernel's supremum over the square around the block
-            PyCoag::User(_) => self.sup_rate(x0.min(y0), x1.max(y1)),
+            PyCoag::User(u) => match &u.sup_block {
+                Some(f) => Some(call_f64(f, &u.raised, (x0, x1, y0, y1))),
+                // the supremum over the square around the block
+                None => self.sup_rate(x0.min(y0), x1.max(y1)),
+            },
         }
     }
     fn low_rank_is_loose(&self) -> bool {
         match self {
             PyCoag::Builtin(k) => k.low_rank_is_loose(),
-            PyCoag::User(_) => false,
+            PyCoag::User(u) => u.loose,
         }
     }
     fn integer_sizes(&self) -> bool {
@@ -221,6 +226,8 @@ impl CoagulationKernel for PyCoag {
                 u64::from(u.majorant.is_some()),
                 u64::from(u.factors.is_some()),
                 u64::from(u.sup.is_some()),
+                u64::from(u.sup_block.is_some()),
+                u64::from(u.loose),
             ]),
         }
     }
@@ -428,8 +435,13 @@ fn _kernel(name: &str, params: Vec<(String, f64)>) -> PyResult<Kernel> {
 /// ≥ 0) and the bounds the chosen scheme needs — `majorant(x)` with
 /// `K(x, y) ≤ h(x) h(y)` (mass flow, MFA, DSA), `factors(x) -> (a, b)` of a rank-`rank`
 /// bound `K ≤ A + Aᵀ`, `A(x, y) = Σ a_k(x) b_k(y)` (the low-rank schemes; `exact=True`
-/// when it is an equality), `sup(lo, hi)` of K on a square (acceptance–rejection).
-/// A bound the kernel exceeds at run time is a `CoagulaError`.
+/// when it is an equality), `sup(lo, hi)` of K on a square (acceptance–rejection),
+/// `sup_block(x0, x1, y0, y1)` of K over `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1` (block
+/// majorants: `lowrank-blocks`, and `lowrank` when it picks them; without it they use
+/// `sup` on the square around a block), and `low_rank_loose=True` when the low-rank bound
+/// is far above the kernel somewhere (`lowrank` then picks block majorants if it has
+/// `sup_block` or `sup`; docs/design/block-majorants.md). A bound the kernel exceeds at
+/// run time is a `CoagulaError`.
 ///
 /// >>> import coagula
 /// >>> # x + y = A + Aᵀ with A(x, y) = x · 1: rank 1, exact
@@ -446,7 +458,9 @@ pub struct UserKernel {
 #[pymethods]
 impl UserKernel {
     #[new]
-    #[pyo3(signature = (rate, *, majorant=None, rank=0, factors=None, exact=false, sup=None))]
+    #[pyo3(signature = (rate, *, majorant=None, rank=0, factors=None, exact=false, sup=None,
+        sup_block=None, low_rank_loose=false))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         rate: Bound<'_, PyAny>,
         majorant: Option<Bound<'_, PyAny>>,
@@ -454,6 +468,8 @@ impl UserKernel {
         factors: Option<Bound<'_, PyAny>>,
         exact: bool,
         sup: Option<Bound<'_, PyAny>>,
+        sup_block: Option<Bound<'_, PyAny>>,
+        low_rank_loose: bool,
     ) -> PyResult<Self> {
         let callable = |name: &str, f: &Bound<'_, PyAny>| {
             if f.is_callable() {
@@ -487,6 +503,8 @@ impl UserKernel {
                 rank,
                 exact,
                 sup: sup.map(|f| callable("sup", &f)).transpose()?,
+                sup_block: sup_block.map(|f| callable("sup_block", &f)).transpose()?,
+                loose: low_rank_loose,
                 raised: Raised,
             }),
         })
@@ -515,6 +533,8 @@ impl UserKernel {
         kw.set_item("factors", u.factors.as_ref().map(|f| f.bind(py)))?;
         kw.set_item("exact", u.exact)?;
         kw.set_item("sup", u.sup.as_ref().map(|f| f.bind(py)))?;
+        kw.set_item("sup_block", u.sup_block.as_ref().map(|f| f.bind(py)))?;
+        kw.set_item("low_rank_loose", u.loose)?;
         Ok((cls, (u.rate.bind(py).clone(), kw)))
     }
 }
@@ -536,6 +556,11 @@ fn _user_kernel(rate: Bound<'_, PyAny>, kw: &Bound<'_, PyDict>) -> PyResult<User
             .transpose()?
             .unwrap_or(false),
         get("sup")?,
+        get("sup_block")?,
+        get("low_rank_loose")?
+            .map(|v| v.extract())
+            .transpose()?
+            .unwrap_or(false),
     )
 }
 

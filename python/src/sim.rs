@@ -302,6 +302,13 @@ impl Sim {
     }
 
     /// The current time.
+    /// The engine the low-rank method runs now (`"slots"`, `"counted"`, `"blocks"`;
+    /// the `engine` option pins one), or None for a scheme without engines.
+    #[getter]
+    fn engine(&self) -> PyResult<Option<&'static str>> {
+        self.with(|c| c.sim.engine().map(|m| m.name()))
+    }
+
     #[getter]
     fn time(&self) -> PyResult<f64> {
         self.with(|c| c.sim.time())

@@ -299,3 +299,51 @@ def test_a_callbacks_exception_belongs_to_its_own_call():
     sim = Simulation("lowrank", k, Initial.monodisperse(1, particles=100), seed=1)
     sim.advance_to(0.01)
     assert sim.time == 0.01
+
+
+def _additive_block(x0, x1, y0, y1):
+    return x1 + y1
+
+
+def _additive_sup(lo, hi):
+    return 2.0 * hi
+
+
+def test_engine_choice_and_user_block_suprema():
+    """`lowrank` picks its engine by the kernel: block majorants for the atmospheric
+    kernel (loose low-rank bound), the bucketed engines for a tight one, pinned by the
+    `engine` option. A user kernel with the additive kernel's exact block supremum runs
+    `lowrank-blocks` to the built-in kernel's bits (the default, the square's supremum,
+    proposes differently); declared loose, `lowrank` picks block majorants; a block
+    bound below the kernel, or a raising one, is a CoagulaError."""
+    start = Initial.monodisperse(1, particles=20_000)
+    assert Simulation("lowrank", Kernel("atmospheric"), start, seed=1).engine == "blocks"
+    assert Simulation("lowrank", Kernel("atmospheric"), start, seed=1, engine="slots").engine == "slots"
+    assert Simulation("lowrank", Kernel("additive"), start, seed=1).engine in ("slots", "counted")
+    assert Simulation("inverse", Kernel("additive"), start, seed=1).engine is None
+
+    def run(kernel):
+        sim = Simulation("lowrank-blocks", kernel, Initial.monodisperse(1, particles=2000), seed=7)
+        sim.advance_to(0.6)
+        return sim.counts(), sim.totals.events
+
+    builtin = run(Kernel("additive"))
+    square = UserKernel(_additive, rank=1, factors=_additive_rank1, sup=_additive_sup)
+    assert not np.array_equal(run(square)[0], builtin[0])
+    exact = UserKernel(_additive, rank=1, factors=_additive_rank1, sup=_additive_sup, sup_block=_additive_block)
+    for k in (exact, pickle.loads(pickle.dumps(exact))):
+        got = run(k)
+        assert got[1] == builtin[1] > 500 and np.array_equal(got[0], builtin[0])
+    tight = Simulation("lowrank", exact, Initial.monodisperse(1, particles=2000), seed=7)
+    assert tight.engine != "blocks"
+    loose = UserKernel(_additive, rank=1, factors=_additive_rank1, sup_block=_additive_block, low_rank_loose=True)
+    assert Simulation("lowrank", loose, Initial.monodisperse(1, particles=2000), seed=7).engine == "blocks"
+    low = UserKernel(_additive, sup_block=lambda x0, x1, y0, y1: x0 + y0)
+    with pytest.raises(CoagulaError):
+        run(low)
+
+    def boom(*a):
+        raise RuntimeError("boom")
+
+    with pytest.raises((CoagulaError, RuntimeError)):
+        run(UserKernel(_additive, sup_block=boom))

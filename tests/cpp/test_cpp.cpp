@@ -433,6 +433,7 @@ void test_verbs_and_errors() {
 /// User kernels and fragmentation from C callbacks.
 double user_rate(double, double, void *ud) { return *static_cast<const double *>(ud); }
 double user_sup(double, double, void *ud) { return std::fabs(*static_cast<const double *>(ud)); }
+double user_block_sup(double, double, double, double, void *ud) { return std::fabs(*static_cast<const double *>(ud)); }
 double user_majorant(double, void *ud) { return std::sqrt(std::fabs(*static_cast<const double *>(ud))); }
 void user_factors(double, double *a, double *b, void *ud) {
     a[0] = 0.5 * std::fabs(*static_cast<const double *>(ud));
@@ -465,6 +466,16 @@ void test_user_kernels() {
     CHECK(std::fabs(e1 - 0.25) < 1e-15, "exact n_1(2) %g", e1);
     CHECK(std::fabs(s0.mean - e0) < kTolerance * s0.se, "user kernel M0(2) %g +- %g vs %g", s0.mean, s0.se, e0);
     CHECK(std::fabs(s1.mean - e1) < kTolerance * s1.se, "user kernel n1(2) %g +- %g vs %g", s1.mean, s1.se, e1);
+    {
+        // a supremum over blocks, declared loose: lowrank runs block majorants
+        auto ub = Kernel::user(desc);
+        ub.set_user_blocks(user_block_sup, true);
+        auto sim = Sim::from_counts("lowrank", ub, {2000}, 2000.0);
+        sim.advance_to(1.0);
+        CHECK(std::string(sim.engine()) == "blocks", "a loose user kernel on %s", sim.engine().c_str());
+        CHECK(code_of([&] { Kernel::constant().set_user_blocks(user_block_sup, false); }) == COAG_UNSUPPORTED,
+              "a block supremum on a built-in kernel");
+    }
     coag_user_kernel norate = desc;
     norate.rate = nullptr;
     CHECK(code_of([&] { Kernel::user(norate); }) == COAG_INVALID_ARGUMENT, "a user kernel without a rate");

@@ -34,6 +34,14 @@ contains
     user_sup = abs(k)
     if (lo > hi) user_sup = -1
   end function
+  real(c_double) function user_block_sup(x0, x1, y0, y1, ud) bind(c)
+    real(c_double), value :: x0, x1, y0, y1
+    type(c_ptr), value :: ud
+    real(c_double), pointer :: k
+    call c_f_pointer(ud, k)
+    user_block_sup = abs(k)
+    if (x0 > x1 .or. y0 > y1) user_block_sup = -1
+  end function
   subroutine user_factors(x, a, b, ud) bind(c)
     real(c_double), value :: x
     real(c_double), intent(out) :: a(*), b(*)

@@ -6,7 +6,6 @@
 ! laws; Langevin batches (4.89 SE); checkpoints that continue bit for bit; refusals that
 ! leave the state unchanged.
 
-
 program test_fortran
   use coagula
   use test_callbacks   ! (and its ieee_is_nan)
@@ -447,6 +446,8 @@ contains
     call check(abs(d - 2020 / 2010.0_c_double) < 1e-12_c_double, "mass conserved: M1")
     call coag_sim_free(sb)
     call coag_sim_free(sa)
+    call ok(coag_kernel_set_user_blocks(ku, c_funloc(user_block_sup), 1))  ! (runs: tests/c/test_schemes.c)
+    call expect(coag_kernel_set_user_blocks(c_null_ptr, c_null_funptr, 0), COAG_NULL_PARAMETER, "NULL kernel")
     call coag_kernel_free(ku)
   end subroutine test_user_kernel_counts
 

@@ -448,10 +448,8 @@ pub unsafe extern "C" fn coag_sim_engine(sim: *const coag_sim, out: *mut *const 
         // SAFETY: NULL checked; live by contract.
         let s = unsafe { handle(sim, "sim") }?;
         non_null(out, "out")?;
-        let name: &'static std::ffi::CStr = match s.sim.engine() {
-            Some(coagula_core::scheme::facade::BucketMode::Slots) => c"slots",
-            Some(coagula_core::scheme::facade::BucketMode::Counted) => c"counted",
-            Some(coagula_core::scheme::facade::BucketMode::Blocks) => c"blocks",
+        let name = match s.sim.engine() {
+            Some(mode) => mode.c_name(),
             None => {
                 return fail(
                     COAG_UNSUPPORTED,

@@ -73,6 +73,23 @@ pub enum BucketMode {
     Blocks,
 }
 
+impl BucketMode {
+    /// The engine's name, as the `engine` option takes it (NUL-terminated for C).
+    pub const fn c_name(self) -> &'static core::ffi::CStr {
+        match self {
+            BucketMode::Slots => c"slots",
+            BucketMode::Counted => c"counted",
+            BucketMode::Blocks => c"blocks",
+        }
+    }
+
+    /// The engine's name, as the `engine` option takes it.
+    pub fn name(self) -> &'static str {
+        // (the names are ASCII)
+        self.c_name().to_str().unwrap_or("")
+    }
+}
+
 /// How low-rank DSMC draws collision directions (Osinsky 2023 §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Directions {
