@@ -246,24 +246,35 @@ impl BlockEngine {
         Ok(s)
     }
 
-    /// Sets block `id`'s allowance in the list of `node` (lowering the node's cap to
-    /// it; a cap left below the least allowance only costs a look).
-    fn give(&mut self, node: usize, id: usize, allow: u64) {
-        if let Some(k) = self.part.find(node as u32, id) {
-            self.part.members[k].allow = allow;
+    /// Sets the allowance of the entry at `k` (in the list of `node`), saturated,
+    /// lowering the node's cap to it (a cap left below the least allowance only costs a
+    /// look).
+    #[inline]
+    fn give(&mut self, k: usize, node: usize, allow: u64) {
+        let a = cap_of(allow);
+        self.part.members[k].allow = a;
+        self.caps[node] = self.caps[node].min(a);
+    }
+
+    /// Splits the headroom of the block of entry `k` (in the list of `node`) between its
+    /// sides afresh.
+    fn allot_at(&mut self, node: usize, k: usize) {
+        let mb = self.part.members[k];
+        let (id, other) = (mb.id as usize, mb.other as usize);
+        let diagonal = other == node;
+        let (r, c) = (self.tree[node], self.tree[other]);
+        let (x, y) = allot(diagonal, self.sup[id], self.hats.leaf(id), r, c);
+        self.give(k, node, x);
+        if !diagonal {
+            self.give(mb.twin as usize, other, y);
         }
-        self.caps[node] = self.caps[node].min(cap_of(allow));
     }
 
     /// Splits block `id`'s headroom between its sides afresh.
     fn allot(&mut self, id: usize) {
-        let b = self.part.blocks[id];
-        let (rn, cn) = self.nodes(&b);
-        let (r, c) = (self.tree[rn], self.tree[cn]);
-        let (x, y) = allot(b.diagonal(), self.sup[id], self.hats.leaf(id), r, c);
-        self.give(rn, id, x);
-        if !b.diagonal() {
-            self.give(cn, id, y);
+        let (rn, _) = self.nodes(&self.part.blocks[id]);
+        if let Some(k) = self.part.find(rn as u32, id) {
+            self.allot_at(rn, k);
         }
     }
 
@@ -271,8 +282,13 @@ impl BlockEngine {
     /// restore).
     fn allot_all(&mut self) {
         self.caps.fill(u32::MAX);
-        for id in 0..self.part.blocks.len() {
-            self.allot(id);
+        for node in 1..self.caps.len() {
+            for k in self.part.list(node as u32) {
+                // (each block once, from its first entry)
+                if k <= self.part.members[k].twin as usize {
+                    self.allot_at(node, k);
+                }
+            }
         }
     }
 
@@ -281,10 +297,10 @@ impl BlockEngine {
     /// headroom split afresh; the cap becomes the least allowance.
     fn look(&mut self, node: usize) {
         let mine = self.tree[node];
-        let mut cap = u64::MAX;
+        let mut cap = u32::MAX;
         for k in self.part.list(node as u32) {
             let mb = self.part.members[k];
-            if mine <= mb.allow {
+            if mine <= u64::from(mb.allow) {
                 cap = cap.min(mb.allow);
                 continue;
             }
@@ -300,13 +316,14 @@ impl BlockEngine {
                 self.changed = true;
             }
             let (x, y) = allot(diagonal, sup, hat, mine, theirs);
+            let x = cap_of(x);
             self.part.members[k].allow = x;
             cap = cap.min(x);
             if !diagonal {
-                self.give(other, id, y);
+                self.give(mb.twin as usize, other, y);
             }
         }
-        self.caps[node] = cap_of(cap);
+        self.caps[node] = cap;
     }
 
     /// Adds `d` (±1, or −2) to the count of size index `p` along its path.

@@ -56,14 +56,16 @@ impl Block {
 }
 
 /// A block in the list of a strip it meets: the block, the count-tree node of the strip
-/// on its other side (its own on the diagonal) and the strip's allowance in the block
-/// (the particle number this side may reach before the block's majorant must be
-/// looked at; kept by the engine).
+/// on its other side (its own on the diagonal), the position in `members` of the
+/// block's entry in that strip's list (its own on the diagonal), and the strip's
+/// allowance in the block (the particle number this side may reach before the block's
+/// majorant must be looked at; kept by the engine, saturated at `u32::MAX`).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Member {
     pub id: u32,
     pub other: u32,
-    pub allow: u64,
+    pub twin: u32,
+    pub allow: u32,
 }
 
 /// The partition of a matrix of `2^levels` sizes (see the module docs). Blocks are
@@ -189,19 +191,30 @@ impl Partition {
         let none = Member {
             id: 0,
             other: 0,
+            twin: 0,
             allow: 0,
         };
         members.resize(starts[strips] as usize, none);
         let mut fill = starts.clone();
         for (id, b) in blocks.iter().enumerate() {
+            let mut at = [u32::MAX; 2];
+            let mut n = 0;
             meets(b, &mut |k, other| {
                 members[fill[k] as usize] = Member {
                     id: id as u32,
                     other,
+                    twin: 0,
                     allow: 0,
                 };
+                at[n] = fill[k];
+                n += 1;
                 fill[k] += 1;
             });
+            // (every block is in its row strip's list, and off the diagonal in its
+            // column strip's)
+            let (a, c) = (at[0], if n == 2 { at[1] } else { at[0] });
+            members[a as usize].twin = c;
+            members[c as usize].twin = a;
         }
         Ok(Partition {
             blocks,
@@ -317,6 +330,18 @@ mod tests {
                 assert_eq!(unique.len(), found.len());
             }
             assert_eq!(Partition::count(levels, min, sep), p.blocks.len());
+            // twins: each entry's twin is the block's entry in the other strip's list
+            for (k, mb) in p.members.iter().enumerate() {
+                let t = p.members[mb.twin as usize];
+                assert_eq!((t.id, t.twin as usize), (mb.id, k));
+                let diagonal = p.blocks[mb.id as usize].diagonal();
+                assert_eq!(mb.twin as usize == k, diagonal);
+            }
+            for node in 1..2 * m as u32 {
+                for k in p.list(node) {
+                    assert_eq!(p.members[p.members[k].twin as usize].other, node);
+                }
+            }
         }
     }
 
