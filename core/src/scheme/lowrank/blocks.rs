@@ -359,20 +359,32 @@ impl BlockEngine {
         }
     }
 
-    /// The size index of the `u`-th particle below node `n` (`u` below its count).
+    /// The size indices of the `u1`-th particle below node `n1` and the `u2`-th below
+    /// `n2` (each below its node's count), the two descents walked in lockstep so that
+    /// the loads of one overlap those of the other, each step without a branch on the
+    /// count.
     #[inline]
-    fn descend(&self, mut n: usize, mut u: u64) -> u64 {
+    fn descend2(
+        &self,
+        (mut n1, mut u1): (usize, u64),
+        (mut n2, mut u2): (usize, u64),
+    ) -> (u64, u64) {
         let m = self.m as usize;
-        while n < m {
-            let left = self.tree[2 * n];
-            if u < left {
-                n *= 2;
-            } else {
-                u -= left;
-                n = 2 * n + 1;
+        while n1 < m || n2 < m {
+            if n1 < m {
+                let left = self.tree[2 * n1];
+                let right = usize::from(u1 >= left);
+                u1 -= left * right as u64;
+                n1 = 2 * n1 + right;
+            }
+            if n2 < m {
+                let left = self.tree[2 * n2];
+                let right = usize::from(u2 >= left);
+                u2 -= left * right as u64;
+                n2 = 2 * n2 + right;
             }
         }
-        (n - m) as u64
+        ((n1 - m) as u64, (n2 - m) as u64)
     }
 }
 
@@ -432,13 +444,11 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
             if q >= p {
                 q += 1;
             }
-            (self.descend(rn, p), self.descend(rn, q))
+            self.descend2((rn, p), (rn, q))
         } else {
             // (disjoint strips)
-            (
-                self.descend(rn, below(rng, rows)),
-                self.descend(cn, below(rng, cols)),
-            )
+            let (p, q) = (below(rng, rows), below(rng, cols));
+            self.descend2((rn, p), (cn, q))
         };
         Some(Candidate {
             x: x + 1,
