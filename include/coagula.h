@@ -1618,9 +1618,11 @@ int32_t coag_class_rates(const double *before, const double *after, size_t len, 
  Sets the sim's particle source: `rate` particles per unit volume and time (finite,
  ≥ 0), sizes of `kind` (`COAG_SOURCE_*`) with parameters `p1`, `p2` (unused ones
  ignored). Processes run on the finite-N schemes with coagulation alone (lowrank,
- lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes,
- dsa); elsewhere `COAG_UNSUPPORTED`. Setting any process starts the books from the
- state now. Errors leave the sim unchanged.
+ lowrank-tree, lowrank-binary-tree, lowrank-blocks, lowrank-sizes, inverse,
+ rejection, dsa, dsa-counts) and inside the steps of `massflow` (with fragmentation
+ too; its books count mass, its particle number stays N); elsewhere
+ `COAG_UNSUPPORTED`. Setting any process starts the books from the state now.
+ Errors leave the sim unchanged.
 
  # Safety
  `sim` NULL or live.

@@ -11,18 +11,21 @@ use coagula_core::initial::Distribution;
 use coagula_core::kernel::{Coagulation, NoFragmentation};
 use coagula_core::observe::Replicas;
 use coagula_core::process::{Books, Processes, Source, UserRate};
-use coagula_core::scheme::facade::{BucketMode, Init, InitKind, Model, Options, SchemeId, State};
+use coagula_core::scheme::facade::{
+    BucketMode, Init, InitKind, Law, Model, Options, SchemeId, State,
+};
 use coagula_core::scheme::registry;
 use rand_pcg::Pcg64Mcg;
 use rand_pcg::rand_core::SeedableRng;
 
-/// The schemes that take processes.
+/// The finite-N schemes that take processes (the time-driven mass flow takes them
+/// too: `processes_massflow.rs`).
 pub(crate) fn process_schemes() -> Vec<V> {
     let p = Processes::default().with_removal(1.0, 0.0).unwrap();
     let mut v: Vec<V> = registry::SCHEMES
         .iter()
         .copied()
-        .filter(|s| s.takes_processes(&p).is_ok())
+        .filter(|s| s.takes_processes(&p).is_ok() && s.law == Law::FiniteN)
         .map(|info| V { info, slots: false })
         .collect();
     // the default scheme's slot engine too (small systems run its counted engine)
@@ -670,7 +673,7 @@ fn split_runs_through_checkpoints_keep_their_bits() {
 }
 
 /// Any real number, the hostile ones often.
-fn hostile() -> impl proptest::strategy::Strategy<Value = f64> {
+pub(crate) fn hostile() -> impl proptest::strategy::Strategy<Value = f64> {
     use proptest::prelude::*;
     prop_oneof![
         1 => Just(f64::NAN),

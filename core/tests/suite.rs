@@ -36,6 +36,8 @@ mod no_panic;
 mod particle_sizes;
 #[path = "processes.rs"]
 mod processes;
+#[path = "processes_massflow.rs"]
+mod processes_massflow;
 #[path = "regime_sweep.rs"]
 mod regime_sweep;
 #[path = "regressions.rs"]

@@ -97,12 +97,35 @@ int main(void) {
         coag_sim_free(split);
         coag_sim_free(whole);
     }
-    /* refusals: growth on real sizes, processes on mass flow, bad parameters */
+    /* the mass flow runs them in its own steps: its books balance with the mass it
+       carries (M1), the number is its N; MFA refuses them; then refusals on real
+       sizes and bad parameters */
     coag_kernel *k = KERNEL0("constant");
     double sizes[64];
     for (int i = 0; i < 64; i++) sizes[i] = 1.0 + i % 3;
     coag_sim *mf;
     OK(coag_sim_new_sizes("massflow", k, NULL, NULL, sizes, 64, 1.0, &mf));
+    OK(coag_sim_set_source(mf, 0.5, COAG_SOURCE_EXPONENTIAL, 2.0, 0.0));
+    OK(coag_sim_set_removal(mf, 0.1, 0.5));
+    OK(coag_sim_set_growth(mf, 0.2, 1.0 / 3.0));
+    EXPECT(coag_sim_set_growth_step(mf, 0.1), COAG_UNSUPPORTED);
+    OK(coag_sim_advance_to(mf, 1.0, NULL));
+    {
+        coag_books b;
+        memset(&b, 0, sizeof b);
+        b.struct_size = sizeof b;
+        OK(coag_sim_books(mf, &b));
+        double m1;
+        OK(coag_sim_moment(mf, 1.0, &m1));
+        double mass = b.initial_mass + b.injected_mass - b.removed_mass + b.grown_mass;
+        CHECK(fabs(mass - m1) < 1e-12 * m1, "massflow: books %.17g vs M1 %.17g", mass, m1);
+        CHECK(b.initial_number == 64 && b.injected_number == 0 && b.merged == 0,
+              "massflow: the number is N");
+        CHECK(b.injected_mass > 0.9 && b.removed_mass > 0 && b.grown_mass > 0,
+              "massflow: every process acted");
+    }
+    coag_sim_free(mf);
+    OK(coag_sim_new_sizes("mfa", k, NULL, NULL, sizes, 64, 1.0, &mf));
     EXPECT(coag_sim_set_removal(mf, 0.1, 0.0), COAG_UNSUPPORTED);
     coag_sim_free(mf);
     coag_sim *ls;

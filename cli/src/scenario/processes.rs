@@ -162,28 +162,32 @@ pub(super) fn of(
         let e = g.exponent.unwrap_or(0.0);
         let c = g.rate * unit.powf(e - 1.0);
         p = p.with_growth(c, e).map_err(|e| src.at("growth", e))?;
-        let integer = scheme
-            .inits
-            .contains(&coagula_core::scheme::facade::InitKind::Counts);
-        match g.step {
-            Some(h) if !integer => {
+        use coagula_core::scheme::facade::GrowthKind;
+        match (g.step, scheme.growth_kind()) {
+            (Some(h), GrowthKind::Split) => {
                 p = p
                     .with_growth_step(h)
                     .map_err(|e| src.at("growth.step", e))?;
             }
-            Some(_) => {
+            (Some(_), GrowthKind::Attachment) => {
                 return Err(src.at(
                     "growth.step",
                     "not used here (growth on integer sizes is monomer attachment, exact)",
                 ));
             }
-            None if !integer => {
+            (Some(_), GrowthKind::InStep) => {
+                return Err(src.at(
+                    "growth.step",
+                    "not used here (the mass flow grows the sizes in its own step, scheme.dt)",
+                ));
+            }
+            (None, GrowthKind::Split) => {
                 return Err(src.at(
                     "growth.step",
                     "growth on real sizes needs a splitting step (second order in it at its multiples)",
                 ));
             }
-            None => {}
+            (None, _) => {}
         }
     }
     if p.is_empty() {
@@ -192,10 +196,10 @@ pub(super) fn of(
     scheme
         .takes_processes(&p)
         .map_err(|e| src.at("scheme.name", e))?;
-    if s.fragmentation.is_some() {
+    if s.fragmentation.is_some() && !scheme.processes_with_fragmentation() {
         return Err(src.at(
             "fragmentation",
-            "processes beside coagulation run with coagulation alone (no fragmentation)",
+            "processes beside coagulation run with coagulation alone on this scheme (massflow takes both)",
         ));
     }
     Ok(Some(p))

@@ -343,9 +343,15 @@ fn processes_tables() {
             &["growth.rate=1.0", "scheme.name=\"lowrank-sizes\""][..],
             "growth.step",
         ),
+        (&["scheme.name=\"mfa\""][..], "scheme.name"),
         (
-            &["scheme.name=\"massflow\"", "scheme.dt=0.01"][..],
-            "scheme.name",
+            &[
+                "scheme.name=\"massflow\"",
+                "scheme.dt=0.01",
+                "growth.rate=0.5",
+                "growth.step=0.05",
+            ][..],
+            "growth.step",
         ),
         (&["source.kind=\"counts\""][..], "source.kind"),
         (&["source.rate=-1"][..], "source"),

@@ -64,6 +64,7 @@
 use super::{Budget, Scheme, StepReport, check_target};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
+use crate::process::{Books, Processes};
 use crate::qmc::Word;
 use crate::tree::{Weight, unit_f64};
 use alloc::vec::Vec;
@@ -349,13 +350,42 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
 
     /// One step of length `h` into the next-sizes buffer; returns its report. The sizes
     /// are not touched, so an error leaves the state as it was.
+    /// With `procs`, the processes' moves join the step (see `processes.rs`) and their
+    /// plan is returned; the caller commits it after the step.
     #[inline(never)]
-    fn step<R: Rng + ?Sized>(&mut self, h: f64, rng: &mut R) -> Result<StepReport> {
+    fn step<'p, R: Rng + ?Sized>(
+        &mut self,
+        h: f64,
+        rng: &mut R,
+        procs: Option<&'p Processes>,
+    ) -> Result<(StepReport, Option<processes::Plan<'p>>)> {
+        // (two instances, so that a run without processes keeps the loop it had)
+        match procs {
+            Some(_) => self.step_in::<true, R>(h, rng, procs),
+            None => self.step_in::<false, R>(h, rng, None),
+        }
+    }
+
+    #[inline(always)]
+    fn step_in<'p, const P: bool, R: Rng + ?Sized>(
+        &mut self,
+        h: f64,
+        rng: &mut R,
+        procs: Option<&'p Processes>,
+    ) -> Result<(StepReport, Option<processes::Plan<'p>>)> {
         let n = self.n;
         let nf = n as f64;
         let mut rep = StepReport::default();
-        let (x, next, pts, _) = split(self.ws.as_mut(), n, self.cur);
+        let (x, next, pts, gamma) = split(self.ws.as_mut(), n, self.cur);
         let (kernel, frag, mass) = (&self.kernel, &self.frag, self.mass);
+        let plan = match procs {
+            Some(p) => Some(processes::plan(p, x, gamma, next, mass, self.time, h)?),
+            None => None,
+        };
+        let (jumps, share, source, grows) = match &plan {
+            Some(p) => (p.jumps, p.source_share, p.source, p.grows),
+            None => (false, 0.0, None, false),
+        };
         let bound = crate::kernel::break_rate_bound(frag);
         // particle k's move with partner l and uniform u3 (next[k] from the old sizes)
         let mut one = |k: usize, l: usize, u3: f64| -> Result<()> {
@@ -370,12 +400,33 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             }
             let pc = h * mass * kt / xl;
             let pf = h * fd;
-            if pc + pf > 1.0 {
+            // the processes' bands follow coagulation's: a jump to the partner's size,
+            // then a source size (both 0 without processes)
+            let pj = if P && jumps {
+                (gamma[l] - gamma[k]).max(0.0)
+            } else {
+                0.0
+            };
+            let (aj, asrc) = if P {
+                (pc + pj, pc + pj + share)
+            } else {
+                (pc, pc)
+            };
+            if asrc + pf > 1.0 {
                 rep.clipped += 1;
             }
             let new = if u3 < pc {
                 rep.events += 1;
                 xk + xl
+            } else if P && u3 < aj {
+                rep.events += 1;
+                xl
+            } else if P
+                && u3 < asrc
+                && let Some(s) = source
+            {
+                rep.events += 1;
+                s.mass_size((u3 - aj) / share)
             } else if pf > 0.0 && u3 >= 1.0 - pf {
                 rep.events += 1;
                 let piece = frag.inverse_piece(xk, ((1.0 - u3) / pf).min(1.0));
@@ -397,7 +448,17 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     name: "particle size (a coagulation passed the largest f64)",
                 });
             }
-            next[k] = new;
+            if P && grows {
+                // the plan left `Φ_h(x_k)` there; a particle that moved grows from
+                // its new size, marked negative for the re-sort
+                if let Some(p) = procs
+                    && new != xk
+                {
+                    next[k] = -processes::grown(p, new, h)?;
+                }
+            } else {
+                next[k] = new;
+            }
             Ok(())
         };
         // the partner of a point: ⌊N u⌋ (a u64 word's top m digits, as `to_unit` keeps
@@ -421,7 +482,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                     one(p, l, unit_f64(rng.next_u64()))?;
                 }
                 rep.proposals = n as u64;
-                return Ok(rep);
+                return Ok((rep, plan));
             }
             PointSource::Niederreiter(seq) if n == 1 << self.m => {
                 crate::qmc::walk_by_first(seq, self.steps, self.m, by_particle)?
@@ -442,22 +503,38 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
             }
         }
         rep.proposals = n as u64;
-        Ok(rep)
+        Ok((rep, plan))
     }
 
     /// Sorts the next sizes (old order with some entries changed) ascending; a particle
-    /// changed in the step iff its next size differs from its size.
+    /// changed in the step iff its next size differs from its size — or, `marked`
+    /// (growth moved every size, monotonely), iff it is negative (its size negated).
+    fn resort(&mut self, marked: bool) {
+        // (two instances: the loop without marks stays as it was)
+        if marked {
+            self.resort_in::<true>()
+        } else {
+            self.resort_in::<false>()
+        }
+    }
+
     #[inline(never)]
-    fn resort(&mut self) {
+    fn resort_in<const MARKED: bool>(&mut self) {
+        let marked = MARKED;
         let (x, next, _, scratch) = split(self.ws.as_mut(), self.n, self.cur);
         match self.sorting {
-            Sorting::Full => next.sort_unstable_by(f64::total_cmp),
+            Sorting::Full => {
+                if marked {
+                    next.iter_mut().for_each(|v| *v = v.abs());
+                }
+                next.sort_unstable_by(f64::total_cmp)
+            }
             Sorting::Adaptive => {
                 let (mut w, mut changed) = (0, 0);
                 for i in 0..next.len() {
                     let v = next[i];
-                    if v != x[i] {
-                        scratch[changed] = v;
+                    if if marked { v < 0.0 } else { v != x[i] } {
+                        scratch[changed] = if marked { -v } else { v };
                         changed += 1;
                     } else {
                         next[w] = v;
@@ -477,6 +554,10 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                         next[out] = scratch[j - 1];
                         j -= 1;
                     }
+                }
+                // (a Runge–Kutta step of a host's growth rate need not be monotone)
+                if marked && next.windows(2).any(|w| w[0] > w[1]) {
+                    next.sort_unstable_by(f64::total_cmp);
                 }
             }
         }
@@ -505,6 +586,35 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
         budget: &mut Budget<'_>,
         rng: &mut R,
     ) -> Result<StepReport> {
+        self.run(t, budget, rng, None)
+    }
+}
+
+impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
+    MassFlow<K, F, B>
+{
+    /// [`advance_within`](Scheme::advance_within) with the processes `procs` in every
+    /// step (`docs/design/processes.md`, "Mass-flow schemes"), entered in `books`: a source, removal and growth
+    /// beside coagulation and fragmentation. Growth moves the sizes by the scheme's own
+    /// step (a splitting step set in `procs` is not used here).
+    pub fn advance_processes<R: Rng + ?Sized>(
+        &mut self,
+        procs: &Processes,
+        books: &mut Books,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+    ) -> Result<StepReport> {
+        self.run(t, budget, rng, Some((procs, books)))
+    }
+
+    fn run<R: Rng + ?Sized>(
+        &mut self,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut R,
+        mut procs: Option<(&Processes, &mut Books)>,
+    ) -> Result<StepReport> {
         check_target(self.time, t)?;
         let mut rep = StepReport::default();
         loop {
@@ -531,15 +641,26 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 rep.interrupted = true;
                 break;
             }
-            let r = match self.step(h, rng) {
-                Ok(r) => r,
+            let stepped = self
+                .step(h, rng, procs.as_ref().map(|p| p.0))
+                .map(|(r, plan)| {
+                    self.resort(plan.as_ref().is_some_and(|p| p.grows));
+                    (r, plan)
+                });
+            let r = match stepped {
+                Ok((r, plan)) => {
+                    if let (Some(plan), Some((_, books))) = (plan, procs.as_mut()) {
+                        plan.book(books);
+                        self.mass = plan.mass;
+                    }
+                    r
+                }
                 Err(e) => {
                     rep.time = self.time;
                     self.totals.accumulate(&rep);
                     return Err(e);
                 }
             };
-            self.resort();
             self.cur ^= 1;
             self.steps += 1;
             self.time += h;
@@ -581,80 +702,6 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
 }
 
-impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>>
-    crate::checkpoint::Checkpoint for MassFlow<K, F, B>
-{
-    fn save(&self, w: &mut crate::checkpoint::Writer) {
-        use crate::checkpoint::header;
-        use crate::scheme::tag;
-        header(w, tag::MASSFLOW);
-        w.u64(self.points.fingerprint());
-        w.u64(match self.sorting {
-            Sorting::Adaptive => 0,
-            Sorting::Full => 1,
-        });
-        w.f64(self.mass);
-        w.f64(self.dt);
-        w.f64(self.time);
-        w.u64(self.steps);
-        self.totals.save(w);
-        w.f64s(self.sizes());
-    }
-
-    fn restore(&mut self, r: &mut crate::checkpoint::Reader) -> Result<()> {
-        use crate::checkpoint::check_header;
-        use crate::scheme::tag;
-        check_header(r, tag::MASSFLOW)?;
-        if r.u64()? != self.points.fingerprint() {
-            return Err(Error::Checkpoint {
-                what: "the point source (or its randomisation) differs",
-            });
-        }
-        let sorting = match r.u64()? {
-            0 => Sorting::Adaptive,
-            1 => Sorting::Full,
-            _ => {
-                return Err(Error::Checkpoint {
-                    what: "unknown sorting",
-                });
-            }
-        };
-        let (mass, dt, time, steps) = (r.f64()?, r.f64()?, r.f64()?, r.u64()?);
-        let totals = StepReport::read(r)?;
-        // read into the next-sizes half (scratch until a step), so that a refused
-        // checkpoint leaves the sizes as they were and nothing is allocated
-        let (_, next, ..) = split(self.ws.as_mut(), self.n, self.cur);
-        r.f64s_into(next).map_err(|_| Error::Checkpoint {
-            what: "different number of particles",
-        })?;
-        // the constructor's checks, the sizes' order (the adaptive sort merges into
-        // it), a time that is finite and not negative, a step count whose point index
-        // fits the sequence, and nothing after the state
-        let n = next.len() as u64;
-        if check_setup(next, mass, dt).is_err()
-            || next.windows(2).any(|w| w[0] > w[1])
-            || !(time >= 0.0 && time.is_finite())
-            || steps
-                .checked_add(1)
-                .and_then(|s| s.checked_mul(n))
-                .is_none()
-        {
-            return Err(Error::Checkpoint {
-                what: "invalid values (sizes not positive, finite and ascending, or mass, dt, time or step count out of range)",
-            });
-        }
-        r.finish()?;
-        self.sorting = sorting;
-        self.mass = mass;
-        self.dt = dt;
-        self.time = time;
-        self.steps = steps;
-        self.totals = totals;
-        self.cur ^= 1;
-        Ok(())
-    }
-}
-
 impl<K, F, B> MassFlow<K, F, B> {
     /// Replaces the coagulation kernel (e.g. new parameters between outer steps).
     pub fn set_kernel(&mut self, kernel: K) {
@@ -687,7 +734,9 @@ impl<K, F, B> MassFlow<K, F, B> {
     }
 }
 
+mod checkpoint;
 mod entry;
+mod processes;
 pub use entry::MassFlowEntry;
 
 #[cfg(test)]

@@ -4,7 +4,9 @@
 use super::driven::Driver;
 use super::model::{Blank, Init, Model};
 use super::options::{BucketMode, Options};
-use super::{Register, RegistryFragmentation, RegistryKernel, SchemeInfo, Simulation, State};
+use super::{
+    GrowthKind, Register, RegistryFragmentation, RegistryKernel, SchemeInfo, Simulation, State,
+};
 use crate::checkpoint::{Checkpoint, Reader, Writer};
 use crate::error::{Error, Result};
 use crate::observe::Observe;
@@ -114,6 +116,31 @@ pub trait Controls<K, F> {
         Err(Error::Unsupported {
             what: "single-particle edits on this scheme",
         })
+    }
+    /// Whether the scheme runs the processes inside its own steps (the time-driven
+    /// mass flow: [`advance_processes`](Self::advance_processes)) rather than as
+    /// events the driver draws over its clock.
+    fn runs_processes(&self) -> bool {
+        false
+    }
+    /// Advances to `t` within `budget` with `procs` in the scheme's own steps, entered
+    /// in `books` (schemes that [`run processes`](Self::runs_processes)).
+    fn advance_processes<G: Rng + ?Sized>(
+        &mut self,
+        _procs: &Processes,
+        _books: &mut Books,
+        _t: f64,
+        _budget: &mut Budget<'_>,
+        _rng: &mut G,
+    ) -> Result<StepReport> {
+        Err(Error::Unsupported {
+            what: "processes inside this scheme's steps (the driver runs them)",
+        })
+    }
+    /// The mass the scheme carries apart from its state (the mass flow's M1), where
+    /// its books start.
+    fn carried_mass(&self) -> Option<f64> {
+        None
     }
     /// Changes the total mass.
     fn set_mass(&mut self, _mass: f64) -> Result<()> {
@@ -252,14 +279,22 @@ where
             return Ok(());
         };
         E::INFO.takes_processes(&procs)?;
-        if self.model.fragments() {
+        if self.model.fragments() && !E::INFO.processes_with_fragmentation() {
             // a fragmentation raises the particle number: the thinning bound would not hold
             return Err(Error::Unsupported {
-                what: "processes beside coagulation with a fragmentation kernel (they run with coagulation alone)",
+                what: "processes beside coagulation with a fragmentation kernel on this scheme (they run with coagulation alone here; massflow takes both)",
+            });
+        }
+        if E::INFO.growth_kind() == GrowthKind::InStep && procs.growth_step.is_some() {
+            return Err(Error::Unsupported {
+                what: "a growth step on the mass flow (it grows the sizes in its own step, dt)",
             });
         }
         let integer = matches!(self.s.state(), State::Counts(..));
-        if !integer && procs.grows() && procs.growth_step.is_none() {
+        if E::INFO.growth_kind() == GrowthKind::Split
+            && procs.grows()
+            && procs.growth_step.is_none()
+        {
             return Err(Error::Unsupported {
                 what: "growth on real sizes without a growth step (it is split: set the step first); on the integer-size schemes, lowrank among them, growth is exact monomer attachment",
             });
@@ -345,7 +380,8 @@ where
         Ok(())
     }
     fn set_mass(&mut self, mass: f64) -> Result<()> {
-        self.s.set_mass(mass)
+        self.s.set_mass(mass)?;
+        self.rebase()
     }
     fn options(&self) -> &Options {
         &self.opts

@@ -111,8 +111,12 @@ fn held<K, F, S: Controls<K, F>>(s: &S) -> Result<Held> {
     }
 }
 
-/// Particle number and mass of the state.
+/// Particle number and mass of the state (a mass-flow state's mass is the one it
+/// carries).
 fn tally<K, F, S: Controls<K, F>>(s: &S) -> Result<(u64, f64)> {
+    if let (Some(m), State::Sizes(x)) = (s.carried_mass(), s.state()) {
+        return Ok((x.len() as u64, m));
+    }
     match s.state() {
         State::Sizes(x) => Ok((x.len() as u64, x.iter().sum())),
         State::Counts(..) => {
@@ -334,6 +338,10 @@ impl Driver {
         S: Scheme + Controls<K, F> + Observe,
         G: Rng + ?Sized,
     {
+        if s.runs_processes() {
+            // the time-driven mass flow: its own steps carry the processes
+            return s.advance_processes(&self.procs, &mut self.books, t, budget, rng);
+        }
         crate::scheme::check_target(s.time(), t)?;
         if let Some(h) = self.split()
             && (t - s.time()) / h > MAX_GROWTH_STEPS

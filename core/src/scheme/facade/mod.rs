@@ -158,12 +158,30 @@ impl SchemeInfo {
     /// fragmentation kernel). The mass-flow, time-stepped, temperature and gas schemes
     /// take none yet (`docs/design/processes.md`).
     pub fn takes_processes(&self, _p: &crate::process::Processes) -> crate::error::Result<()> {
-        if self.law != Law::FiniteN {
+        if !matches!(self.law, Law::FiniteN | Law::TimeStepped) {
             return Err(crate::Error::Unsupported {
-                what: "processes beside coagulation on this scheme (they run on the finite-N schemes: lowrank, lowrank-tree, lowrank-binary-tree, inverse, rejection, dsa-counts, lowrank-sizes, dsa)",
+                what: "processes beside coagulation on this scheme (they run on the finite-N schemes — lowrank, lowrank-tree, lowrank-binary-tree, lowrank-blocks, lowrank-sizes, inverse, rejection, dsa, dsa-counts — and on massflow)",
             });
         }
         Ok(())
+    }
+
+    /// How the scheme takes growth (see [`GrowthKind`]).
+    pub fn growth_kind(&self) -> GrowthKind {
+        if self.law == Law::TimeStepped {
+            GrowthKind::InStep
+        } else if self.inits.contains(&InitKind::Counts) {
+            GrowthKind::Attachment
+        } else {
+            GrowthKind::Split
+        }
+    }
+
+    /// Whether processes run beside a fragmentation kernel: only inside the mass
+    /// flow's own steps (elsewhere a fragmentation would raise the particle number,
+    /// and the thinning bound of the driver would not hold).
+    pub fn processes_with_fragmentation(&self) -> bool {
+        self.law == Law::TimeStepped
     }
 
     /// Whether a run under `opts` draws random numbers beyond its start: every
@@ -176,6 +194,18 @@ impl SchemeInfo {
             || opts.points() == Points::MonteCarlo
             || opts.randomization() != crate::qmc::Randomization::None
     }
+}
+
+/// How a scheme takes growth ([`SchemeInfo::growth_kind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GrowthKind {
+    /// Monomer attachment on integer sizes: exact, no step.
+    Attachment,
+    /// Real sizes, split off by a step the caller sets
+    /// ([`Processes::with_growth_step`](crate::process::Processes::with_growth_step)).
+    Split,
+    /// Inside the scheme's own time step (the time-driven mass flow).
+    InStep,
 }
 
 /// A registered scheme as [`registry::SCHEMES`](super::registry::SCHEMES) holds it.

@@ -3,11 +3,12 @@
 use super::{MassFlow, workspace_len};
 use crate::error::{Error, Result};
 use crate::kernel::{CoagulationKernel, FragmentationKernel};
+use crate::process::{Books, Processes};
 use crate::scheme::facade::{
     Blank, Boxed, Controls, Init, InitKind, Memory, Model, ModelKind, Options, Reach, Register,
     RegistryFragmentation, RegistryKernel, Samples, SchemeInfo, Simulation, State,
 };
-use crate::scheme::tag;
+use crate::scheme::{Budget, StepReport, tag};
 use alloc::boxed::Box;
 use rand_core::Rng;
 
@@ -130,5 +131,21 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
     }
     fn set_mass(&mut self, mass: f64) -> Result<()> {
         MassFlow::set_mass(self, mass)
+    }
+    fn runs_processes(&self) -> bool {
+        true
+    }
+    fn advance_processes<G: Rng + ?Sized>(
+        &mut self,
+        procs: &Processes,
+        books: &mut Books,
+        t: f64,
+        budget: &mut Budget<'_>,
+        rng: &mut G,
+    ) -> Result<StepReport> {
+        MassFlow::advance_processes(self, procs, books, t, budget, rng)
+    }
+    fn carried_mass(&self) -> Option<f64> {
+        Some(self.mass())
     }
 }
