@@ -110,6 +110,10 @@ pub struct Source {
     /// `S(t)` as a host's function of time, at most its bound (then `rate` and
     /// `schedule` are not used).
     function: Option<UserRate>,
+    /// A listed or counted distribution's cumulative mass weights (size × count), for
+    /// draws from its mass distribution by bisection ([`mass_size`](Source::mass_size));
+    /// empty for the others.
+    mass_cdf: Vec<f64>,
 }
 
 /// Largest number of pieces of a source's schedule.
@@ -127,11 +131,31 @@ impl Source {
             }
             d => d.check()?,
         }
+        let mut mass_cdf = Vec::new();
+        let weights: Option<Vec<f64>> = match &sizes {
+            Distribution::Sizes(x) => Some(x.clone()),
+            Distribution::Counts(c) => Some(
+                c.iter()
+                    .enumerate()
+                    .map(|(i, &n)| (i + 1) as f64 * n as f64)
+                    .collect(),
+            ),
+            _ => None,
+        };
+        if let Some(w) = weights {
+            crate::memory::try_reserve(&mut mass_cdf, w.len())?;
+            let mut acc = 0.0;
+            for v in w {
+                acc += v;
+                mass_cdf.push(acc);
+            }
+        }
         Ok(Source {
             rate,
             sizes,
             schedule: Vec::new(),
             function: None,
+            mass_cdf,
         })
     }
 
@@ -265,25 +289,16 @@ impl Source {
     /// of a continuous distribution, the listed sizes weighted by their sizes.
     pub fn mass_size(&self, u: f64) -> f64 {
         let u = u.clamp(f64::MIN_POSITIVE, 1.0 - f64::EPSILON / 2.0);
-        let pick = |weights: &mut dyn Iterator<Item = (f64, f64)>, total: f64| {
-            let (mut acc, mut last) = (0.0, f64::NAN);
-            for (x, w) in weights {
-                acc += w;
-                last = x;
-                if u * total < acc {
-                    break;
-                }
-            }
-            last
+        // the first entry whose cumulative weight passes u × total (O(log n))
+        let pick = || {
+            let total = self.mass_cdf.last().copied().unwrap_or(0.0);
+            let k = self.mass_cdf.partition_point(|&c| c <= u * total);
+            k.min(self.mass_cdf.len().saturating_sub(1))
         };
         match &self.sizes {
             Distribution::Monodisperse { size } => *size,
-            Distribution::Sizes(x) => pick(&mut x.iter().map(|&v| (v, v)), x.iter().sum::<f64>()),
-            Distribution::Counts(c) => {
-                let w = |(i, &n): (usize, &u64)| ((i + 1) as f64, (i + 1) as f64 * n as f64);
-                let total = c.iter().enumerate().map(w).map(|p| p.1).sum();
-                pick(&mut c.iter().enumerate().map(w), total)
-            }
+            Distribution::Sizes(x) => x.get(pick()).copied().unwrap_or(f64::NAN),
+            Distribution::Counts(_) => (pick() + 1) as f64,
             d => d.inverse(u, true),
         }
     }
@@ -370,7 +385,9 @@ impl Power {
     /// `log1p((1−p) c t x^{p−1})/(1−p)`).
     pub fn log_growth(&self, x: f64, t: f64) -> f64 {
         let (c, p) = (self.coefficient, self.exponent);
-        if p == 1.0 {
+        if c == 0.0 {
+            0.0
+        } else if p == 1.0 {
             c * t
         } else if p == 0.0 {
             libm::log1p(c * t / x)

@@ -426,7 +426,14 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 && let Some(s) = source
             {
                 rep.events += 1;
-                s.mass_size((u3 - aj) / share)
+                let y = s.mass_size((u3 - aj) / share);
+                if !(y > 0.0 && y.is_finite()) {
+                    return Err(Error::InvalidRate {
+                        name: "source size (finite and > 0; a distribution's mass quantile underflowed)",
+                        value: y,
+                    });
+                }
+                y
             } else if pf > 0.0 && u3 >= 1.0 - pf {
                 rep.events += 1;
                 let piece = frag.inverse_piece(xk, ((1.0 - u3) / pf).min(1.0));
@@ -454,7 +461,7 @@ impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]
                 if let Some(p) = procs
                     && new != xk
                 {
-                    next[k] = -processes::grown(p, new, h)?;
+                    next[k] = -processes::factors(p, new, h)?.size;
                 }
             } else {
                 next[k] = new;

@@ -67,34 +67,55 @@ fn removal(p: &Processes, x: f64) -> Result<f64> {
     Ok(r)
 }
 
-/// For a particle of size `x` over `h`: the mass it gains by growth and loses by
-/// removal, per unit of its mass (`Φ/x − 1` and `(Φ/x)(1 − e^{−hλ})`), and its
-/// log-factor `γ = ln(Φ/x) − hλ`.
-fn factors_log(p: &Processes, x: f64, h: f64) -> Result<(f64, f64, f64)> {
-    let lr = crate::error::finite(
-        "growth over a step (log of the factor)",
-        p.log_growth(x, h)?,
-    )?;
-    let hl = h * crate::error::finite("removal rate", removal(p, x)?)?;
-    let gain = libm::expm1(lr);
-    Ok((gain, (1.0 + gain) * -libm::expm1(-hl), lr - hl))
+/// The largest share of the mass one step may remove: beyond it M1 would be the
+/// rounding residue of nearly equal sums (and the step is far outside the first-order
+/// regime of the scheme).
+const MAX_REMOVED_SHARE: f64 = 1.0 - 1e-6;
+
+/// The largest spread of the log-factors γ over one step: the jump probabilities
+/// `(γ_l − γ_k)^+` are a linearisation and must stay below 1.
+const MAX_SPREAD: f64 = 1.0;
+
+/// What a step of `h` does to a particle of size `x`: its grown size `Φ_h(x)` (one
+/// formula for every particle, so that equal sizes stay equal), the mass it gains per
+/// unit of its mass `Φ/x − 1`, what of the grown mass it keeps `(Φ/x) e^{−hλ}` and
+/// loses `(Φ/x)(1 − e^{−hλ})`, and its log-factor `γ = ln(Φ/x) − hλ`.
+pub(super) struct Factors {
+    pub size: f64,
+    gain: f64,
+    kept: f64,
+    lost: f64,
+    gamma: f64,
 }
 
-/// [`factors_log`] without γ.
-fn factors(p: &Processes, x: f64, h: f64) -> Result<(f64, f64)> {
-    factors_log(p, x, h).map(|(g, l, _)| (g, l))
-}
-
-/// A grown size, checked finite and positive.
-pub(super) fn grown(p: &Processes, x: f64, h: f64) -> Result<f64> {
-    let y = p.grow(x, h)?;
-    if !(y.is_finite() && y > 0.0) {
+pub(super) fn factors(p: &Processes, x: f64, h: f64) -> Result<Factors> {
+    let (size, lr) = if p.user_growth.is_some() {
+        let y = p.grow(x, h)?;
+        (y, libm::log(y / x))
+    } else {
+        let lr = p.log_growth(x, h)?;
+        (x + x * libm::expm1(lr), lr)
+    };
+    if !(size.is_finite() && size > 0.0 && lr.is_finite()) {
         return Err(Error::InvalidRate {
             name: "grown size (finite and positive)",
-            value: y,
+            value: size,
         });
     }
-    Ok(y)
+    let hl = h * crate::error::finite("removal rate", removal(p, x)?)?;
+    let ratio = size / x;
+    let (kept, lost) = if hl == 0.0 {
+        (ratio, 0.0)
+    } else {
+        (ratio * libm::exp(-hl), ratio * -libm::expm1(-hl))
+    };
+    Ok(Factors {
+        size,
+        gain: ratio - 1.0,
+        kept,
+        lost,
+        gamma: lr - hl,
+    })
 }
 
 /// The plan of a step from `t` to `t + h` over the sorted sizes `x` of mass `mass`,
@@ -113,23 +134,24 @@ pub(super) fn plan<'a>(
 ) -> Result<Plan<'a>> {
     let grows = p.grows();
     let w = mass / x.len() as f64;
-    let (mut grown_sum, mut removed_sum) = (0.0, 0.0);
+    let (mut grown_sum, mut removed_sum, mut kept_sum) = (0.0, 0.0, x.len() as f64);
     let local = p.removal.is_some() || p.user_removal.is_some() || p.grows();
     // the same γ for every particle (a constant removal rate, linear growth): no
-    // jumps, and the sums are N times one particle's
+    // jumps, and the sums are N times one particle's (the grown sizes still each)
     let uniform = p.user_removal.is_none()
         && p.user_growth.is_none()
         && p.removal.is_none_or(|q| q.exponent == 0.0)
         && p.growth.is_none_or(|q| q.exponent == 1.0);
     let mut jumps = false;
     if local && uniform {
-        let (gain, loss) = factors(p, x.first().copied().unwrap_or(1.0), h)?;
+        let f = factors(p, x.first().copied().unwrap_or(1.0), h)?;
         let n = x.len() as f64;
-        grown_sum = n * gain;
-        removed_sum = n * loss;
+        (grown_sum, removed_sum, kept_sum) = (n * f.gain, n * f.lost, n * f.kept);
         if grows {
-            for (f, &xk) in phi.iter_mut().zip(x) {
-                *f = xk + xk * gain;
+            // (the formula of `factors`: lr is the same at every size here)
+            let e = libm::expm1(p.log_growth(x.first().copied().unwrap_or(1.0), h)?);
+            for (g, &xk) in phi.iter_mut().zip(x) {
+                *g = xk + xk * e;
             }
             if let Some(&y) = phi.last()
                 && !(y.is_finite() && y > 0.0)
@@ -142,29 +164,40 @@ pub(super) fn plan<'a>(
         }
     } else if local {
         let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        kept_sum = 0.0;
         // (the sizes are sorted, and repeat often — a start from monomers, integer
         // sizes from coagulation: a run of equal sizes is evaluated once)
-        let mut last = (f64::NAN, 0.0, 0.0, 0.0, 0.0);
+        let mut last: Option<(f64, Factors)> = None;
         for ((g, f), &xk) in gamma.iter_mut().zip(phi.iter_mut()).zip(x) {
-            if xk != last.0 {
-                let (gain, loss, gk) = factors_log(p, xk, h)?;
-                let y = xk + xk * gain;
-                if grows && !(y.is_finite() && y > 0.0) {
-                    return Err(Error::InvalidRate {
-                        name: "grown size (finite and positive)",
-                        value: y,
-                    });
-                }
-                last = (xk, gain, loss, gk, y);
-                lo = lo.min(gk);
-                hi = hi.max(gk);
+            if last.as_ref().is_none_or(|l| l.0 != xk) {
+                let fk = factors(p, xk, h)?;
+                lo = lo.min(fk.gamma);
+                hi = hi.max(fk.gamma);
+                last = Some((xk, fk));
             }
-            grown_sum += last.1;
-            removed_sum += last.2;
-            *g = last.3;
-            *f = last.4;
+            if let Some((_, fk)) = &last {
+                grown_sum += fk.gain;
+                removed_sum += fk.lost;
+                kept_sum += fk.kept;
+                *g = fk.gamma;
+                *f = fk.size;
+            }
+        }
+        if hi - lo > MAX_SPREAD {
+            return Err(Error::OutOfRange {
+                name: "spread of the processes' log-factors over one mass-flow step (dt times the difference of the removal and relative growth rates between sizes)",
+                value: hi - lo,
+                range: "at most 1: take a smaller dt",
+            });
         }
         jumps = hi > lo;
+    }
+    if local && kept_sum < (1.0 - MAX_REMOVED_SHARE) * (x.len() as f64 + grown_sum) {
+        return Err(Error::OutOfRange {
+            name: "share of the mass one mass-flow step removes",
+            value: removed_sum / (x.len() as f64 + grown_sum),
+            range: "below 1 - 1e-6: take a smaller dt",
+        });
     }
     let (grown, removed) = (w * grown_sum, w * removed_sum);
     let (source, injected) = match &p.source {
@@ -175,7 +208,7 @@ pub(super) fn plan<'a>(
         }
         None => (None, 0.0),
     };
-    let after = mass + injected + grown - removed;
+    let after = w * kept_sum + injected;
     if !(after.is_finite() && after > 0.0) {
         return Err(Error::OutOfRange {
             name: "mass after a step of the processes",
