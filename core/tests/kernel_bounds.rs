@@ -126,6 +126,11 @@ fn bounds_are_as_tight_as_claimed() {
             // (E = 1 for large drops against the bound's E_max)
             assert!(l.worst_acceptance == 0.0, "{name}: {l:?}");
             assert!(l.max_ratio <= 1.0 && l.max_ratio > 0.85, "{name}: {l:?}");
+        } else if name == "gravitational-hall" {
+            // the same with Hall's E_max = 4 (wake capture near r = R = 70 µm): large
+            // drops (E = 1) approach 1/4 of the bound
+            assert!(l.worst_acceptance == 0.0, "{name}: {l:?}");
+            assert!(l.max_ratio <= 0.25 && l.max_ratio > 0.2, "{name}: {l:?}");
         } else if name.starts_with("free") {
             assert!(
                 l.worst_acceptance >= 1.0 / 2f64.sqrt() - 1e-12,

@@ -188,6 +188,22 @@ pub const BUILTINS: &[BuiltinInfo] = &[
         units: "m^3/s; time in s; sizes in volume units of a drop of radius r0",
     },
     BuiltinInfo {
+        name: "gravitational-hall",
+        family: Family::Coagulation,
+        formula: "K = E(R, r) pi (r_x + r_y)^2 |v(r_x) - v(r_y)|, r_x = r0 x^(1/3); v: Simmel et al. 2002 Table 2 (Beard 1976); E: Hall 1980 Table 1, bilinear in (R, r/R), clamped at its edges",
+        source: "Hall 1980; Simmel, Trautmann & Tetzlaff 2002; docs/design/block-majorants.md",
+        params: &[
+            Param {
+                name: "unit-radius",
+                default: Some(1e-6),
+                unit: "m",
+                doc: "radius r0 of the drop of size 1, in [1e-8, 1e-2] m (sizes are volumes in its units)",
+            },
+            COEFFICIENT,
+        ],
+        units: "m^3/s; time in s; sizes in volume units of a drop of radius r0",
+    },
+    BuiltinInfo {
         name: "brownian-continuum",
         family: Family::Coagulation,
         formula: "K = (2 k_B T / 3 mu) (v^(1/3) + w^(1/3)) (v^(-1/3) + w^(-1/3))",
@@ -416,6 +432,7 @@ fn build(info: &'static BuiltinInfo, v: &[f64; 4], given: &[bool; 4]) -> Result<
         "brownian" => coag(Coagulation::brownian(), p[0])?,
         "atmospheric" => coag(Coagulation::atmospheric(), p[0])?,
         "gravitational" => coag(Coagulation::gravitational(p[0])?, p[1])?,
+        "gravitational-hall" => coag(Coagulation::gravitational_hall(p[0])?, p[1])?,
         "brownian-continuum" => Builtin::Coagulation(Coagulation::brownian_continuum(p[0], p[1])?),
         "free-molecular-physical" => {
             let d = crate::error::positive("monomer-diameter", p[2])?;

@@ -13,6 +13,15 @@
 //!   (coalescence efficiency 1). Its largest value is 1.0575, at R = r = 50 µm; the
 //!   bounds use 1.125 (the formula's factor at R = 50 µm).
 //!
+//! * Or Hall's (1980, J. Atmos. Sci. 37:2486, Table 1) tabulated efficiencies
+//!   ([`Collection::Hall`]): collector radii R = 10, 20, 30, 40, 50, 60, 70, 100, 150,
+//!   200, 300 µm against r/R = 0.05, 0.10, …, 1.00, bilinear in (R, r/R) between the
+//!   nodes and clamped to the table's edges outside it (R below 10 µm takes the 10 µm
+//!   row, above 300 µm the 300 µm row; r/R below 0.05 the 0.05 column). The values
+//!   above 1 near r/R = 1 (wake capture, up to 4.0) are Hall's. The table was read
+//!   from two published transcriptions, which differ at one node (R = 30 µm,
+//!   r/R = 0.05: 10⁻⁴ or 10⁻³); 10⁻⁴ is the one that cites Table 1.
+//!
 //! The kernel vanishes on the diagonal (equal drops fall together) and `E` is 10⁻³
 //! for small drops, so the low-rank bound `E_max π (r_x + r_y)² (v_x + v_y)` (rank 3,
 //! `E_max` = 1.125) is loose by orders of magnitude there: block majorants
@@ -33,6 +42,90 @@ const LONG_R_MAX: f64 = 50e-4;
 /// itself reaches 1.0575 there, at r = R).
 pub const E_MAX: f64 = 4.5e4 * LONG_R_MAX * LONG_R_MAX;
 
+/// The collision efficiency law.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Collection {
+    /// Long 1974 in Simmel's form (the module docs).
+    Long,
+    /// Hall 1980, Table 1, bilinear (the module docs).
+    Hall,
+}
+
+/// Hall's collector radii (µm), ascending.
+const HALL_R: [f64; 11] = [
+    10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 100.0, 150.0, 200.0, 300.0,
+];
+
+/// Hall's efficiencies: row k for collector radius `HALL_R[k]`, column j for
+/// r/R = 0.05 (j + 1).
+#[rustfmt::skip]
+const HALL_E: [[f64; 20]; 11] = [
+    [1e-4, 1e-4, 1e-4, 0.014, 0.017, 0.019, 0.022, 0.027, 0.030, 0.033, 0.035, 0.037, 0.038, 0.038, 0.037, 0.036, 0.035, 0.032, 0.029, 0.027],
+    [1e-4, 1e-4, 0.005, 0.016, 0.022, 0.03, 0.043, 0.052, 0.064, 0.072, 0.079, 0.082, 0.080, 0.076, 0.067, 0.057, 0.048, 0.040, 0.033, 0.027],
+    [1e-4, 0.002, 0.02, 0.04, 0.085, 0.17, 0.27, 0.40, 0.50, 0.55, 0.58, 0.59, 0.58, 0.54, 0.51, 0.49, 0.47, 0.45, 0.47, 0.52],
+    [0.001, 0.07, 0.28, 0.50, 0.62, 0.68, 0.74, 0.78, 0.80, 0.80, 0.80, 0.78, 0.77, 0.76, 0.77, 0.77, 0.78, 0.79, 0.95, 1.4],
+    [0.005, 0.40, 0.60, 0.70, 0.78, 0.83, 0.86, 0.88, 0.90, 0.90, 0.90, 0.90, 0.89, 0.88, 0.88, 0.89, 0.92, 1.01, 1.3, 2.3],
+    [0.05, 0.43, 0.64, 0.77, 0.84, 0.87, 0.89, 0.90, 0.91, 0.91, 0.91, 0.91, 0.91, 0.92, 0.93, 0.95, 1.0, 1.03, 1.7, 3.0],
+    [0.20, 0.58, 0.75, 0.84, 0.88, 0.90, 0.92, 0.94, 0.95, 0.95, 0.95, 0.95, 0.95, 0.95, 0.97, 1.0, 1.02, 1.04, 2.3, 4.0],
+    [0.50, 0.79, 0.91, 0.95, 0.95, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    [0.77, 0.93, 0.97, 0.97, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    [0.87, 0.96, 0.98, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+    [0.97, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0],
+];
+
+/// The largest of Hall's efficiencies (R = 70 µm, r = R).
+pub const HALL_E_MAX: f64 = 4.0;
+
+impl Collection {
+    /// A bound on the efficiency at every pair of radii.
+    pub fn e_max(self) -> f64 {
+        match self {
+            Collection::Long => E_MAX,
+            Collection::Hall => HALL_E_MAX,
+        }
+    }
+}
+
+/// The cell of a clamped coordinate on an ascending grid: the index of its left node
+/// and the weight of the right one.
+fn cell(grid: &[f64], v: f64) -> (usize, f64) {
+    let v = v.clamp(grid[0], grid[grid.len() - 1]);
+    let i = grid.partition_point(|&g| g <= v).clamp(1, grid.len() - 1) - 1;
+    (i, (v - grid[i]) / (grid[i + 1] - grid[i]))
+}
+
+/// Hall's ratio nodes r/R = 0.05 (j + 1).
+const HALL_Q: [f64; 20] = [
+    0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35, 0.40, 0.45, 0.50, 0.55, 0.60, 0.65, 0.70, 0.75, 0.80,
+    0.85, 0.90, 0.95, 1.00,
+];
+
+/// Hall's efficiency at collector radius `big` ≥ collected radius `small` (m).
+fn hall(big: f64, small: f64) -> f64 {
+    let (i, u) = cell(&HALL_R, big * 1e6);
+    let (j, w) = cell(&HALL_Q, small / big);
+    let e = |a: usize, b: usize| HALL_E[a][b];
+    (1.0 - u) * ((1.0 - w) * e(i, j) + w * e(i, j + 1))
+        + u * ((1.0 - w) * e(i + 1, j) + w * e(i + 1, j + 1))
+}
+
+/// The largest of Hall's efficiencies over collector radii in `[r0, r1]` and ratios in
+/// `[q0, q1]`: the largest node of the cells the rectangle meets (a bilinear
+/// interpolant is at most its cell's largest node).
+fn hall_bound(r0: f64, r1: f64, q0: f64, q1: f64) -> f64 {
+    let (i0, _) = cell(&HALL_R, r0 * 1e6);
+    let (i1, _) = cell(&HALL_R, r1 * 1e6);
+    let (j0, _) = cell(&HALL_Q, q0);
+    let (j1, _) = cell(&HALL_Q, q1);
+    let mut m: f64 = 0.0;
+    for row in &HALL_E[i0..=i1 + 1] {
+        for &v in &row[j0..=j1 + 1] {
+            m = m.max(v);
+        }
+    }
+    m
+}
+
 /// Terminal velocity (m/s) of a drop of radius `r` (m): Simmel et al. 2002, Table 2.
 pub fn velocity(r: f64) -> f64 {
     let rc = r * 100.0; // cm
@@ -51,7 +144,15 @@ pub fn velocity(r: f64) -> f64 {
 
 /// Long's collision efficiency of radii `a`, `b` (m), either order.
 pub fn efficiency(a: f64, b: f64) -> f64 {
+    efficiency_of(Collection::Long, a, b)
+}
+
+/// The collision efficiency of `law` for radii `a`, `b` (m), either order.
+pub fn efficiency_of(law: Collection, a: f64, b: f64) -> f64 {
     let (big, small) = if a >= b { (a, b) } else { (b, a) };
+    if law == Collection::Hall {
+        return hall(big, small);
+    }
     let (rc, sc) = (big * 100.0, small * 100.0);
     if rc <= LONG_R_MAX {
         (4.5e4 * rc * rc * (1.0 - 3e-4 / sc)).max(1e-3)
@@ -60,10 +161,15 @@ pub fn efficiency(a: f64, b: f64) -> f64 {
     }
 }
 
-/// The kernel (m³/s) for radii `a`, `b` (m).
+/// The kernel (m³/s) for radii `a`, `b` (m) with Long's efficiency.
 pub fn rate_of_radii(a: f64, b: f64) -> f64 {
+    rate_with(Collection::Long, a, b)
+}
+
+/// The kernel (m³/s) for radii `a`, `b` (m) with the efficiency of `law`.
+pub fn rate_with(law: Collection, a: f64, b: f64) -> f64 {
     let s = a + b;
-    efficiency(a, b) * core::f64::consts::PI * s * s * (velocity(a) - velocity(b)).abs()
+    efficiency_of(law, a, b) * core::f64::consts::PI * s * s * (velocity(a) - velocity(b)).abs()
 }
 
 /// The largest efficiency over collector radii in `[.., big]` and collected radii in
@@ -78,11 +184,32 @@ fn efficiency_bound(big: f64, small: f64) -> f64 {
 /// A bound on the kernel over radii `a ∈ [a0, a1]`, `b ∈ [b0, b1]` (m): see the module
 /// docs.
 pub fn bound_of_radii(a0: f64, a1: f64, b0: f64, b1: f64) -> f64 {
+    bound_with(Collection::Long, a0, a1, b0, b1)
+}
+
+/// [`bound_of_radii`] with the efficiency of `law` (Hall's: the largest table node of
+/// the cells the block's collector radii and ratios meet).
+pub fn bound_with(law: Collection, a0: f64, a1: f64, b0: f64, b1: f64) -> f64 {
     let dv = (velocity(b1) - velocity(a0))
         .max(velocity(a1) - velocity(b0))
         .max(0.0);
     let s = a1 + b1;
-    let e = efficiency_bound(a1.max(b1), a1.min(b1));
+    let e = match law {
+        Collection::Long => efficiency_bound(a1.max(b1), a1.min(b1)),
+        Collection::Hall => {
+            // R = max(a, b) over the block; r/R = min/max is extreme at a corner,
+            // and reaches 1 where the two ranges meet
+            let q = |a: f64, b: f64| a.min(b) / a.max(b);
+            let corners = [q(a0, b0), q(a0, b1), q(a1, b0), q(a1, b1)];
+            let q0 = corners.into_iter().fold(1.0, f64::min);
+            let q1 = if a0 <= b1 && b0 <= a1 {
+                1.0
+            } else {
+                corners.into_iter().fold(0.0, f64::max)
+            };
+            hall_bound(a0.max(b0), a1.max(b1), q0, q1)
+        }
+    };
     e * core::f64::consts::PI * s * s * dv
 }
 
@@ -128,6 +255,30 @@ mod tests {
         assert!(efficiency(50e-6, 50e-6) <= E_MAX);
     }
 
+    #[test]
+    fn hall_efficiency_values() {
+        // at the nodes, the table; between them, bilinear; clamped outside; symmetric
+        assert_eq!(efficiency_of(Collection::Hall, 70e-6, 70e-6), 4.0);
+        assert!((efficiency_of(Collection::Hall, 30e-6, 15e-6) - 0.55).abs() < 1e-12);
+        assert!((efficiency_of(Collection::Hall, 20e-6, 2e-6) - 1e-4).abs() < 1e-15);
+        let mid = efficiency_of(Collection::Hall, 25e-6, 12.5e-6);
+        assert!((mid - 0.5 * (0.072 + 0.55)).abs() < 1e-12, "{mid}");
+        assert_eq!(efficiency_of(Collection::Hall, 1e-3, 1e-4), 1.0);
+        assert_eq!(
+            efficiency_of(Collection::Hall, 5e-6, 4e-6),
+            efficiency_of(Collection::Hall, 10e-6, 8e-6)
+        );
+        assert_eq!(
+            efficiency_of(Collection::Hall, 12e-6, 40e-6),
+            efficiency_of(Collection::Hall, 40e-6, 12e-6)
+        );
+        for row in HALL_E {
+            for v in row {
+                assert!(v > 0.0 && v <= HALL_E_MAX);
+            }
+        }
+    }
+
     /// The block bound is above every kernel value in the block (random blocks,
     /// scanned on a grid), and within a modest factor of it off the diagonal.
     #[test]
@@ -144,14 +295,16 @@ mod tests {
             let a1 = a0 * (1.0 + 3.0 * next());
             let b0 = 1e-6 * pow(3000.0, next());
             let b1 = b0 * (1.0 + 3.0 * next());
-            let bound = bound_of_radii(a0, a1, b0, b1);
-            let n = 24;
-            for i in 0..=n {
-                for j in 0..=n {
-                    let a = a0 + (a1 - a0) * f64::from(i) / f64::from(n);
-                    let b = b0 + (b1 - b0) * f64::from(j) / f64::from(n);
-                    let k = rate_of_radii(a, b);
-                    assert!(k <= bound * (1.0 + 1e-12), "{a} {b}: {k} > {bound}");
+            for law in [Collection::Long, Collection::Hall] {
+                let bound = bound_with(law, a0, a1, b0, b1);
+                let n = 24;
+                for i in 0..=n {
+                    for j in 0..=n {
+                        let a = a0 + (a1 - a0) * f64::from(i) / f64::from(n);
+                        let b = b0 + (b1 - b0) * f64::from(j) / f64::from(n);
+                        let k = rate_with(law, a, b);
+                        assert!(k <= bound * (1.0 + 1e-12), "{law:?} {a} {b}: {k} > {bound}");
+                    }
                 }
             }
         }

@@ -117,8 +117,8 @@ enum Kind {
     FreeMolecular,
     Brownian,
     Atmospheric,
-    /// Gravitational collection; the unit radius r0 (m).
-    Gravitational(f64),
+    /// Gravitational collection; the unit radius r0 (m) and the efficiency law.
+    Gravitational(f64, gravitational::Collection),
 }
 
 impl Coagulation {
@@ -134,7 +134,8 @@ impl Coagulation {
             Kind::FreeMolecular => (6, 0.0),
             Kind::Brownian => (7, 0.0),
             Kind::Atmospheric => (8, 0.0),
-            Kind::Gravitational(r0) => (9, r0),
+            Kind::Gravitational(r0, gravitational::Collection::Long) => (9, r0),
+            Kind::Gravitational(r0, gravitational::Collection::Hall) => (10, r0),
         };
         crate::checkpoint::fingerprint([
             tag,
@@ -232,7 +233,21 @@ impl Coagulation {
                 range: "[1e-8, 1e-2] m",
             });
         }
-        Ok(Self::new(Kind::Gravitational(unit_radius)))
+        Ok(Self::new(Kind::Gravitational(
+            unit_radius,
+            gravitational::Collection::Long,
+        )))
+    }
+
+    /// [`gravitational`](Self::gravitational) with Hall's (1980) tabulated collision
+    /// efficiencies instead of Long's (see [`gravitational`](crate::kernel::gravitational));
+    /// the rank-3 bound takes `E ≤ 4` (Hall's largest, wake capture of equal drops).
+    pub fn gravitational_hall(unit_radius: f64) -> Result<Self> {
+        let k = Self::gravitational(unit_radius)?;
+        Ok(Self::new(Kind::Gravitational(
+            k.unit_radius(),
+            gravitational::Collection::Hall,
+        )))
     }
 
     /// The kernel for sizes counted in units of `unit` of this kernel's sizes:
@@ -249,8 +264,8 @@ impl Coagulation {
                 value: unit,
                 range: "1",
             }),
-            Kind::Gravitational(r0) => Ok(Coagulation {
-                kind: Kind::Gravitational(Self::gravitational(r0 * cbrt(unit))?.unit_radius()),
+            Kind::Gravitational(r0, law) => Ok(Coagulation {
+                kind: Kind::Gravitational(Self::gravitational(r0 * cbrt(unit))?.unit_radius(), law),
                 ..self
             }),
             _ => self.with_coefficient(libm::pow(unit, self.homogeneity())),
@@ -260,7 +275,7 @@ impl Coagulation {
     /// The gravitational kernel's unit radius (m); NaN for the other kernels.
     fn unit_radius(&self) -> f64 {
         match self.kind {
-            Kind::Gravitational(r0) => r0,
+            Kind::Gravitational(r0, _) => r0,
             _ => f64::NAN,
         }
     }
@@ -362,7 +377,7 @@ impl Coagulation {
             Kind::FreeMolecular => 1.0 / 6.0,
             Kind::Atmospheric => -5.0 / 9.0,
             // (not homogeneous: see in_size_unit)
-            Kind::Gravitational(_) => f64::NAN,
+            Kind::Gravitational(..) => f64::NAN,
         }
     }
 
@@ -417,7 +432,8 @@ impl Coagulation {
             Kind::FreeMolecular => "free-molecular",
             Kind::Brownian => "brownian",
             Kind::Atmospheric => "atmospheric",
-            Kind::Gravitational(_) => "gravitational",
+            Kind::Gravitational(_, gravitational::Collection::Long) => "gravitational",
+            Kind::Gravitational(_, gravitational::Collection::Hall) => "gravitational-hall",
         }
     }
 }
@@ -486,7 +502,7 @@ impl CoagulationKernel for Coagulation {
         match self.kind {
             Kind::FreeMolecular => 3,
             Kind::Brownian | Kind::Atmospheric => 2,
-            Kind::Gravitational(_) => 3,
+            Kind::Gravitational(..) => 3,
             _ => 1,
         }
     }
@@ -514,7 +530,10 @@ impl CoagulationKernel for Coagulation {
     fn low_rank_is_exact(&self) -> bool {
         !matches!(
             self.kind,
-            Kind::FreeMolecular | Kind::Homogeneous(_) | Kind::Atmospheric | Kind::Gravitational(_)
+            Kind::FreeMolecular
+                | Kind::Homogeneous(_)
+                | Kind::Atmospheric
+                | Kind::Gravitational(..)
         )
     }
 
@@ -535,7 +554,7 @@ impl CoagulationKernel for Coagulation {
     fn low_rank_floor(&self) -> f64 {
         match self.kind {
             Kind::FreeMolecular => core::f64::consts::FRAC_1_SQRT_2 * (1.0 - 1e-12),
-            Kind::Homogeneous(_) | Kind::Atmospheric | Kind::Gravitational(_) => 0.0,
+            Kind::Homogeneous(_) | Kind::Atmospheric | Kind::Gravitational(..) => 0.0,
             _ => 1.0,
         }
     }
@@ -547,7 +566,7 @@ impl CoagulationKernel for Coagulation {
         if self.kind == Kind::Atmospheric {
             return Some(self.scale * atmospheric::sup_block(lo, hi, lo, hi));
         }
-        if let Kind::Gravitational(_) = self.kind {
+        if let Kind::Gravitational(..) = self.kind {
             return self.sup_block(lo, hi, lo, hi);
         }
         let corners = [self.rate(lo, lo), self.rate(lo, hi), self.rate(hi, hi)];
@@ -561,9 +580,9 @@ impl CoagulationKernel for Coagulation {
         if self.kind == Kind::Atmospheric {
             return Some(self.scale * atmospheric::sup_block(x0, x1, y0, y1));
         }
-        if let Kind::Gravitational(r0) = self.kind {
+        if let Kind::Gravitational(r0, law) = self.kind {
             let r = |x: f64| r0 * cbrt(x);
-            let b = gravitational::bound_of_radii(r(x0), r(x1), r(y0), r(y1));
+            let b = gravitational::bound_with(law, r(x0), r(x1), r(y0), r(y1));
             return Some(self.scale * b);
         }
         let corners = [
@@ -594,14 +613,16 @@ impl Coagulation {
             }
             Kind::Brownian => (cbrt(x) + cbrt(y)) * (1.0 / cbrt(x) + 1.0 / cbrt(y)),
             Kind::Atmospheric => atmospheric::rate(x, y, cbrt_of(x), cbrt_of(y)),
-            Kind::Gravitational(r0) => gravitational::rate_of_radii(r0 * cbrt(x), r0 * cbrt(y)),
+            Kind::Gravitational(r0, law) => {
+                gravitational::rate_with(law, r0 * cbrt(x), r0 * cbrt(y))
+            }
         }
     }
 
     /// The majorant with coefficient 1.
     fn unit_majorant(&self, x: f64) -> Option<f64> {
         Some(match self.kind {
-            Kind::Gravitational(_) => return None,
+            Kind::Gravitational(..) => return None,
             Kind::Constant(k0) => sqrt(k0),
             Kind::Additive => x + self.c,
             Kind::Multiplicative => x,
@@ -665,12 +686,12 @@ impl Coagulation {
                 a[1] = c;
                 b[1] = 1.0 / c;
             }
-            Kind::Gravitational(r0) => {
+            Kind::Gravitational(r0, law) => {
                 // A(x, y) = c (r_x² v_x + r_x² v_y + 2 r_x v_x r_y), c = E_max π:
                 // A + Aᵀ = c (r_x + r_y)² (v_x + v_y)
                 let r = r0 * cbrt(x);
                 let v = gravitational::velocity(r);
-                let c = gravitational::E_MAX * core::f64::consts::PI;
+                let c = law.e_max() * core::f64::consts::PI;
                 a[0] = c * r * r * v;
                 b[0] = 1.0;
                 a[1] = c * r * r;
