@@ -17,20 +17,30 @@
 //!   ([`Collection::Hall`]): collector radii R = 10, 20, 30, 40, 50, 60, 70, 100, 150,
 //!   200, 300 µm against r/R = 0.05, 0.10, …, 1.00, bilinear in (R, r/R) between the
 //!   nodes and clamped to the table's edges outside it (R below 10 µm takes the 10 µm
-//!   row, above 300 µm the 300 µm row; r/R below 0.05 the 0.05 column). The values
-//!   above 1 near r/R = 1 (wake capture, up to 4.0) are Hall's. The table was read
-//!   from two published transcriptions, which differ at one node (R = 30 µm,
-//!   r/R = 0.05: 10⁻⁴ or 10⁻³); 10⁻⁴ is the one that cites Table 1.
+//!   row, above 300 µm the 300 µm row; r/R below 0.05 the 0.05 column). The clamp is a
+//!   choice, not Hall's: below 10 µm it gives E ≈ 0.03 near r = R where Long's formula
+//!   gives its floor 10⁻³, and below r/R = 0.05 it keeps the 0.05 column where Bott's
+//!   extension of the table sets E = 0 at r/R = 0 — size 1 should be a drop of 10 µm
+//!   or more (`unit-radius`) where that matters. The values above 1 near r/R = 1 (wake
+//!   capture, up to 4.0) are Hall's. The table was read from public transcriptions
+//!   (of cloud and aerosol codes: CARMA's, a Python bin model's, PySDM's, a Fortran
+//!   bin model's): the first two agree at every node with the values here; PySDM's
+//!   has 10⁻³ at R = 30 µm, r/R = 0.05 (10⁻⁴ here); the Fortran one has 0.96, 0.96,
+//!   0.97, 0.98 at (70 µm, 0.65), (70, 0.70), (100, 0.25), (150, 0.20) (0.95, 0.95,
+//!   0.95, 0.97 here, as the other three). The paper itself was not in reach.
 //!
 //! The kernel vanishes on the diagonal (equal drops fall together) and `E` is 10⁻³
 //! for small drops, so the low-rank bound `E_max π (r_x + r_y)² (v_x + v_y)` (rank 3,
-//! `E_max` = 1.125) is loose by orders of magnitude there: block majorants
+//! `E_max` = 1.125 with Long's efficiency, 4 with Hall's) is loose by orders of
+//! magnitude there: block majorants
 //! (`docs/design/block-majorants.md`). `v` and `(r_x + r_y)²` are non-decreasing in
 //! each size, and `E` is up to R = 50 µm (it falls to 1 past it), so over a block
 //! `[x0, x1] × [y0, y1]` the kernel is at most `E_b π (r_x1 + r_y1)² (v_hi − v_lo)`:
 //! `E_b` the efficiency at the block's largest radii clamped to 50 µm (and at least 1
 //! when the block reaches past 50 µm), `v_hi − v_lo` the largest velocity difference
-//! of its corners — a bound, not the supremum.
+//! of its corners — a bound, not the supremum. With Hall's efficiency `E_b` is the
+//! largest table node of the cells the block's collector radii and ratios r/R meet
+//! (a bilinear interpolant is at most its cell's largest node).
 
 use libm::{cbrt, pow};
 
@@ -100,8 +110,17 @@ const HALL_Q: [f64; 20] = [
     0.85, 0.90, 0.95, 1.00,
 ];
 
+/// The first node at or above a clamped coordinate.
+fn upper(grid: &[f64], v: f64) -> usize {
+    let v = v.clamp(grid[0], grid[grid.len() - 1]);
+    grid.partition_point(|&g| g < v).min(grid.len() - 1)
+}
+
 /// Hall's efficiency at collector radius `big` ≥ collected radius `small` (m).
 fn hall(big: f64, small: f64) -> f64 {
+    if big.is_nan() || big <= 0.0 {
+        return 0.0;
+    }
     let (i, u) = cell(&HALL_R, big * 1e6);
     let (j, w) = cell(&HALL_Q, small / big);
     let e = |a: usize, b: usize| HALL_E[a][b];
@@ -113,13 +132,14 @@ fn hall(big: f64, small: f64) -> f64 {
 /// `[q0, q1]`: the largest node of the cells the rectangle meets (a bilinear
 /// interpolant is at most its cell's largest node).
 fn hall_bound(r0: f64, r1: f64, q0: f64, q1: f64) -> f64 {
+    // from the last node at or below the lower end to the first at or above the upper
     let (i0, _) = cell(&HALL_R, r0 * 1e6);
-    let (i1, _) = cell(&HALL_R, r1 * 1e6);
+    let i1 = upper(&HALL_R, r1 * 1e6).max(i0);
     let (j0, _) = cell(&HALL_Q, q0);
-    let (j1, _) = cell(&HALL_Q, q1);
+    let j1 = upper(&HALL_Q, q1).max(j0);
     let mut m: f64 = 0.0;
-    for row in &HALL_E[i0..=i1 + 1] {
-        for &v in &row[j0..=j1 + 1] {
+    for row in &HALL_E[i0..=i1] {
+        for &v in &row[j0..=j1] {
             m = m.max(v);
         }
     }

@@ -364,6 +364,35 @@ fn gravitational_bounds_and_units() {
     for bad in [0.0, -1e-6, 1.0, f64::NAN] {
         assert!(Coagulation::gravitational(bad).is_err(), "{bad}");
     }
+    // Hall's efficiencies: another kernel (name, fingerprint), the same units rule,
+    // its bounds hold on integer blocks, and R = r = 70 µm takes Hall's 4.0
+    let h = Coagulation::gravitational_hall(1e-5).unwrap();
+    assert_eq!(h.name(), "gravitational-hall");
+    assert_ne!(h.fingerprint(), k.fingerprint());
+    assert_eq!(h.in_size_unit(8.0).unwrap().name(), "gravitational-hall");
+    assert!(Coagulation::gravitational_hall(1.0).is_err());
+    for &(x0, x1, y0, y1) in &[
+        (1.0, 4.0, 5.0, 8.0),
+        (100.0, 125.0, 100.0, 125.0),
+        (300.0, 400.0, 20.0, 40.0),
+        (1.0, 2.0, 1000.0, 1200.0),
+    ] {
+        let sup = h.sup_block(x0, x1, y0, y1).unwrap();
+        for x in x0 as u32..=x1 as u32 {
+            for y in y0 as u32..=y1 as u32 {
+                assert!(h.rate(f64::from(x), f64::from(y)) <= sup, "{x} {y}");
+            }
+        }
+    }
+    let r = 70e-6;
+    assert_eq!(
+        crate::kernel::gravitational::efficiency_of(
+            crate::kernel::gravitational::Collection::Hall,
+            r,
+            r
+        ),
+        4.0
+    );
     // the atmospheric kernel lives on integer sizes: no other unit
     assert!(Coagulation::atmospheric().in_size_unit(1.0 / 64.0).is_err());
     assert!(Coagulation::atmospheric().in_size_unit(1.0).is_ok());
