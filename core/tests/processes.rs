@@ -116,16 +116,7 @@ fn tally(s: &common::Sim) -> (u64, f64) {
     }
 }
 
-/// The checkpoint envelope of `s`, in a buffer of the size it needs.
-pub(crate) fn checkpoint(s: &common::Sim) -> Vec<u8> {
-    let mut w = coagula_core::checkpoint::Writer::new(&mut []);
-    s.save_checkpoint(None, &mut w);
-    let mut buf = vec![0u8; w.needed()];
-    let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
-    s.save_checkpoint(None, &mut w);
-    w.finish().unwrap();
-    buf
-}
+pub(crate) use common::checkpoint;
 
 pub(crate) fn rng(seed: u64) -> Pcg64Mcg {
     Pcg64Mcg::seed_from_u64(seed)
@@ -741,18 +732,7 @@ proptest::proptest! {
         if let Some(b) = s.books() {
             proptest::prop_assert_eq!(b.current_number(), s.particles());
         }
-        let mut buf = checkpoint(&*s);
-        let n = buf.len();
-        buf[flip % n] = value;
-        let kept = common::state_bits(&*s);
-        let books = s.books();
-        if s.restore_checkpoint(&buf[..n]).is_err() {
-            proptest::prop_assert_eq!(common::state_bits(&*s), kept);
-            proptest::prop_assert_eq!(s.books(), books);
-        } else {
-            let t2 = s.time() + 0.05;
-            let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(20_000), &mut g);
-        }
+        common::corrupted_checkpoint(&mut *s, flip, value, &mut g)?;
     }
 }
 

@@ -412,18 +412,7 @@ proptest::proptest! {
             let m1 = s.moment(1.0);
             proptest::prop_assert!((b.current_mass() - m1).abs() <= 1e-9 * m1.abs().max(1e-300));
         }
-        let mut buf = crate::processes::checkpoint(&*s);
-        let n = buf.len();
-        buf[flip % n] = value;
-        let kept = common::state_bits(&*s);
-        let books = s.books();
-        if s.restore_checkpoint(&buf[..n]).is_err() {
-            proptest::prop_assert_eq!(common::state_bits(&*s), kept);
-            proptest::prop_assert_eq!(s.books(), books);
-        } else {
-            let t2 = s.time() + 0.05;
-            let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(20_000), &mut rng);
-        }
+        common::corrupted_checkpoint(&mut *s, flip, value, &mut rng)?;
     }
 }
 

@@ -82,6 +82,14 @@ const COEFFICIENT: Param = Param {
     doc: "the coefficient b > 0 multiplying the kernel",
 };
 
+/// The gravitational kernels' unit radius.
+const UNIT_RADIUS: Param = Param {
+    name: "unit-radius",
+    default: Some(1e-6),
+    unit: "m",
+    doc: "radius r0 of the drop of size 1, in [1e-8, 1e-2] m (sizes are volumes in its units)",
+};
+
 const MIN_SIZE: Param = Param {
     name: "min-size",
     default: Some(0.0),
@@ -176,15 +184,7 @@ pub const BUILTINS: &[BuiltinInfo] = &[
         family: Family::Coagulation,
         formula: "K = E(R, r) pi (r_x + r_y)^2 |v(r_x) - v(r_y)|, r_x = r0 x^(1/3); v: Simmel et al. 2002 Table 2 (Beard 1976); E: Long 1974",
         source: "Long 1974; Simmel, Trautmann & Tetzlaff 2002; Shima et al. 2009; docs/design/block-majorants.md",
-        params: &[
-            Param {
-                name: "unit-radius",
-                default: Some(1e-6),
-                unit: "m",
-                doc: "radius r0 of the drop of size 1, in [1e-8, 1e-2] m (sizes are volumes in its units)",
-            },
-            COEFFICIENT,
-        ],
+        params: &[UNIT_RADIUS, COEFFICIENT],
         units: "m^3/s; time in s; sizes in volume units of a drop of radius r0",
     },
     BuiltinInfo {
@@ -192,15 +192,7 @@ pub const BUILTINS: &[BuiltinInfo] = &[
         family: Family::Coagulation,
         formula: "K = E(R, r) pi (r_x + r_y)^2 |v(r_x) - v(r_y)|, r_x = r0 x^(1/3); v: Simmel et al. 2002 Table 2 (Beard 1976); E: Hall 1980 Table 1, bilinear in (R, r/R), clamped at its edges",
         source: "Hall 1980; Simmel, Trautmann & Tetzlaff 2002; docs/design/block-majorants.md",
-        params: &[
-            Param {
-                name: "unit-radius",
-                default: Some(1e-6),
-                unit: "m",
-                doc: "radius r0 of the drop of size 1, in [1e-8, 1e-2] m (sizes are volumes in its units)",
-            },
-            COEFFICIENT,
-        ],
+        params: &[UNIT_RADIUS, COEFFICIENT],
         units: "m^3/s; time in s; sizes in volume units of a drop of radius r0",
     },
     BuiltinInfo {

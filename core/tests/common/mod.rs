@@ -201,3 +201,37 @@ pub fn mass(counts: &[u64]) -> u64 {
         .map(|(i, &c)| (i as u64 + 1) * c)
         .sum()
 }
+
+/// The checkpoint envelope of `s`, in a buffer of the size it needs.
+pub fn checkpoint(s: &Sim) -> Vec<u8> {
+    let mut w = coagula_core::checkpoint::Writer::new(&mut []);
+    s.save_checkpoint(None, &mut w);
+    let mut buf = vec![0u8; w.needed()];
+    let mut w = coagula_core::checkpoint::Writer::new(&mut buf);
+    s.save_checkpoint(None, &mut w);
+    w.finish().unwrap();
+    buf
+}
+
+/// The sim's checkpoint with byte `flip` (mod its length) set to `value`: restored, and
+/// a short advance after it, or refused with the state and the books as they were.
+pub fn corrupted_checkpoint(
+    s: &mut Sim,
+    flip: usize,
+    value: u8,
+    g: &mut Pcg64Mcg,
+) -> Result<(), proptest::test_runner::TestCaseError> {
+    let mut buf = checkpoint(s);
+    let n = buf.len();
+    buf[flip % n] = value;
+    let kept = state_bits(s);
+    let books = s.books();
+    if s.restore_checkpoint(&buf[..n]).is_err() {
+        proptest::prop_assert_eq!(state_bits(s), kept);
+        proptest::prop_assert_eq!(s.books(), books);
+    } else {
+        let t2 = s.time() + 0.05;
+        let _ = s.advance_within(t2, &mut coagula_core::scheme::Budget::work(20_000), g);
+    }
+    Ok(())
+}

@@ -316,6 +316,18 @@ fn additive_shift_is_tight_at_the_minimum_size() {
     assert_eq!(Coagulation::additive().majorant(0.0), Some(1.0));
 }
 
+/// `k`'s block bound is at least the kernel at every integer pair of each block.
+fn sup_block_holds(k: &Coagulation, blocks: &[(f64, f64, f64, f64)]) {
+    for &(x0, x1, y0, y1) in blocks {
+        let sup = k.sup_block(x0, x1, y0, y1).unwrap();
+        for x in x0 as u32..=x1 as u32 {
+            for y in y0 as u32..=y1 as u32 {
+                assert!(k.rate(f64::from(x), f64::from(y)) <= sup, "{x} {y}");
+            }
+        }
+    }
+}
+
 /// The gravitational kernel through `Coagulation`: its rank-3 bound holds (and is
 /// loose: below 1 % at near-equal small drops), its block bound holds on integer
 /// blocks, a change of size unit is the same kernel, and bad radii are refused.
@@ -341,18 +353,14 @@ fn gravitational_bounds_and_units() {
         }
     }
     assert!(worst < 0.01, "{worst}");
-    for &(x0, x1, y0, y1) in &[
-        (1.0, 4.0, 5.0, 8.0),
-        (1.0, 4.0, 1.0, 4.0),
-        (30.0, 60.0, 1.0, 2.0),
-    ] {
-        let sup = k.sup_block(x0, x1, y0, y1).unwrap();
-        for x in x0 as u32..=x1 as u32 {
-            for y in y0 as u32..=y1 as u32 {
-                assert!(k.rate(f64::from(x), f64::from(y)) <= sup);
-            }
-        }
-    }
+    sup_block_holds(
+        &k,
+        &[
+            (1.0, 4.0, 5.0, 8.0),
+            (1.0, 4.0, 1.0, 4.0),
+            (30.0, 60.0, 1.0, 2.0),
+        ],
+    );
     // sizes in units of 8: the unit radius doubles
     let k8 = k.in_size_unit(8.0).unwrap();
     assert_eq!(
@@ -371,19 +379,15 @@ fn gravitational_bounds_and_units() {
     assert_ne!(h.fingerprint(), k.fingerprint());
     assert_eq!(h.in_size_unit(8.0).unwrap().name(), "gravitational-hall");
     assert!(Coagulation::gravitational_hall(1.0).is_err());
-    for &(x0, x1, y0, y1) in &[
-        (1.0, 4.0, 5.0, 8.0),
-        (100.0, 125.0, 100.0, 125.0),
-        (300.0, 400.0, 20.0, 40.0),
-        (1.0, 2.0, 1000.0, 1200.0),
-    ] {
-        let sup = h.sup_block(x0, x1, y0, y1).unwrap();
-        for x in x0 as u32..=x1 as u32 {
-            for y in y0 as u32..=y1 as u32 {
-                assert!(h.rate(f64::from(x), f64::from(y)) <= sup, "{x} {y}");
-            }
-        }
-    }
+    sup_block_holds(
+        &h,
+        &[
+            (1.0, 4.0, 5.0, 8.0),
+            (100.0, 125.0, 100.0, 125.0),
+            (300.0, 400.0, 20.0, 40.0),
+            (1.0, 2.0, 1000.0, 1200.0),
+        ],
+    );
     let r = 70e-6;
     assert_eq!(
         crate::kernel::gravitational::efficiency_of(
