@@ -10,8 +10,11 @@ cd "$(dirname "$0")/.."
 # (the Python crate has no Rust tests: it is built below as the wheel a user installs,
 # not a second time in the test profile; coagula-mpi has none and needs an MPI
 # library, tests/mpi/run.sh runs it; the examples are not tests — clippy checks that
-# they build — and compiling them was 35 of the test build's 695 unit-seconds)
-cargo test --workspace --exclude coagula-python --exclude coagula-mpi --lib --bins --tests
+# they build — and compiling them was 35 of the test build's 695 unit-seconds).
+# `--tests` takes the targets whose manifest sets `test = true`: not libcoagula's
+# (coagula-ffi's lib has no unit tests; `--lib` would compile it a second time with
+# cfg(test) for nothing, 54 of the build's unit-seconds on 2026-12-07).
+cargo test --workspace --exclude coagula-python --exclude coagula-mpi --tests
 cargo test --workspace --exclude coagula-python --exclude coagula-mpi --doc
 
 # The C library the Python tests compare bits with (the test profile's build, which
