@@ -2,7 +2,8 @@
 //! (`docs/design/processes.md`): a particle drawn uniformly or in proportion to its size
 //! (a bucket by its particle number, or by particle number times its largest size, then
 //! a particle of the bucket, accepted with its size over that largest size), removed or
-//! added in O(1) after an O(buckets) draw.
+//! added in O(1) after an O(buckets) draw. The per-size tree layouts draw a size in one
+//! pass over their counts and edit in O(log M) (`tree.rs`).
 
 use super::bound::MAX_PARTICLES as MAX_REFERENCE;
 use super::bound::bucket_range;

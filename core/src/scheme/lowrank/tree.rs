@@ -286,6 +286,70 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         self.change(size as usize - 1, 1);
     }
 
+    const EDITS: bool = true;
+
+    /// A size by its particle number (`by_mass`: number times size) in one pass over
+    /// the counts (the tree holds the kernel's weights, not counts): O(M) a draw, and
+    /// the edit O(log M), against a state replacement's O(M) rebuild.
+    fn draw_particle<G: Rng + ?Sized>(
+        &self,
+        by_mass: bool,
+        n: u64,
+        rng: &mut G,
+    ) -> Option<(u64, (usize, u64))> {
+        let occupied = || self.counts.iter().enumerate().filter(|&(_, &c)| c > 0);
+        let idx = if by_mass {
+            let weight = |(i, &c): (usize, &u64)| c as f64 * (i + 1) as f64;
+            let total: f64 = occupied().map(weight).sum();
+            if !(total > 0.0 && total < f64::INFINITY) {
+                return None;
+            }
+            let mut u = unit_f64(rng.next_u64()) * total;
+            let mut last = None;
+            for c in occupied() {
+                last = Some(c.0);
+                let w = weight(c);
+                if u < w {
+                    break;
+                }
+                u -= w;
+            }
+            last?
+        } else {
+            if n == 0 {
+                return None;
+            }
+            let mut k = crate::random::below(rng, n);
+            let mut last = None;
+            for (i, &c) in occupied() {
+                last = Some(i);
+                if k < c {
+                    break;
+                }
+                k -= c;
+            }
+            last?
+        };
+        Some(((idx + 1) as u64, (idx, 0)))
+    }
+
+    fn remove_particle(&mut self, (idx, _): (usize, u64), _x: u64) {
+        self.change(idx, -1);
+    }
+
+    fn add_particle<K: CoagulationKernel>(
+        &mut self,
+        kernel: &K,
+        x: u64,
+        pop: &Population,
+    ) -> Result<()> {
+        while x > self.m as u64 {
+            self.grow(kernel, 2 * self.m, pop.memory_budget)?;
+        }
+        self.change(x as usize - 1, 1);
+        Ok(())
+    }
+
     const REWEIGHS: bool = true;
 
     #[inline]
