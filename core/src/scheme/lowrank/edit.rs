@@ -23,6 +23,19 @@ pub(super) fn pick_bucket<G: Rng + ?Sized>(
     m: u64,
     rng: &mut G,
 ) -> Option<usize> {
+    pick(counts, n, by_mass, |b| bucket_range(b).1.min(m), rng)
+}
+
+/// An entry drawn in proportion to `n_b` (or `n_b · hi(b)` when `by_mass`) from
+/// `(b, n_b)`; `n` is `Σ n_b`. A bucket's `hi` is its largest size (the draw is then
+/// thinned by [`keep_by_mass`]); a single size's is the size itself.
+pub(super) fn pick<G: Rng + ?Sized>(
+    counts: impl Iterator<Item = (usize, u64)> + Clone,
+    n: u64,
+    by_mass: bool,
+    hi: impl Fn(usize) -> u64,
+    rng: &mut G,
+) -> Option<usize> {
     if !by_mass {
         if n == 0 {
             return None;
@@ -40,7 +53,7 @@ pub(super) fn pick_bucket<G: Rng + ?Sized>(
         }
         return last;
     }
-    let weight = |(b, n): (usize, u64)| n as f64 * bucket_range(b).1.min(m) as f64;
+    let weight = |(b, n): (usize, u64)| n as f64 * hi(b) as f64;
     let total: f64 = counts.clone().map(weight).sum();
     if total.is_nan() || total <= 0.0 {
         return None;

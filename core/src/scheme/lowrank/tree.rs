@@ -297,39 +297,8 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
         n: u64,
         rng: &mut G,
     ) -> Option<(u64, (usize, u64))> {
-        let occupied = || self.counts.iter().enumerate().filter(|&(_, &c)| c > 0);
-        let idx = if by_mass {
-            let weight = |(i, &c): (usize, &u64)| c as f64 * (i + 1) as f64;
-            let total: f64 = occupied().map(weight).sum();
-            if !(total > 0.0 && total < f64::INFINITY) {
-                return None;
-            }
-            let mut u = unit_f64(rng.next_u64()) * total;
-            let mut last = None;
-            for c in occupied() {
-                last = Some(c.0);
-                let w = weight(c);
-                if u < w {
-                    break;
-                }
-                u -= w;
-            }
-            last?
-        } else {
-            if n == 0 {
-                return None;
-            }
-            let mut k = crate::random::below(rng, n);
-            let mut last = None;
-            for (i, &c) in occupied() {
-                last = Some(i);
-                if k < c {
-                    break;
-                }
-                k -= c;
-            }
-            last?
-        };
+        let counts = self.counts.iter().copied().enumerate();
+        let idx = super::edit::pick(counts, n, by_mass, |i| i as u64 + 1, rng)?;
         Some(((idx + 1) as u64, (idx, 0)))
     }
 
