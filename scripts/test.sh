@@ -6,6 +6,9 @@
 # installed into the venv from PyPI.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# cargo's output directory (CARGO_TARGET_DIR when set, relative to the workspace)
+target=${CARGO_TARGET_DIR:-target}
+case $target in /*) ;; *) target="$PWD/$target" ;; esac
 
 # (the Python crate has no Rust tests: it is built below as the wheel a user installs,
 # not a second time in the test profile; coagula-mpi has none and needs an MPI
@@ -14,26 +17,64 @@ cd "$(dirname "$0")/.."
 # `--tests` takes the targets whose manifest sets `test = true`: not libcoagula's
 # (coagula-ffi's lib has no unit tests; `--lib` would compile it a second time with
 # cfg(test) for nothing, 54 of the build's unit-seconds on 2026-12-07).
-cargo test --workspace --exclude coagula-python --exclude coagula-mpi --tests
-cargo test --workspace --exclude coagula-python --exclude coagula-mpi --doc
+cargo_test=(cargo test --workspace --exclude coagula-python --exclude coagula-mpi)
+"${cargo_test[@]}" --tests --no-run
+"${cargo_test[@]}" --doc
 
 # The C library the Python tests compare bits with (the test profile's build, which
 # `cargo test` has compiled most of).
 cargo build -q -p coagula-ffi --profile test
-export COAGULA_LIB="$PWD/target/debug/libcoagula.so"
+export COAGULA_LIB="$target/debug/libcoagula.so"
 
+# The Python package is built while the Rust tests run: the release build of the wheel
+# compiles one large crate at a time, and the tests leave a core idle while one long
+# test finishes; side by side they took N s less of CI (docs/results/ci-time.md).
+# (`cargo test` would hold cargo's lock on the build directory while its tests run,
+# so the test programs it built are run here directly, as cargo runs them: from
+# their package's directory, one after the other.)
 venv=target/pyvenv
-if [ ! -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv"
+wheel_log="$target/wheel-build.log"
+(
+    if [ ! -x "$venv/bin/python" ]; then
+        python3 -m venv "$venv"
+    fi
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check \
+        'maturin>=1.9,<2' 'pytest>=7' 'numpy>=1.21' 'xarray>=2022.3' scipy
+    # The package as a user installs it: a release wheel (without the command line's
+    # plotting and argument parsing, which the package does not link)
+    rm -rf target/wheels
+    "$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels \
+        --interpreter "$venv/bin/python"
+    "$venv/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall \
+        --no-deps target/wheels/coagula-*.whl
+) > "$wheel_log" 2>&1 &
+wheel=$!
+
+# the test programs `cargo test --no-run` built (fresh now: nothing compiles), with
+# their package's directory
+programs=$("${cargo_test[@]}" --tests --no-run -q --message-format=json | python3 -c '
+import json, os, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m.get("executable") and m["profile"]["test"]:
+        print(os.path.dirname(m["manifest_path"]) + "\t" + m["executable"])
+')
+failed=""
+while IFS=$'\t' read -r dir program; do
+    echo "     Running $(basename "$program")"
+    (cd "$dir" && CARGO_MANIFEST_DIR="$dir" "$program") || failed="$failed $(basename "$program")"
+done <<< "$programs"
+
+status=0
+wait "$wheel" || status=$?
+if [ "$status" != 0 ]; then
+    cat "$wheel_log"
+    echo "building or installing the Python package failed (exit status $status)"
+    exit 1
 fi
-"$venv/bin/python" -m pip install -q --disable-pip-version-check \
-    'maturin>=1.9,<2' 'pytest>=7' 'numpy>=1.21' 'xarray>=2022.3' scipy
-# The package as a user installs it: a release wheel (without the command line's
-# plotting and argument parsing, which the package does not link)
-rm -rf target/wheels
-"$venv/bin/maturin" build -q --release -m python/Cargo.toml -o target/wheels \
-    --interpreter "$venv/bin/python"
-"$venv/bin/python" -m pip install -q --disable-pip-version-check --force-reinstall \
-    --no-deps target/wheels/coagula-*.whl
+if [ -n "$failed" ]; then
+    echo "failed test programs:$failed"
+    exit 1
+fi
 # from outside the source tree, so that the installed package is the one imported
 (cd target && ../"$venv/bin/python" -m pytest -q -p no:cacheprovider ../python/tests)

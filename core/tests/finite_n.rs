@@ -217,32 +217,52 @@ fn sizes_sim(id: SchemeId, kernel: Coagulation) -> Box<common::Sim> {
     .unwrap()
 }
 
+/// The times scheme `name` is compared at. The block engine's count tree and
+/// partition are dense in sizes (`docs/design/block-majorants.md`): with the additive
+/// kernel at t = 8 the 32 particles reach sizes near 2^17, and each replica rebuilds
+/// structures over 2^18 sizes about a dozen times — 77 s of the suite's CPU for 6000
+/// replicas (2026-12-07), where t ≤ 5 takes 4.5 s and still takes a replica through
+/// about seven doublings and up to six growth rebuilds (M from 64 to the total mass,
+/// 32 · 2^7). So there the block engine's last time is
+/// 5 instead of 8 (as many comparisons: docs/design/statistical-tests.md).
+fn times_for(name: &str, kind: Kind, times: &[f64]) -> Vec<f64> {
+    if name == "lowrank-blocks" && kind == Kind::Additive {
+        let mut t: Vec<f64> = times.iter().map(|&t| t.min(5.0)).collect();
+        t.dedup();
+        t
+    } else {
+        times.to_vec()
+    }
+}
+
 /// Compares every size-count scheme of the registry, low-rank over sizes and direct
 /// simulation over particles with the reference; returns the
 /// z-scores and the failures.
 fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
-    let exact = reference(kind, times, true);
-    let plain = reference(kind, times, false);
+    // the reference at every time some scheme is compared at
+    let mut all = times.to_vec();
+    all.extend(times_for("lowrank-blocks", kind, times));
+    all.sort_by(f64::total_cmp);
+    all.dedup();
+    let exact = reference(kind, &all, true);
+    let plain = reference(kind, &all, false);
     // family-wise: every comparison at TEST_ALPHA (see observe::TEST_ALPHA)
     let z_max = common::z_max(REPLICAS);
     let mut report = String::new();
     let mut failures = String::new();
-    let runs: Vec<(&str, bool, Vec<[Replicas; 3]>)> = common::count_schemes()
+    let mut runs: Vec<(&str, bool, Vec<f64>, Vec<[Replicas; 3]>)> = common::count_schemes()
         .enumerate()
         .filter_map(|(i, info)| {
             common::build(info, kernel, &[N0], N0 as f64)?;
             let make = || common::build(info, kernel, &[N0], N0 as f64).unwrap();
-            Some((
-                info.name,
-                info.name != "dsa-counts",
-                common::facade_replicas(i as u64 + 1, REPLICAS, times, make),
-            ))
+            let times = times_for(info.name, kind, times);
+            let stats = common::facade_replicas(i as u64 + 1, REPLICAS, &times, make);
+            Some((info.name, info.name != "dsa-counts", times, stats))
         })
         .collect();
     assert!(runs.len() >= 6, "every size-count scheme ran");
     // the particle schemes from 32 particles of size 1 in volume 32: low-rank over sizes
     // doubles, direct simulation does not
-    let mut runs = runs;
     let offset = registry::SCHEMES.len() as u64;
     for (i, id) in [
         registry::find("lowrank-sizes").unwrap(),
@@ -255,25 +275,27 @@ fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
         runs.push((
             id.name,
             id.name == "lowrank-sizes",
+            times.to_vec(),
             common::facade_replicas(offset + i as u64 + 1, REPLICAS, times, make),
         ));
     }
-    for (name, doubles, stats) in &runs {
+    for (name, doubles, times, stats) in &runs {
         let exact = if *doubles { &exact } else { &plain };
-        for (ti, &t) in times.iter().enumerate() {
+        for (&t, stats) in times.iter().zip(stats) {
+            let at = all.iter().position(|&a| a == t).unwrap();
             for (q, label) in ["N/V", "N1/V", "N2/V"].iter().enumerate() {
-                let st = &stats[ti][q];
-                let z = (st.mean() - exact[ti][q]) / st.std_error();
+                let st = &stats[q];
+                let z = (st.mean() - exact[at][q]) / st.std_error();
                 report.push_str(&format!(
                     "{kind:?} {name} t={t} {label}: mean {:.6} exact {:.6} z {z:+.2}\n",
                     st.mean(),
-                    exact[ti][q]
+                    exact[at][q]
                 ));
                 if z.is_nan() || z.abs() >= z_max {
                     failures.push_str(&format!(
                         "{kind:?} {name} t={t} {label}: mean {} exact {} z {z:.2} beyond {z_max:.2}\n",
                         st.mean(),
-                        exact[ti][q]
+                        exact[at][q]
                     ));
                 }
             }
@@ -317,7 +339,8 @@ fn constant_kernel_schemes_match_the_finite_n_reference() {
 
 /// Additive kernel to t = 8 (N/V ≈ e^{-t}, ~12 doublings, sizes up to ~2^17): at
 /// t = 30 the largest size would pass 32 · 2^40, beyond any size limit, so the fourth
-/// time of the constant kernel is left out here.
+/// time of the constant kernel is left out here (and the block engine stops at t = 5:
+/// see `times_for`).
 #[test]
 fn additive_kernel_schemes_match_the_finite_n_reference() {
     let (report, failures) = check(Kind::Additive, Coagulation::additive(), &[0.5, 2.0, 8.0]);
