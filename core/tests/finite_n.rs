@@ -235,6 +235,10 @@ fn times_for(name: &str, kind: Kind, times: &[f64]) -> Vec<f64> {
     }
 }
 
+/// A scheme's replicas: its name, whether it doubles, its times and the statistics at
+/// each.
+type Run = (&'static str, bool, Vec<f64>, Vec<[Replicas; 3]>);
+
 /// Compares every size-count scheme of the registry, low-rank over sizes and direct
 /// simulation over particles with the reference; returns the
 /// z-scores and the failures.
@@ -250,7 +254,7 @@ fn check(kind: Kind, kernel: Coagulation, times: &[f64]) -> (String, String) {
     let z_max = common::z_max(REPLICAS);
     let mut report = String::new();
     let mut failures = String::new();
-    let mut runs: Vec<(&str, bool, Vec<f64>, Vec<[Replicas; 3]>)> = common::count_schemes()
+    let mut runs: Vec<Run> = common::count_schemes()
         .enumerate()
         .filter_map(|(i, info)| {
             common::build(info, kernel, &[N0], N0 as f64)?;
