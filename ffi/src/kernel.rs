@@ -225,6 +225,12 @@ impl CoagulationKernel for Kernel {
             Kernel::User(_, b) => b.loose,
         }
     }
+    fn log_linear_blocks(&self) -> bool {
+        match self {
+            Kernel::Builtin(k) => k.log_linear_blocks(),
+            Kernel::User(..) => false,
+        }
+    }
     fn integer_sizes(&self) -> bool {
         match self {
             Kernel::Builtin(k) => k.integer_sizes(),

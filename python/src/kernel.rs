@@ -196,6 +196,12 @@ impl CoagulationKernel for PyCoag {
             PyCoag::User(u) => u.loose,
         }
     }
+    fn log_linear_blocks(&self) -> bool {
+        match self {
+            PyCoag::Builtin(k) => k.log_linear_blocks(),
+            PyCoag::User(_) => false,
+        }
+    }
     fn integer_sizes(&self) -> bool {
         match self {
             PyCoag::Builtin(k) => k.integer_sizes(),

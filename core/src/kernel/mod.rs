@@ -135,6 +135,17 @@ pub trait CoagulationKernel {
         false
     }
 
+    /// Whether block majorants may stop cutting the size axis next to the diagonal at
+    /// *log-linear strips* — a strip at most 1/32 of its smallest size wide, as the
+    /// buckets of the bucketed layout — instead of strips of 4 sizes: true for a kernel
+    /// that varies little across such a strip, so that a block there is bounded nearly
+    /// as tightly. The block engine then keeps about 190 blocks per octave of sizes
+    /// instead of 1.25 per size (`docs/design/block-majorants.md`). Only the acceptance
+    /// depends on it, never the law. False by default.
+    fn log_linear_blocks(&self) -> bool {
+        false
+    }
+
     /// A fingerprint of the kernel and its parameters, which a checkpoint records so
     /// that it is restored only under the same kernel; 0 (the default) for a kernel
     /// that cannot say (closures: their checkpoints are not checked against a change).

@@ -545,6 +545,15 @@ impl CoagulationKernel for Coagulation {
         self.kind == Kind::Atmospheric
     }
 
+    /// The gravitational kernels: smooth across a log-linear strip (the fall speeds'
+    /// difference vanishes on the diagonal, so a diagonal block's supremum is that of
+    /// its corners). The atmospheric kernel is not (it peaks next to the diagonal);
+    /// the others keep the integer partition, and the bits the block engine drew for
+    /// them before.
+    fn log_linear_blocks(&self) -> bool {
+        matches!(self.kind, Kind::Gravitational(..))
+    }
+
     fn integer_sizes(&self) -> bool {
         self.kind == Kind::Atmospheric
     }

@@ -336,6 +336,11 @@ fn gravitational_bounds_and_units() {
     let k = Coagulation::gravitational(1e-5).unwrap();
     assert_eq!(k.name(), "gravitational");
     assert!(!k.low_rank_is_loose() && !k.low_rank_is_exact() && !k.integer_sizes());
+    // thin strips next to the diagonal for block majorants; not for the atmospheric
+    // kernel, which peaks there, nor (same bits as before) for the others
+    assert!(k.log_linear_blocks());
+    assert!(!Coagulation::atmospheric().log_linear_blocks());
+    assert!(!Coagulation::constant(1.0).unwrap().log_linear_blocks());
     assert!(k.majorant(2.0).is_none());
     let (mut a, mut b, mut c, mut d) = ([0.0; 3], [0.0; 3], [0.0; 3], [0.0; 3]);
     let mut worst = f64::INFINITY;

@@ -197,9 +197,10 @@ impl BlockEngine {
         budget: usize,
     ) -> Result<Self> {
         let levels = m.trailing_zeros();
-        let nb = Partition::count(levels, MIN_LEVEL, SEPARATION);
+        let ll = kernel.log_linear_blocks();
+        let nb = Partition::count(levels, MIN_LEVEL, SEPARATION, ll);
         within_budget(Self::bytes_for(m, nb), budget)?;
-        let part = Partition::new(levels, MIN_LEVEL, SEPARATION)?;
+        let part = Partition::new(levels, MIN_LEVEL, SEPARATION, ll)?;
         let mu = m as usize;
         let mut tree = Vec::new();
         try_reserve(&mut tree, 2 * mu)?;

@@ -15,6 +15,12 @@
 //! 1–3 % of their proposals. So every block's rows and columns span sizes within a
 //! factor 2, apart from the finest level next to the diagonal.
 //!
+//! With `log_linear` (a kernel smooth next to the diagonal,
+//! `CoagulationKernel::log_linear_blocks`), a square is also kept whole once its rows
+//! are a *thin* strip, at most `2^-LOG_LINEAR_BITS` (1/32) of its smallest size wide,
+//! as the buckets of the bucketed layout: the partition then holds about 190 blocks
+//! per octave of sizes instead of 1.25 per size.
+//!
 //! Every unordered pair of sizes lies in exactly one block. For each strip the partition
 //! lists the blocks that meet it (as rows, or as columns off the diagonal), so a count
 //! change finds the blocks whose sums it moves.
@@ -83,11 +89,18 @@ pub(crate) struct Partition {
     pub members: Vec<Member>,
 }
 
+/// A thin strip is at most `2^-LOG_LINEAR_BITS` of its smallest size wide.
+pub(crate) const LOG_LINEAR_BITS: u32 = 5;
+
 /// Calls `f` for every block of the partition of `2^levels` sizes, in a fixed order.
-fn visit(levels: u32, min_level: u32, sep: u64, f: &mut dyn FnMut(Block)) {
-    fn go(l: u32, a: u64, c: u64, min: u32, sep: u64, f: &mut dyn FnMut(Block)) {
+fn visit(levels: u32, min_level: u32, sep: u64, log_linear: bool, f: &mut dyn FnMut(Block)) {
+    fn go(l: u32, a: u64, c: u64, min: u32, sep: u64, ll: bool, f: &mut dyn FnMut(Block)) {
         // (gap c − a − 1 at least sep)
         let apart = c > a && c - a > sep;
+        // rows 2^l sizes from size a·2^l + 1 (indices are sizes − 1), at most
+        // 2^-LOG_LINEAR_BITS of it: kept whole when the kernel allows (the columns, at
+        // or after the rows, are thinner still)
+        let thin = ll && (1u64 << (l + LOG_LINEAR_BITS)) <= (a << l) + 1;
         if apart && a == 0 && l > 0 {
             // rows 1 ..= 2^l: the kernel may vary as a power of the smaller size, so
             // the rows are cut where they double (sizes 1, 2, 3..4, 5..8, ...), each
@@ -100,7 +113,7 @@ fn visit(levels: u32, min_level: u32, sep: u64, f: &mut dyn FnMut(Block)) {
                     col: c as u32,
                 });
             }
-        } else if l == min || apart {
+        } else if l == min || apart || thin {
             f(Block {
                 row_level: l as u8,
                 col_level: l as u8,
@@ -108,23 +121,23 @@ fn visit(levels: u32, min_level: u32, sep: u64, f: &mut dyn FnMut(Block)) {
                 col: c as u32,
             });
         } else if c == a {
-            go(l - 1, 2 * a, 2 * a, min, sep, f);
-            go(l - 1, 2 * a, 2 * a + 1, min, sep, f);
-            go(l - 1, 2 * a + 1, 2 * a + 1, min, sep, f);
+            go(l - 1, 2 * a, 2 * a, min, sep, ll, f);
+            go(l - 1, 2 * a, 2 * a + 1, min, sep, ll, f);
+            go(l - 1, 2 * a + 1, 2 * a + 1, min, sep, ll, f);
         } else {
             for (da, dc) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                go(l - 1, 2 * a + da, 2 * c + dc, min, sep, f);
+                go(l - 1, 2 * a + da, 2 * c + dc, min, sep, ll, f);
             }
         }
     }
-    go(levels, 0, 0, min_level.min(levels), sep, f);
+    go(levels, 0, 0, min_level.min(levels), sep, log_linear, f);
 }
 
 impl Partition {
     /// The number of blocks of the partition of `2^levels` sizes.
-    pub fn count(levels: u32, min_level: u32, sep: u64) -> usize {
+    pub fn count(levels: u32, min_level: u32, sep: u64, log_linear: bool) -> usize {
         let mut n = 0;
-        visit(levels, min_level, sep, &mut |_| n += 1);
+        visit(levels, min_level, sep, log_linear, &mut |_| n += 1);
         n
     }
 
@@ -147,7 +160,7 @@ impl Partition {
         )
     }
 
-    pub fn new(levels: u32, min_level: u32, sep: u64) -> Result<Partition> {
+    pub fn new(levels: u32, min_level: u32, sep: u64, log_linear: bool) -> Result<Partition> {
         if levels > 31 {
             // (member lists name count-tree nodes, below 2^32)
             return Err(crate::error::Error::Capacity {
@@ -157,8 +170,8 @@ impl Partition {
         }
         let min_level = min_level.min(levels);
         let mut blocks = Vec::new();
-        try_reserve(&mut blocks, Self::count(levels, min_level, sep))?;
-        visit(levels, min_level, sep, &mut |b| blocks.push(b));
+        try_reserve(&mut blocks, Self::count(levels, min_level, sep, log_linear))?;
+        visit(levels, min_level, sep, log_linear, &mut |b| blocks.push(b));
         blocks.sort_unstable_by_key(|b| (b.row_level, b.row, b.col_level, b.col));
         let strips = Self::keys(levels, min_level);
         let mut starts = Vec::new();
@@ -275,15 +288,17 @@ mod tests {
     /// each of its sizes.
     #[test]
     fn blocks_cover_each_pair_once() {
-        for (levels, min, sep) in [
-            (3, 3, 2),
-            (5, 0, 2),
-            (6, 2, 2),
-            (6, 1, 1),
-            (7, 3, 3),
-            (7, 2, 1),
+        for (levels, min, sep, ll) in [
+            (3, 3, 2, false),
+            (5, 0, 2, false),
+            (6, 2, 2, false),
+            (6, 1, 1, false),
+            (7, 3, 3, false),
+            (7, 2, 1, false),
+            (10, 2, 1, true),
+            (9, 0, 2, true),
         ] {
-            let p = Partition::new(levels, min, sep).unwrap();
+            let p = Partition::new(levels, min, sep, ll).unwrap();
             let m = 1u64 << levels;
             let node = |l: u8, s: u32| ((m >> l) + u64::from(s)) as u32;
             let mut seen = alloc::vec![0u32; (m * m) as usize];
@@ -329,7 +344,7 @@ mod tests {
                 unique.dedup();
                 assert_eq!(unique.len(), found.len());
             }
-            assert_eq!(Partition::count(levels, min, sep), p.blocks.len());
+            assert_eq!(Partition::count(levels, min, sep, ll), p.blocks.len());
             // twins: each entry's twin is the block's entry in the other strip's list
             for (k, mb) in p.members.iter().enumerate() {
                 let t = p.members[mb.twin as usize];
@@ -350,7 +365,7 @@ mod tests {
     /// level; columns too.
     #[test]
     fn strips_within_a_factor_two() {
-        let p = Partition::new(12, 2, 1).unwrap();
+        let p = Partition::new(12, 2, 1, false).unwrap();
         for b in &p.blocks {
             let ((r0, r1), (c0, c1)) = b.ranges();
             if usize::from(b.row_level) > 2 || b.col - b.row > 1 {
@@ -364,10 +379,46 @@ mod tests {
     #[test]
     fn blocks_per_size() {
         for levels in 6..=21 {
-            let per = Partition::count(levels, super::super::MIN_LEVEL, super::super::SEPARATION)
-                as f64
+            let per = Partition::count(
+                levels,
+                super::super::MIN_LEVEL,
+                super::super::SEPARATION,
+                false,
+            ) as f64
                 / (1u64 << levels) as f64;
             assert!(per <= super::super::BLOCKS_PER_SIZE, "{levels}: {per}");
+        }
+    }
+
+    /// The log-linear partition: every block with rows wider than the finest level
+    /// either lies apart from the diagonal or has thin rows (at most 1/32 of their
+    /// smallest size, and more than 1/64 of it: the parent strip was not thin); and
+    /// the blocks grow as the octaves, not as the sizes.
+    #[test]
+    fn log_linear_blocks_are_thin_and_few() {
+        let (min, sep) = (super::super::MIN_LEVEL, super::super::SEPARATION);
+        let p = Partition::new(16, min, sep, true).unwrap();
+        let mut thin = 0;
+        for b in &p.blocks {
+            let ((r0, r1), (c0, _)) = b.ranges();
+            let (w, size) = (r1 - r0, r0 + 1);
+            // (not apart: the gap to the diagonal below sep sides)
+            let near = c0 <= r0 + sep * w;
+            if near && u32::from(b.row_level) > min {
+                assert!(w << LOG_LINEAR_BITS <= size, "{b:?}");
+                // (the parent strip, from at most w sizes lower, was not thin)
+                assert!((w << (LOG_LINEAR_BITS + 1)) + w > size, "{b:?}");
+                thin += 1;
+            }
+        }
+        assert!(thin > 0);
+        for levels in 12..=24 {
+            let n = Partition::count(levels, min, sep, true);
+            let per_octave = n as f64 / f64::from(levels);
+            assert!(per_octave < 160.0, "{levels}: {n} blocks");
+            if levels <= 20 {
+                assert!(n <= Partition::count(levels, min, sep, false));
+            }
         }
     }
 }
