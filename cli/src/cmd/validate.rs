@@ -11,6 +11,7 @@ use coagula_core::kernel::Fragmentation;
 use coagula_core::observe::{Replicas, TEST_ALPHA, student_t_threshold};
 use coagula_core::scheme::facade::{InitKind, Model, ModelKind};
 use coagula_core::scheme::registry::SCHEMES;
+use rayon::prelude::*;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 
@@ -150,6 +151,9 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
             only.unwrap_or_default()
         ));
     }
+    // the scenario cases, run side by side (many run one replica on one thread; the
+    // results do not depend on the threads, and come back in the file's order)
+    let mut jobs = Vec::new();
     for spec in &file.case {
         if !spec.modes.iter().any(|m| m == mode) || !selected(&spec.name) {
             continue;
@@ -189,8 +193,18 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
             if let Some(s) = &scheme {
                 overrides.push(("scheme.name".into(), toml::Value::String(s.clone())));
             }
-            run_case(&name, spec, &overrides, &mut out)?;
+            jobs.push((name, spec, overrides));
         }
+    }
+    let results: Vec<Result<Vec<Case>, String>> = jobs
+        .par_iter()
+        .map(|(name, spec, overrides)| {
+            let mut cases = Vec::new();
+            run_case(name, spec, overrides, &mut cases).map(|()| cases)
+        })
+        .collect();
+    for r in results {
+        out.extend(r?);
     }
     let mut cases = Vec::new();
     if langevin {
