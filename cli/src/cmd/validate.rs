@@ -196,26 +196,34 @@ pub fn evaluate(text: &str, quick: bool, only: Option<&str>) -> Result<Vec<Case>
             jobs.push((name, spec, overrides));
         }
     }
-    let results: Vec<Result<Vec<Case>, String>> = jobs
-        .par_iter()
-        .map(|(name, spec, overrides)| {
+    // (and beside them the cases computed in code)
+    let (results, coded) = rayon::join(
+        || {
+            jobs.par_iter()
+                .map(|(name, spec, overrides)| {
+                    let mut cases = Vec::new();
+                    run_case(name, spec, overrides, &mut cases).map(|()| cases)
+                })
+                .collect::<Vec<Result<Vec<Case>, String>>>()
+        },
+        || -> Result<Vec<Case>, String> {
             let mut cases = Vec::new();
-            run_case(name, spec, overrides, &mut cases).map(|()| cases)
-        })
-        .collect();
+            if langevin {
+                cases.extend(crate::reproduce::maftei2016::cases(quick)?);
+            }
+            if temperature {
+                cases.extend(crate::reproduce::osinsky2023::cases(quick)?);
+            }
+            if dsmc {
+                cases.extend(crate::reproduce::osinsky2023::dsmc_cases(quick)?);
+            }
+            Ok(cases)
+        },
+    );
     for r in results {
         out.extend(r?);
     }
-    let mut cases = Vec::new();
-    if langevin {
-        cases.extend(crate::reproduce::maftei2016::cases(quick)?);
-    }
-    if temperature {
-        cases.extend(crate::reproduce::osinsky2023::cases(quick)?);
-    }
-    if dsmc {
-        cases.extend(crate::reproduce::osinsky2023::dsmc_cases(quick)?);
-    }
+    let mut cases = coded?;
     if langevin || temperature || dsmc {
         cases.retain(|c| selected(&c.case));
         if cases.is_empty() && out.is_empty() {
