@@ -28,7 +28,7 @@ export COAGULA_LIB="$target/debug/libcoagula.so"
 
 # The Python package is built while the Rust tests run: the release build of the wheel
 # compiles one large crate at a time, and the tests leave a core idle while one long
-# test finishes; side by side they took N s less of CI (docs/results/ci-time.md).
+# test finishes (side by side: docs/results/ci-time.md).
 # (`cargo test` would hold cargo's lock on the build directory while its tests run,
 # so the test programs it built are run here directly, as cargo runs them: from
 # their package's directory, one after the other.)
