@@ -28,10 +28,8 @@ export COAGULA_LIB="$target/debug/libcoagula.so"
 
 # The Python package is built while the Rust tests run: the release build of the wheel
 # compiles one large crate at a time, and the tests leave a core idle while one long
-# test finishes (side by side: docs/results/ci-time.md).
-# (`cargo test` would hold cargo's lock on the build directory while its tests run,
-# so the test programs it built are run here directly, as cargo runs them: from
-# their package's directory, one after the other.)
+# test finishes (side by side: docs/results/ci-time.md). Cargo locks each profile's
+# output directory, so the wheel's release build does not wait for the tests' run.
 venv=target/pyvenv
 wheel_log="$target/wheel-build.log"
 (
@@ -50,30 +48,17 @@ wheel_log="$target/wheel-build.log"
 ) > "$wheel_log" 2>&1 &
 wheel=$!
 
-# the test programs `cargo test --no-run` built (fresh now: nothing compiles), with
-# their package's directory
-programs=$("${cargo_test[@]}" --tests --no-run -q --message-format=json | python3 -c '
-import json, os, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m.get("executable") and m["profile"]["test"]:
-        print(os.path.dirname(m["manifest_path"]) + "\t" + m["executable"])
-')
-failed=""
-while IFS=$'\t' read -r dir program; do
-    echo "     Running $(basename "$program")"
-    (cd "$dir" && CARGO_MANIFEST_DIR="$dir" "$program") || failed="$failed $(basename "$program")"
-done <<< "$programs"
+# (every test program, even after one fails; nothing compiles here any more)
+tests=0
+"${cargo_test[@]}" --tests --no-fail-fast || tests=$?
 
 status=0
 wait "$wheel" || status=$?
 if [ "$status" != 0 ]; then
     cat "$wheel_log"
     echo "building or installing the Python package failed (exit status $status)"
-    exit 1
 fi
-if [ -n "$failed" ]; then
-    echo "failed test programs:$failed"
+if [ "$tests" != 0 ] || [ "$status" != 0 ]; then
     exit 1
 fi
 # from outside the source tree, so that the installed package is the one imported

@@ -139,8 +139,8 @@ pub trait CoagulationKernel {
     /// *log-linear strips* — a strip at most 1/32 of its smallest size wide, as the
     /// buckets of the bucketed layout — instead of strips of 4 sizes: true for a kernel
     /// that varies little across such a strip, so that a block there is bounded nearly
-    /// as tightly. The block engine then keeps about 190 blocks per octave of sizes
-    /// instead of 1.25 per size (`docs/design/block-majorants.md`). Only the acceptance
+    /// as tightly. The block engine then keeps about 190 more blocks per added octave
+    /// of sizes instead of 1.25 per size (`docs/design/block-majorants.md`). Only the acceptance
     /// depends on it, never the law. False by default.
     fn log_linear_blocks(&self) -> bool {
         false

@@ -59,7 +59,8 @@ use partition::{Block, Partition};
 use rand_core::Rng;
 use sums::QuadSums;
 
-/// Diagonal blocks are `2^MIN_LEVEL` sizes wide.
+/// Diagonal blocks are `2^MIN_LEVEL` sizes wide (wider in a log-linear partition, at
+/// most 1/32 of their sizes: `partition`).
 pub const MIN_LEVEL: u32 = 2;
 /// A block is kept whole once its gap to the diagonal is at least this many sides.
 pub const SEPARATION: u64 = 1;
@@ -197,6 +198,13 @@ impl BlockEngine {
         budget: usize,
     ) -> Result<Self> {
         let levels = m.trailing_zeros();
+        if levels > 31 {
+            // (before counting the blocks: the partition names strips below 2^32)
+            return Err(Error::Capacity {
+                name: "maximum particle size",
+                capacity: 1 << 31,
+            });
+        }
         let ll = kernel.log_linear_blocks();
         let nb = Partition::count(levels, MIN_LEVEL, SEPARATION, ll);
         within_budget(Self::bytes_for(m, nb), budget)?;
@@ -576,7 +584,11 @@ impl<const R: usize> ProposalEngine<R> for BlockEngine {
         let mut s = Self::with_size(kernel, &counts, m, pop.memory_budget)?;
         let nb = r.u64()?;
         if nb != s.part.blocks.len() as u64 {
-            return Err(bad("block count differs from the partition"));
+            // (also a checkpoint of a gravitational kernel written before its partition
+            // became log-linear, 2026-12-07)
+            return Err(bad(
+                "block count differs from the partition (a checkpoint of another partition)",
+            ));
         }
         let mut leaves = Vec::new();
         try_reserve(&mut leaves, s.part.blocks.len())?;

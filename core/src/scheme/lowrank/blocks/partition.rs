@@ -18,8 +18,8 @@
 //! With `log_linear` (a kernel smooth next to the diagonal,
 //! `CoagulationKernel::log_linear_blocks`), a square is also kept whole once its rows
 //! are a *thin* strip, at most `2^-LOG_LINEAR_BITS` (1/32) of its smallest size wide,
-//! as the buckets of the bucketed layout: the partition then holds about 190 blocks
-//! per octave of sizes instead of 1.25 per size.
+//! as the buckets of the bucketed layout: the partition then grows by about 190 blocks
+//! per added octave of sizes instead of 1.25 blocks per size.
 //!
 //! Every unordered pair of sizes lies in exactly one block. For each strip the partition
 //! lists the blocks that meet it (as rows, or as columns off the diagonal), so a count
