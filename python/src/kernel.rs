@@ -190,6 +190,13 @@ impl CoagulationKernel for PyCoag {
             },
         }
     }
+    fn inf_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+        match self {
+            PyCoag::Builtin(k) => k.inf_block(x0, x1, y0, y1),
+            // (no squeeze for a user kernel: it changes the cost, never the draws)
+            PyCoag::User(..) => 0.0,
+        }
+    }
     fn low_rank_is_loose(&self) -> bool {
         match self {
             PyCoag::Builtin(k) => k.low_rank_is_loose(),

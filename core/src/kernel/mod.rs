@@ -120,6 +120,16 @@ pub trait CoagulationKernel {
         self.sup_rate(x0.min(y0), x1.max(y1))
     }
 
+    /// A lower bound of K over the block `x0 ≤ x ≤ x1`, `y0 ≤ y ≤ y1` of sizes (over its
+    /// integer pairs on integer ends, as [`sup_block`](Self::sup_block)); 0, the
+    /// default, when none is known. A block-majorant scheme accepts a proposal whose
+    /// uniform falls below it without evaluating K — the decision K would give, on the
+    /// same draws, so it changes the cost and never the results. A bound above K is
+    /// caught by the scheme's spot checks ([`crate::Error::BoundExceeded`]).
+    fn inf_block(&self, _x0: f64, _x1: f64, _y0: f64, _y1: f64) -> f64 {
+        0.0
+    }
+
     /// Whether the kernel is defined on integer sizes only (its values or bounds do
     /// not hold between them): the registry refuses it for schemes over real sizes.
     /// False by default.

@@ -582,6 +582,22 @@ impl CoagulationKernel for Coagulation {
         Some(corners.into_iter().fold(0.0, f64::max))
     }
 
+    /// The atmospheric kernel's, on integer sizes, from
+    /// [`atmospheric::inf_block`](crate::kernel::atmospheric::inf_block), the
+    /// gravitational kernels' from
+    /// [`gravitational::inf_with`](crate::kernel::gravitational::inf_with); 0 for the
+    /// others.
+    fn inf_block(&self, x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
+        if self.kind == Kind::Atmospheric {
+            return self.scale * atmospheric::inf_block(x0, x1, y0, y1);
+        }
+        if let Kind::Gravitational(r0, law) = self.kind {
+            let r = |x: f64| r0 * cbrt(x);
+            return self.scale * gravitational::inf_with(law, r(x0), r(x1), r(y0), r(y1));
+        }
+        0.0
+    }
+
     /// Quasi-convex along each axis (as for [`sup_rate`](Self::sup_rate)): the supremum
     /// over a block is at one of its four corners; the atmospheric kernel's, on integer
     /// sizes, from [`atmospheric::sup_block`](crate::kernel::atmospheric::sup_block).

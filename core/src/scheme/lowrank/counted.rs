@@ -40,7 +40,7 @@
 use super::bound::{
     MAX_PARTICLES, SINGLE, bucket_extremes, bucket_of, bucket_range, each_in_list, width_bits,
 };
-use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine, rank_mismatch};
 use super::tree::{check_restored, checked_rate, descend_leaves, tree_rate};
 use super::trees::{ProposalTree, Weights, WideTree};
 use crate::checkpoint::{Reader, Writer};
@@ -263,7 +263,7 @@ impl<const R: usize, const W: usize> CountedEngine<R, W> {
 impl<const R: usize, const W: usize> ProposalEngine<R> for CountedEngine<R, W> {
     type Loc = Loc;
     const TAG: u64 = crate::scheme::tag::BUCKETED_COUNTED;
-    const LOW_IS_BOUND: bool = false;
+    const LOW: Low = Low::Factors;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
         if kernel.rank() != R || R == 0 || W != 2 * R {

@@ -94,12 +94,12 @@ fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
 }
 
 /// Block majorants: the count tree and its caps (24 bytes a size) and the blocks (about
-/// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 64 bytes each: the block,
-/// two list entries, its bound and its majorant in the sum tree), and while M doubles
+/// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 72 bytes each: the block,
+/// two list entries, its bounds and its majorant in the sum tree), and while M doubles
 /// the old tables beside the new ones (half as many).
 fn blocks_memory(reach: &Reach) -> u64 {
     let first = reach.start.max(64).next_power_of_two();
-    let per = (24.0 + 64.0 * super::blocks::BLOCKS_PER_SIZE) * 1.5;
+    let per = (24.0 + 72.0 * super::blocks::BLOCKS_PER_SIZE) * 1.5;
     reach.bytes(first, per as u64, 0, 0)
 }
 

@@ -79,7 +79,7 @@ pub use entry::{
     BinaryTreeEntry, BlocksEntry, BucketedEntry, DsmcEntry, DsmcRejectionEntry, SizesEntry,
     TemperatureEntry, TemperatureRejectionEntry, TreeEntry,
 };
-pub use proposal::{Candidate, Outcome, ProposalEngine};
+pub use proposal::{Candidate, Low, Outcome, ProposalEngine};
 pub use rule::{Coagulate, EventRule, Reweighed, SPOT_CHECK};
 pub use sizes::LowRankSizes;
 pub use temperature::{Collide, TemperatureMc, TemperatureRejection, Temperatures};
@@ -423,9 +423,9 @@ where
         let spot = (self.totals.proposals.wrapping_add(rep.proposals)).is_multiple_of(SPOT_CHECK);
         let engine = &self.engine;
         let bounds = || engine.bounds(&c.at);
-        let Some(outcome) =
-            self.rule
-                .decide(&self.kernel, &c, bounds, E::LOW_IS_BOUND, spot, rng)?
+        let Some(outcome) = self
+            .rule
+            .decide(&self.kernel, &c, bounds, E::LOW, spot, rng)?
         else {
             rep.rejections += 1;
             return Ok(false);

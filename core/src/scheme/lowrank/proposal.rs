@@ -43,6 +43,22 @@ pub enum Outcome {
     Bounce,
 }
 
+/// What an engine's `low` (the second of [`ProposalEngine::bounds`]) is, and so how a
+/// rule may accept without evaluating the kernel (a squeeze: a uniform under a lower
+/// bound of K accepts, the same decision the kernel would give, on the same draws).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Low {
+    /// Built from the smallest factors the engine's coarsening allows: `K ≥ ρ · low`
+    /// with the kernel's acceptance floor ρ.
+    Factors,
+    /// Always the bound itself (the per-size layout's factor bound): `K ≥ ρ · low`.
+    Bound,
+    /// The kernel's infimum over the proposal's block
+    /// ([`CoagulationKernel::inf_block`]):
+    /// `K ≥ low`, whatever ρ.
+    Infimum,
+}
+
 /// A particle layout that proposes pairs from a rank-R bound (see the module docs).
 ///
 /// The event loop calls, per proposal, [`propose`](Self::propose); after a rule accepts
@@ -87,17 +103,16 @@ pub trait ProposalEngine<const R: usize>: Sized {
     /// [`needs_refresh`](Self::needs_refresh) after rejections too.
     const REFRESH_AFTER_REJECT: bool = false;
 
-    /// Whether the engine's bound at a pair is the kernel's factor bound itself, so that
-    /// `low = bound` always (the per-size layout; a coarsened bound has `low ≤ bound`).
-    const LOW_IS_BOUND: bool;
+    /// What the engine's `low` at a pair is (the second of [`bounds`](Self::bounds)).
+    const LOW: Low;
 
     /// Draws one proposal; `None` when thinning rejects it (an empty slot, a rounding
     /// ghost, the particle paired with itself).
     fn propose<G: Rng + ?Sized>(&mut self, rng: &mut G) -> Option<Candidate<Self::Loc>>;
 
-    /// `(bound, low)` at a proposed pair: `bound = Â(x, y) + Â(y, x)`, what the
-    /// acceptance divides by, and `low ≤ bound` built from the smallest factors the
-    /// engine's coarsening allows, so that a rule can squeeze with the kernel's floor.
+    /// `(bound, low)` at a proposed pair: `bound`, what the acceptance divides by
+    /// (`Â(x, y) + Â(y, x)`, or a block's `sup_block`), and `low ≤ bound`, what a rule
+    /// squeezes with (see [`Low`]).
     fn bounds(&self, at: &Self::Loc) -> (f64, f64);
 
     /// The fallible part of applying `outcome` (growing the size table for a new

@@ -13,7 +13,7 @@
 //! temperature changed. Such a rule runs on an engine that can reweigh a size (the
 //! per-size trees).
 
-use super::proposal::{Candidate, Outcome};
+use super::proposal::{Candidate, Low, Outcome};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::Result;
 use crate::kernel::{CoagulationKernel, bounded_rate};
@@ -37,7 +37,7 @@ pub trait EventRule<K>: Sized {
 
     /// Accepts (`Some(outcome)`) or rejects (`None`) candidate `c`; `bounds()` gives
     /// `(bound, low)` at the pair (see [`ProposalEngine::bounds`](super::ProposalEngine::bounds)),
-    /// `low_is_bound` says the engine's `low` always equals its `bound`. `spot` asks for
+    /// `low` says what the engine's `low` is. `spot` asks for
     /// a kernel evaluation even if the squeeze accepts (see [`SPOT_CHECK`]). A kernel
     /// that returns an invalid rate or exceeds the bound is an error.
     fn decide<L, G: Rng + ?Sized>(
@@ -45,7 +45,7 @@ pub trait EventRule<K>: Sized {
         kernel: &K,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
-        low_is_bound: bool,
+        low: Low,
         spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>>;
@@ -128,22 +128,22 @@ impl<K: CoagulationKernel> EventRule<K> for Coagulate {
         kernel: &K,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
-        low_is_bound: bool,
+        low: Low,
         spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>> {
         let merge = Outcome::Merge {
             size: c.x.saturating_add(c.y),
         };
-        if self.floor >= 1.0 && low_is_bound && !spot {
+        if self.floor >= 1.0 && low == Low::Bound && !spot {
             // an exact bound on exact per-size factors: every pair is accepted, and the
             // bound is not even looked up
             return Ok(Some(merge));
         }
+        // (a block's infimum bounds K itself)
+        let floor = if low == Low::Infimum { 1.0 } else { self.floor };
         let (bound, low) = bounds();
-        if !thin(
-            self.floor, kernel, c.x as f64, c.y as f64, bound, low, spot, rng,
-        )? {
+        if !thin(floor, kernel, c.x as f64, c.y as f64, bound, low, spot, rng)? {
             return Ok(None);
         }
         Ok(Some(merge))
@@ -203,7 +203,7 @@ pub(crate) fn thin<K: CoagulationKernel + ?Sized, G: Rng + ?Sized>(
         let relied = squeeze.min(bound);
         if k < relied * (1.0 - 1e-9) {
             return Err(crate::Error::BoundExceeded {
-                name: "acceptance floor ρ·(A + Aᵀ) (an exact low-rank kernel has ρ = 1)",
+                name: "acceptance floor ρ·(A + Aᵀ) (an exact low-rank kernel has ρ = 1), or lower bound over a block (inf_block)",
                 rate: k,
                 bound: relied,
             });

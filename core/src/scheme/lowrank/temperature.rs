@@ -43,7 +43,7 @@
 //! assert!((sim.mean_temperature() / exact.mean_temperature() - 1.0).abs() < 0.05);
 //! ```
 
-use super::proposal::{Candidate, Outcome, ProposalEngine};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine};
 use super::rule::{EventRule, Reweighed};
 use super::trees::WideTree;
 use super::{LowRankMc, TreeEngine, UniformEngine};
@@ -241,7 +241,7 @@ impl<TK: TemperatureKernel + Clone> EventRule<Temperatures<TK>> for Collide {
         kernel: &Temperatures<TK>,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
-        _low_is_bound: bool,
+        _low: Low,
         _spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>> {

@@ -4,7 +4,7 @@
 //! change walks a single path. A proposal picks k ∝ `U_k V_k`, then i and j by descending
 //! the tree; the bound at the pair is exact per size (`low = bound`).
 
-use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine, rank_mismatch};
 use super::trees::{ProposalTree, Weights};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
@@ -197,7 +197,7 @@ impl<const R: usize, T: ProposalTree<R>> ProposalEngine<R> for TreeEngine<R, T> 
     /// The two sizes' indices.
     type Loc = (usize, usize);
     const TAG: u64 = crate::scheme::tag::LOWRANK;
-    const LOW_IS_BOUND: bool = true;
+    const LOW: Low = Low::Bound;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
         if kernel.rank() != R || R == 0 {

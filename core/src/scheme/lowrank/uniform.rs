@@ -11,7 +11,7 @@
 //! `max(M, 1024)` events (a stale maximum is still a bound: it only costs
 //! rejections).
 
-use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine, rank_mismatch};
 use super::trees::Weights;
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
@@ -126,7 +126,7 @@ impl<const R: usize> ProposalEngine<R> for UniformEngine<R> {
     /// The two particles' places in the list.
     type Loc = (usize, usize);
     const TAG: u64 = crate::scheme::tag::UNIFORM;
-    const LOW_IS_BOUND: bool = false;
+    const LOW: Low = Low::Factors;
     const REWEIGHS: bool = true;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {

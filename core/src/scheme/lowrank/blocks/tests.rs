@@ -30,7 +30,7 @@ fn check(e: &BlockEngine) {
         let hat = e.hats.leaf(id);
         assert!(e.intensity_of(id) <= hat, "block {id}: I above Î");
         assert!(
-            e.sup[id] * pairs(b.diagonal(), x, y) <= hat,
+            e.sup[id][0] * pairs(b.diagonal(), x, y) <= hat,
             "block {id}: allowances above Î"
         );
     }

@@ -6,7 +6,7 @@ use super::*;
 impl<const R: usize, const W: usize> ProposalEngine<R> for BucketedEngine<R, W> {
     type Loc = Loc;
     const TAG: u64 = crate::scheme::tag::BUCKETED;
-    const LOW_IS_BOUND: bool = false;
+    const LOW: Low = Low::Factors;
 
     fn build<K: CoagulationKernel>(kernel: &K, counts: &[u64], pop: &Population) -> Result<Self> {
         Self::with_counts(kernel, counts, pop)

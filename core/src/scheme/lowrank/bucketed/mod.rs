@@ -92,7 +92,7 @@ use super::bound::{
     MAX_PARTICLES, SINGLE, bucket_extremes, bucket_of, bucket_range, count_len, each_in_list,
     quantise_up, quantum, width_bits,
 };
-use super::proposal::{Candidate, Outcome, ProposalEngine, rank_mismatch};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine, rank_mismatch};
 use crate::checkpoint::{Reader, Writer};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;

@@ -123,13 +123,13 @@ impl<S: Sticking + Clone> EventRule<Gas<S>> for Collisions {
         gas: &Gas<S>,
         c: &Candidate<L>,
         bounds: impl FnOnce() -> (f64, f64),
-        low_is_bound: bool,
+        low: Low,
         _spot: bool,
         rng: &mut G,
     ) -> Result<Option<Outcome>> {
         let (x, y) = (c.x, c.y);
         let (sx, sy) = (&gas.species[x as usize - 1], &gas.species[y as usize - 1]);
-        if gas.weighted && !low_is_bound {
+        if gas.weighted && low != Low::Bound {
             return Err(Error::Unsupported {
                 what: "a gas weighted for the per-size trees on another engine (use new_gas)",
             });

@@ -67,7 +67,7 @@
 //! assert!((0..3).all(|k| (p[k] - p0[k]).abs() < 1e-9 * 20_000.0));
 //! ```
 
-use super::proposal::{Candidate, Outcome, ProposalEngine};
+use super::proposal::{Candidate, Low, Outcome, ProposalEngine};
 use super::rule::{EventRule, Reweighed};
 use super::trees::WideTree;
 use super::{LowRankMc, TreeEngine, UniformEngine};
@@ -356,7 +356,7 @@ where
     /// trees the first particle of a pair is drawn ∝ its speed bound; see the module
     /// docs).
     pub fn new_gas(mut gas: Gas<S>, volume: f64) -> Result<Self> {
-        gas.weighted = E::LOW_IS_BOUND;
+        gas.weighted = E::LOW == Low::Bound;
         let counts = gas.counts();
         Self::new(gas, &counts, volume)
     }
