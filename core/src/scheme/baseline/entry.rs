@@ -134,5 +134,5 @@ impl Register for RejectionEntry {
     }
 }
 
-count_controls!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()));
-count_controls!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()));
+count_controls!([K: CoagulationKernel + Clone] Inverse<K>, |s| Cow::Owned(s.counts()), edits = true);
+count_controls!([K: CoagulationKernel] AcceptanceRejection<K>, |s| Cow::Owned(s.counts()), edits = true);

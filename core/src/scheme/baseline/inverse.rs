@@ -26,6 +26,8 @@ use alloc::vec;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
+mod edit;
+
 const NONE: u32 = u32::MAX;
 
 /// Kernel values `K(x, y)` for `x, y ≤ CACHE_DIM` are cached (`CACHE_DIM²` doubles).

@@ -364,7 +364,91 @@ impl<K: CoagulationKernel> crate::checkpoint::Checkpoint for AcceptanceRejection
     }
 }
 
+/// Single-particle edits, for processes beside coagulation (`docs/design/processes.md`):
+/// the particle list takes an O(1) removal (swap-remove) and addition (push); a draw is
+/// uniform in O(1), by mass in one pass over the list.
 impl<K: CoagulationKernel> AcceptanceRejection<K> {
+    /// Whether single-particle edits are supported (always).
+    pub fn edits(&self) -> bool {
+        true
+    }
+
+    /// A particle drawn uniformly (`by_mass`: in proportion to its size): its size and
+    /// its place in the list, the handle for [`remove_drawn`](Self::remove_drawn).
+    pub fn draw_particle<G: Rng + ?Sized>(&self, by_mass: bool, rng: &mut G) -> Option<(u64, u64)> {
+        let n = self.sizes.len() as u64;
+        if n == 0 {
+            return None;
+        }
+        let p = if by_mass {
+            // (the list's mass is at most N · max_present, checked when the state was
+            // set, and merging keeps it)
+            let total = self.sizes.iter().try_fold(0u64, |a, &s| a.checked_add(s))?;
+            let mut k = u64::uniform_below(rng, total);
+            self.sizes.iter().position(|&s| {
+                let hit = k < s;
+                k = k.wrapping_sub(s);
+                hit
+            })?
+        } else {
+            u64::uniform_below(rng, n) as usize
+        };
+        Some((self.sizes[p], p as u64))
+    }
+
+    /// Removes the particle of size `x` that a draw returned `handle` for (nothing
+    /// changed since; a handle that does not name a particle of size `x` is an error
+    /// and changes nothing). The next proposal is drawn afresh.
+    pub fn remove_drawn(&mut self, x: u64, handle: u64) -> Result<()> {
+        let p = usize::try_from(handle)
+            .ok()
+            .filter(|&p| self.sizes.get(p) == Some(&x));
+        let Some(p) = p else {
+            return Err(Error::OutOfRange {
+                name: "particle handle",
+                value: handle as f64,
+                range: "a particle of the given size, from the last draw",
+            });
+        };
+        self.sizes.swap_remove(p);
+        self.pop.n -= 1;
+        self.pending = None;
+        Ok(())
+    }
+
+    /// Adds a particle of size `x` (at least 1, within the size limit and the memory
+    /// budget; a size past the largest raises the supremum). Errors leave the scheme
+    /// unchanged. The next proposal is drawn afresh.
+    pub fn add_particle(&mut self, x: u64) -> Result<()> {
+        if x == 0 {
+            return Err(Error::OutOfRange {
+                name: "size",
+                value: 0.0,
+                range: "1 or more",
+            });
+        }
+        self.pop.check_size(x)?;
+        let cmax = if x > self.max_present {
+            self.sup(x)?
+        } else {
+            self.cmax
+        };
+        let len = self.sizes.len() + 1;
+        within_budget(
+            len.checked_mul(core::mem::size_of::<u64>()),
+            self.pop.memory_budget,
+        )?;
+        try_reserve(&mut self.sizes, 1)?;
+        self.sizes.push(x);
+        self.max_present = self.max_present.max(x);
+        self.cmax = cmax;
+        self.pop.n += 1;
+        // (the reference of doubling, and what a checkpoint holds the list to)
+        self.pop.n0 = self.pop.n0.max(self.pop.n);
+        self.pending = None;
+        Ok(())
+    }
+
     /// Replaces the kernel (its supremum is recomputed). Errors leave the scheme
     /// unchanged.
     pub fn set_kernel(&mut self, kernel: K) -> Result<()> {

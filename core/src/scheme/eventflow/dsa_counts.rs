@@ -36,6 +36,8 @@ use alloc::borrow::Cow;
 use alloc::vec::Vec;
 use rand_core::Rng;
 
+mod edit;
+
 /// Sizes below this start the table (the tree's smallest length).
 const MIN_TABLE: usize = 64;
 

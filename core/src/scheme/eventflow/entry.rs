@@ -288,7 +288,7 @@ impl Register for DsaCountsEntry {
     }
 }
 
-count_controls!([K: CoagulationKernel] DsaCounts<K>, |s| s.counts());
+count_controls!([K: CoagulationKernel] DsaCounts<K>, |s| s.counts(), edits = true);
 
 impl<K: CoagulationKernel, F: FragmentationKernel, B: AsRef<[f64]> + AsMut<[f64]>> Controls<K, F>
     for Mfa<K, F, B>
