@@ -29,6 +29,7 @@ pub fn estimate(
     let mut reach = Reach::at_start(&init, rank);
     if let Model::Coagulation { kernel, .. } = &plan.model {
         reach.blocks = coagula_core::scheme::lowrank::prefers_blocks(kernel);
+        reach.log_linear = kernel.log_linear_blocks();
     }
     let end = plan.times.last().copied().unwrap_or(0.0);
     plan.memory_basis = "at start".into();

@@ -173,6 +173,16 @@ impl BlockEngine {
             .checked_add(QuadSums::bytes(b)?)
     }
 
+    /// Bytes of the engine over `m` sizes (a power of two) with a log-linear
+    /// partition; `None` past the largest M (2^31) or the address space.
+    pub(super) fn log_linear_bytes(m: u64) -> Option<usize> {
+        let levels = m.trailing_zeros();
+        if !m.is_power_of_two() || levels > 31 {
+            return None;
+        }
+        Self::bytes_for(m, Partition::count(levels, MIN_LEVEL, SEPARATION, true))
+    }
+
     #[inline]
     fn node(&self, level: u8, strip: u32) -> usize {
         ((self.m >> level) + u64::from(strip)) as usize

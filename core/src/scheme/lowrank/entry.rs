@@ -96,9 +96,16 @@ fn bucketed_memory(opts: &Options, reach: &Reach) -> u64 {
 /// Block majorants: the count tree and its caps (24 bytes a size) and the blocks (about
 /// [`BLOCKS_PER_SIZE`](super::blocks::BLOCKS_PER_SIZE) a size, 72 bytes each: the block,
 /// two list entries, its bounds and its majorant in the sum tree), and while M doubles
-/// the old tables beside the new ones (half as many).
+/// the old tables beside the new ones (half as many). A log-linear partition has a
+/// few hundred blocks an octave: its tables, counted exactly, are the count tree's.
 fn blocks_memory(reach: &Reach) -> u64 {
     let first = reach.start.max(64).next_power_of_two();
+    if reach.log_linear {
+        let m = reach.table_len(first).max(64).checked_next_power_of_two();
+        return m
+            .and_then(super::blocks::BlockEngine::log_linear_bytes)
+            .map_or(u64::MAX, |b| (b as u64).saturating_mul(3) / 2);
+    }
     let per = (24.0 + 72.0 * super::blocks::BLOCKS_PER_SIZE) * 1.5;
     reach.bytes(first, per as u64, 0, 0)
 }

@@ -112,3 +112,29 @@ fn allot_stays_within_the_majorant() {
     assert_eq!(allot(false, 0.0, 1.0, 3, 4), (u64::MAX, u64::MAX));
     assert_eq!(allot(false, 1.0, f64::INFINITY, 3, 4), (u64::MAX, u64::MAX));
 }
+
+/// The memory of a log-linear partition, as the estimate counts it: the engine's own
+/// figure for the blocks it builds, a few hundred an octave — a small fraction of the
+/// per-size figure the other kernels take (1.33 blocks a size), and above the count
+/// tree alone.
+#[test]
+fn log_linear_memory_is_the_count_tree_and_few_blocks() {
+    let k = Coagulation::gravitational(1e-5).unwrap();
+    for levels in [10u32, 16, 20] {
+        let m = 1u64 << levels;
+        let bytes = BlockEngine::log_linear_bytes(m).unwrap();
+        let e = BlockEngine::with_size(&k, &[100, 50], m, usize::MAX).unwrap();
+        assert_eq!(
+            Some(bytes),
+            BlockEngine::bytes_for(m, e.part.blocks.len()),
+            "2^{levels}"
+        );
+        let per_size = (24.0 + 72.0 * BLOCKS_PER_SIZE) * m as f64;
+        assert!(bytes as f64 > 24.0 * m as f64, "2^{levels}: {bytes}");
+        if levels >= 16 {
+            assert!((bytes as f64) < per_size / 3.0, "2^{levels}: {bytes}");
+        }
+    }
+    assert_eq!(BlockEngine::log_linear_bytes(3 << 10), None);
+    assert_eq!(BlockEngine::log_linear_bytes(1 << 32), None);
+}
