@@ -448,8 +448,8 @@ fn the_squeeze_changes_the_cost_not_the_bits() {
             Some(x1 + y1)
         }
         fn inf_block(&self, _x0: f64, x1: f64, _y0: f64, y1: f64) -> f64 {
-            // the largest value: above the kernel everywhere but one corner
-            x1 + y1
+            // nearly the largest value: above the kernel on most of every block
+            0.999 * (x1 + y1)
         }
     }
     let mut s = Blocks::new(Above, &[5000, 2000, 500], 5000.0).unwrap();

@@ -124,8 +124,12 @@ pub trait CoagulationKernel {
     /// integer pairs on integer ends, as [`sup_block`](Self::sup_block)); 0, the
     /// default, when none is known. A block-majorant scheme accepts a proposal whose
     /// uniform falls below it without evaluating K — the decision K would give, on the
-    /// same draws, so it changes the cost and never the results. A bound above K is
-    /// caught by the scheme's spot checks ([`crate::Error::BoundExceeded`]).
+    /// same draws, so it changes the cost and never the results — provided it holds:
+    /// the scheme's spot checks evaluate K on one in 1024 of the proposals the squeeze
+    /// accepted ([`crate::Error::BoundExceeded`] where K is below the bound there), so a
+    /// bound far above K is caught early, one slightly above it on a corner of a block
+    /// perhaps never. The built-in bounds are checked by scans in their tests. A bound
+    /// at or above the block's `sup_block` squeezes nothing.
     fn inf_block(&self, _x0: f64, _x1: f64, _y0: f64, _y1: f64) -> f64 {
         0.0
     }

@@ -381,13 +381,12 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             return None;
         }
         let p = if by_mass {
-            // (the list's mass is at most N · max_present, checked when the state was
-            // set, and merging keeps it)
-            let total = self.sizes.iter().try_fold(0u64, |a, &s| a.checked_add(s))?;
-            let mut k = u64::uniform_below(rng, total);
+            // (u128: a mass of up to 2^64 sizes of up to 2^64 each)
+            let total: u128 = self.sizes.iter().map(|&s| u128::from(s)).sum();
+            let mut k = crate::random::below_wide(rng, total)?;
             self.sizes.iter().position(|&s| {
-                let hit = k < s;
-                k = k.wrapping_sub(s);
+                let hit = k < u128::from(s);
+                k = k.wrapping_sub(u128::from(s));
                 hit
             })?
         } else {
@@ -428,6 +427,20 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             });
         }
         self.pop.check_size(x)?;
+        // the mass Σ x stays within u64, as every state set from counts (N times the
+        // largest size bounds it; the exact sum only when that bound fails)
+        let n = self.pop.n.saturating_add(1);
+        if n.checked_mul(x.max(self.max_present)).is_none()
+            && self
+                .sizes
+                .iter()
+                .try_fold(x, |m, &s| m.checked_add(s))
+                .is_none()
+        {
+            return Err(Error::Overflow {
+                name: "total mass (sum of i N_i)",
+            });
+        }
         let cmax = if x > self.max_present {
             self.sup(x)?
         } else {

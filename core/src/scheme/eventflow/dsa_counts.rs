@@ -23,7 +23,8 @@
 //! times come from the ziggurat. The figures are in `docs/results/eventflow-samplers.md`.
 
 use super::super::population::{
-    DEFAULT_MEMORY_BUDGET, Population, check_counts, dense_from_pairs, try_resize, within_budget,
+    DEFAULT_MEMORY_BUDGET, Population, check_counts, dense_from_pairs, try_reserve, try_resize,
+    within_budget,
 };
 use super::super::{Budget, Pending, Scheme, StepReport, check_target};
 use super::{accept, majorant};
@@ -196,6 +197,12 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         )?;
         let old = self.counts.len();
         let w = 2 * self.rank;
+        // (every allocation before any table changes: a failure leaves them as they
+        // were, the same length)
+        try_reserve(&mut self.counts, need.saturating_sub(old))?;
+        try_reserve(&mut self.h, need.saturating_sub(old))?;
+        let fac_more = (need * w).saturating_sub(self.fac.len());
+        try_reserve(&mut self.fac, fac_more)?;
         self.tree.resize_zero(need)?;
         try_resize(&mut self.counts, need, 0)?;
         try_resize(&mut self.h, need, f64::NAN)?;

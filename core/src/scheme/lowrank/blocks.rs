@@ -246,9 +246,11 @@ impl BlockEngine {
                     value: v,
                 });
             }
-            // (a lower bound that is not a number, or above the sup, squeezes nothing)
+            // (a lower bound that is not a number, or not below the sup, squeezes
+            // nothing: at the sup itself the rule would accept without its uniform,
+            // and the draws would differ from a run without the squeeze)
             let w = kernel.inf_block((r0 + 1) as f64, r1 as f64, (c0 + 1) as f64, c1 as f64);
-            sup.push([v, if w >= 0.0 && w <= v { w } else { 0.0 }]);
+            sup.push([v, if w >= 0.0 && w < v { w } else { 0.0 }]);
         }
         let mut caps = Vec::new();
         try_reserve(&mut caps, 2 * mu)?;

@@ -7,7 +7,7 @@
 use super::{Inverse, NONE};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use crate::random::below;
+use crate::random::below_wide;
 use rand_core::Rng;
 
 impl<K: CoagulationKernel> Inverse<K> {
@@ -19,23 +19,14 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// A particle drawn uniformly (`by_mass`: in proportion to its size): its size and
     /// its occupied slot, the handle for [`remove_drawn`](Self::remove_drawn).
     pub fn draw_particle<G: Rng + ?Sized>(&self, by_mass: bool, rng: &mut G) -> Option<(u64, u64)> {
+        // (u128: a mass of up to 2^64 sizes of up to 2^64 each)
         let weight = |a: usize| {
-            if by_mass {
-                self.count[a].checked_mul(self.size[a])
-            } else {
-                Some(self.count[a])
-            }
+            u128::from(self.count[a]) * if by_mass { u128::from(self.size[a]) } else { 1 }
         };
-        let mut total = 0u64;
+        let total: u128 = (0..self.size.len()).map(weight).sum();
+        let mut k = below_wide(rng, total)?;
         for a in 0..self.size.len() {
-            total = total.checked_add(weight(a)?)?;
-        }
-        if total == 0 {
-            return None;
-        }
-        let mut k = below(rng, total);
-        for a in 0..self.size.len() {
-            let w = weight(a)?;
+            let w = weight(a);
             if k < w {
                 return Some((self.size[a], a as u64));
             }
@@ -84,6 +75,18 @@ impl<K: CoagulationKernel> Inverse<K> {
             });
         }
         self.pop.check_size(x)?;
+        // N and the mass Σ i N_i stay within u64, as every state set from counts
+        let n = self.pop.n.checked_add(1).ok_or(Error::Overflow {
+            name: "particle number",
+        })?;
+        let mass = (0..self.size.len()).try_fold(x, |m, a| {
+            self.count[a]
+                .checked_mul(self.size[a])
+                .and_then(|v| m.checked_add(v))
+        });
+        mass.ok_or(Error::Overflow {
+            name: "total mass (sum of i N_i)",
+        })?;
         self.reserve_size(x)?;
         self.column(x)?;
         let kxx = self.rate(x, x)?;
@@ -106,7 +109,7 @@ impl<K: CoagulationKernel> Inverse<K> {
         } else {
             self.count[slot as usize] += 1;
         }
-        self.pop.n += 1;
+        self.pop.n = n;
         // (the reference of doubling, which a checkpoint holds N to)
         self.pop.n0 = self.pop.n0.max(self.pop.n);
         self.pending = None;
@@ -128,5 +131,26 @@ impl<K: CoagulationKernel> Inverse<K> {
         let r = fill();
         self.scratch_j = kx;
         r
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::Coagulation;
+
+    /// An addition that would take N or the mass past u64 is refused, the state as it
+    /// was.
+    #[test]
+    fn additions_keep_n_and_the_mass_within_u64() {
+        let k = Coagulation::constant(1.0).unwrap();
+        let mut s = Inverse::new(k, &[u64::MAX - 2], 1.0).unwrap();
+        let e = s.add_particle(8).unwrap_err();
+        assert!(matches!(e, Error::Overflow { .. }), "{e}");
+        assert_eq!((s.pop.n, s.size.len()), (u64::MAX - 2, 1));
+        s.add_particle(1).unwrap();
+        s.add_particle(1).unwrap();
+        assert!(matches!(s.add_particle(1), Err(Error::Overflow { .. })));
+        assert_eq!(s.pop.n, u64::MAX);
     }
 }

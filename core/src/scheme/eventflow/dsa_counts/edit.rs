@@ -6,7 +6,7 @@
 use super::DsaCounts;
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
-use crate::random::below;
+use crate::random::below_wide;
 use rand_core::Rng;
 
 impl<K: CoagulationKernel> DsaCounts<K> {
@@ -18,23 +18,17 @@ impl<K: CoagulationKernel> DsaCounts<K> {
     /// A particle drawn uniformly (`by_mass`: in proportion to its size): its size, and
     /// the size again as the handle for [`remove_drawn`](Self::remove_drawn).
     pub fn draw_particle<G: Rng + ?Sized>(&self, by_mass: bool, rng: &mut G) -> Option<(u64, u64)> {
-        let weight = |k: usize, c: u64| {
-            if by_mass {
-                c.checked_mul(k as u64 + 1)
-            } else {
-                Some(c)
-            }
-        };
-        let mut total = 0u64;
+        // (u128: a mass of up to 2^64 sizes of up to 2^64 each)
+        let weight = |k: usize, c: u64| u128::from(c) * if by_mass { k as u128 + 1 } else { 1 };
+        let total: u128 = self
+            .counts
+            .iter()
+            .enumerate()
+            .map(|(k, &c)| weight(k, c))
+            .sum();
+        let mut u = below_wide(rng, total)?;
         for (k, &c) in self.counts.iter().enumerate() {
-            total = total.checked_add(weight(k, c)?)?;
-        }
-        if total == 0 {
-            return None;
-        }
-        let mut u = below(rng, total);
-        for (k, &c) in self.counts.iter().enumerate() {
-            let w = weight(k, c)?;
+            let w = weight(k, c);
             if u < w {
                 return Some((k as u64 + 1, k as u64 + 1));
             }
@@ -74,12 +68,26 @@ impl<K: CoagulationKernel> DsaCounts<K> {
             });
         }
         self.pop.check_size(x)?;
+        // N and the mass Σ k N_k stay within u64, as every state set from counts (the
+        // table's length bounds the sizes; the exact sum only when that bound fails)
+        let n = self.pop.n.checked_add(1).ok_or(Error::Overflow {
+            name: "particle number",
+        })?;
+        let quick = n.checked_mul(x.max(self.counts.len() as u64)).is_some();
+        if !quick {
+            let mass = self.counts.iter().enumerate().try_fold(x, |m, (k, &c)| {
+                c.checked_mul(k as u64 + 1).and_then(|v| m.checked_add(v))
+            });
+            mass.ok_or(Error::Overflow {
+                name: "total mass (sum of i N_i)",
+            })?;
+        }
         if x as usize > self.counts.len() {
             self.grow(x)?;
         }
         let k = x as usize - 1;
         self.set_count(k, self.counts[k] + 1)?;
-        self.pop.n += 1;
+        self.pop.n = n;
         self.pop.n0 = self.pop.n0.max(self.pop.n);
         self.pending = None;
         Ok(())
@@ -98,5 +106,38 @@ impl<K: CoagulationKernel> DsaCounts<K> {
         self.tree.update_many([(k, w)])?;
         self.counts[k] = c;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kernel::Coagulation;
+    use rand_pcg::Pcg64Mcg;
+
+    /// An addition that would take N or the mass past u64 is refused, the state as it
+    /// was; a draw by mass over a mass past u64 still draws (128-bit weights).
+    #[test]
+    fn additions_keep_n_and_the_mass_within_u64() {
+        let k = Coagulation::constant(1.0).unwrap();
+        let mut s = DsaCounts::new(k, &[u64::MAX - 2], 1.0).unwrap();
+        let e = s.add_particle(8).unwrap_err();
+        assert!(matches!(e, Error::Overflow { .. }), "{e}");
+        assert_eq!(
+            (s.pop.n, s.counts[0], s.counts[7]),
+            (u64::MAX - 2, u64::MAX - 2, 0)
+        );
+        s.add_particle(1).unwrap();
+        s.add_particle(1).unwrap();
+        assert!(matches!(s.add_particle(1), Err(Error::Overflow { .. })));
+        assert_eq!(s.pop.n, u64::MAX);
+        let mut rng = Pcg64Mcg::new(7);
+        let mut t = DsaCounts::new(k, &[0, 0, 0, 1 << 62, 1 << 62], 1.0);
+        // (N 2^63, mass 9 · 2^62: refused when set from counts, as before)
+        assert!(t.is_err());
+        t = DsaCounts::new(k, &[0, 0, 1 << 62], 1.0);
+        let t = t.unwrap();
+        assert_eq!(t.draw_particle(true, &mut rng), Some((3, 3)));
+        assert_eq!(t.draw_particle(false, &mut rng), Some((3, 3)));
     }
 }
