@@ -388,8 +388,8 @@ impl CoagulationKernel for Evaluations {
 
 /// The squeeze accepts without evaluating K only where K would accept, on the same
 /// draws: with and without it, a seed gives the same counts, time and report, bit for
-/// bit (the atmospheric kernel, and the gravitational one on its log-linear
-/// partition), with far fewer kernel evaluations. A lower bound above the kernel is
+/// bit (the atmospheric kernel, and the gravitational ones, Long's and Hall's, on
+/// their log-linear partition), with far fewer kernel evaluations. A lower bound above the kernel is
 /// caught by the spot checks (`SPOT_CHECK`), by name.
 #[test]
 fn the_squeeze_changes_the_cost_not_the_bits() {
@@ -397,6 +397,12 @@ fn the_squeeze_changes_the_cost_not_the_bits() {
         (Coagulation::atmospheric(), vec![3000u64], 3000.0, 40.0),
         (
             Coagulation::gravitational(2e-5).unwrap(),
+            cloud_counts(3000, (30.531f64 / 20.0).powi(3)),
+            3000.0 / 8_388_608.0,
+            600.0,
+        ),
+        (
+            Coagulation::gravitational_hall(2e-5).unwrap(),
             cloud_counts(3000, (30.531f64 / 20.0).powi(3)),
             3000.0 / 8_388_608.0,
             600.0,
