@@ -42,6 +42,18 @@ fn at(i: f64, j: f64) -> f64 {
     rate(i, j, super::cbrt_of(i), super::cbrt_of(j))
 }
 
+/// The ends of a block rounded inwards to integers from 1, `None` when it holds no
+/// integer pair.
+fn integer_ends(x0: f64, x1: f64, y0: f64, y1: f64) -> Option<(f64, f64, f64, f64)> {
+    let (x0, x1, y0, y1) = (
+        libm::ceil(x0.max(1.0)),
+        libm::floor(x1),
+        libm::ceil(y0.max(1.0)),
+        libm::floor(y1),
+    );
+    (x0 <= x1 && y0 <= y1).then_some((x0, x1, y0, y1))
+}
+
 /// `sup K(i, j)` (coefficient 1) over the integer pairs of the block
 /// `x0 ≤ i ≤ x1`, `y0 ≤ j ≤ y1` (ends rounded inwards; 0 for an empty block).
 ///
@@ -51,15 +63,9 @@ fn at(i: f64, j: f64) -> f64 {
 /// it), and `K(i, i) = 4`: a block that meets the diagonal has its supremum at a
 /// corner, at the adjacent pair of its largest shared sizes, or 4. O(1).
 pub fn sup_block(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
-    let (x0, x1, y0, y1) = (
-        libm::ceil(x0.max(1.0)),
-        libm::floor(x1),
-        libm::ceil(y0.max(1.0)),
-        libm::floor(y1),
-    );
-    if !(x0 <= x1 && y0 <= y1) {
+    let Some((x0, x1, y0, y1)) = integer_ends(x0, x1, y0, y1) else {
         return 0.0;
-    }
+    };
     if x1 < y0 || y1 < x0 {
         return [at(x0, y0), at(x0, y1), at(x1, y0), at(x1, y1)]
             .into_iter()
@@ -107,15 +113,9 @@ pub const COLUMN_ARGMIN: (f64, f64) = (0.1842, 0.1845);
 /// `K(i, i) = 4` on shared sizes. Lowered by 1e-9 against rounding in the evaluations.
 /// O(1).
 pub fn inf_block(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
-    let (x0, x1, y0, y1) = (
-        libm::ceil(x0.max(1.0)),
-        libm::floor(x1),
-        libm::ceil(y0.max(1.0)),
-        libm::floor(y1),
-    );
-    if !(x0 <= x1 && y0 <= y1) {
+    let Some((x0, x1, y0, y1)) = integer_ends(x0, x1, y0, y1) else {
         return 0.0;
-    }
+    };
     // rows i in [a0, a1'] below columns j ≤ b1, a1' = min(a1, b1 − 1)
     let side = |(a0, a1): (f64, f64), b1: f64| {
         let a1 = a1.min(b1 - 1.0);

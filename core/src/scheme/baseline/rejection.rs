@@ -4,7 +4,7 @@
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::scheme::population::{
-    DEFAULT_MEMORY_BUDGET, Population, rate_overflow, try_reserve, within_budget,
+    DEFAULT_MEMORY_BUDGET, Population, bad_handle, rate_overflow, try_reserve, within_budget,
 };
 use crate::scheme::{Budget, Pending, Scheme, StepReport, check_target, exp1, open_unit};
 use crate::tree::Weight;
@@ -403,11 +403,10 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
             .ok()
             .filter(|&p| self.sizes.get(p) == Some(&x));
         let Some(p) = p else {
-            return Err(Error::OutOfRange {
-                name: "particle handle",
-                value: handle as f64,
-                range: "a particle of the given size, from the last draw",
-            });
+            return Err(bad_handle(
+                handle,
+                "a particle of the given size, from the last draw",
+            ));
         };
         self.sizes.swap_remove(p);
         self.pop.n -= 1;
@@ -419,17 +418,9 @@ impl<K: CoagulationKernel> AcceptanceRejection<K> {
     /// budget; a size past the largest raises the supremum). Errors leave the scheme
     /// unchanged. The next proposal is drawn afresh.
     pub fn add_particle(&mut self, x: u64) -> Result<()> {
-        if x == 0 {
-            return Err(Error::OutOfRange {
-                name: "size",
-                value: 0.0,
-                range: "1 or more",
-            });
-        }
-        self.pop.check_size(x)?;
-        // the mass Σ x stays within u64, as every state set from counts (N times the
-        // largest size bounds it; the exact sum only when that bound fails)
-        let n = self.pop.n.saturating_add(1);
+        // N and the mass Σ x stay within u64, as every state set from counts (N times
+        // the largest size bounds the mass; the exact sum only when that bound fails)
+        let n = self.pop.check_added(x)?;
         if n.checked_mul(x.max(self.max_present)).is_none()
             && self
                 .sizes

@@ -113,14 +113,7 @@ impl<K: CoagulationKernel, const R: usize, E: ProposalEngine<R>> LowRankMc<K, R,
         if !E::EDITS {
             return Err(unsupported());
         }
-        if x == 0 {
-            return Err(Error::OutOfRange {
-                name: "size",
-                value: 0.0,
-                range: "1 or more",
-            });
-        }
-        self.pop.check_size(x)?;
+        self.pop.check_added(x)?;
         if self.pop.n >= MAX_REFERENCE {
             return Err(Error::Capacity {
                 name: "particles",

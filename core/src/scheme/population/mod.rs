@@ -92,6 +92,23 @@ impl Population {
         self.check_size(x.saturating_add(y))
     }
 
+    /// The particle number after adding a particle of `size` (a single-particle edit),
+    /// or `Err` for size 0 ([`Error::OutOfRange`]), a size past the limit
+    /// ([`Self::check_size`]) or a number past u64 ([`Error::Overflow`]).
+    pub fn check_added(&self, size: u64) -> Result<u64> {
+        if size == 0 {
+            return Err(Error::OutOfRange {
+                name: "size",
+                value: 0.0,
+                range: "1 or more",
+            });
+        }
+        self.check_size(size)?;
+        self.n.checked_add(1).ok_or(Error::Overflow {
+            name: "particle number",
+        })
+    }
+
     /// `Err(Capacity)` for a particle beyond the size limit (or at `u64::MAX`, where a
     /// saturated sum lands).
     #[inline]
@@ -194,6 +211,16 @@ pub(crate) fn check_counts(counts: &[u64]) -> Result<u64> {
             })?;
     }
     Ok(n)
+}
+
+/// The error of a single-particle edit given a handle that does not name a particle
+/// of the given size (`what`: what it should have named).
+pub(crate) fn bad_handle(handle: u64, what: &'static str) -> Error {
+    Error::OutOfRange {
+        name: "particle handle",
+        value: handle as f64,
+        range: what,
+    }
 }
 
 /// The error of a total proposal rate that overflowed (kernel values near `f64::MAX`

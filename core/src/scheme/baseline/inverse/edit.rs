@@ -8,6 +8,7 @@ use super::{Inverse, NONE};
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::random::below_wide;
+use crate::scheme::population::bad_handle;
 use rand_core::Rng;
 
 impl<K: CoagulationKernel> Inverse<K> {
@@ -44,11 +45,10 @@ impl<K: CoagulationKernel> Inverse<K> {
             .ok()
             .filter(|&a| self.size.get(a) == Some(&x) && self.count[a] > 0);
         let Some(a) = a else {
-            return Err(Error::OutOfRange {
-                name: "particle handle",
-                value: handle as f64,
-                range: "an occupied slot of the given size, from the last draw",
-            });
+            return Err(bad_handle(
+                handle,
+                "an occupied slot of the given size, from the last draw",
+            ));
         };
         self.column(x)?;
         for b in 0..self.size.len() {
@@ -67,18 +67,8 @@ impl<K: CoagulationKernel> Inverse<K> {
     /// budget). Errors, an invalid kernel value among them, leave the scheme
     /// unchanged. The next event is drawn afresh.
     pub fn add_particle(&mut self, x: u64) -> Result<()> {
-        if x == 0 {
-            return Err(Error::OutOfRange {
-                name: "size",
-                value: 0.0,
-                range: "1 or more",
-            });
-        }
-        self.pop.check_size(x)?;
         // N and the mass Σ i N_i stay within u64, as every state set from counts
-        let n = self.pop.n.checked_add(1).ok_or(Error::Overflow {
-            name: "particle number",
-        })?;
+        let n = self.pop.check_added(x)?;
         let mass = (0..self.size.len()).try_fold(x, |m, a| {
             self.count[a]
                 .checked_mul(self.size[a])

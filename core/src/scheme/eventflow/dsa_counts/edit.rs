@@ -7,6 +7,7 @@ use super::DsaCounts;
 use crate::error::{Error, Result};
 use crate::kernel::CoagulationKernel;
 use crate::random::below_wide;
+use crate::scheme::population::bad_handle;
 use rand_core::Rng;
 
 impl<K: CoagulationKernel> DsaCounts<K> {
@@ -44,11 +45,7 @@ impl<K: CoagulationKernel> DsaCounts<K> {
             .ok()
             .filter(|&k| handle == x && self.counts.get(k).is_some_and(|&c| c > 0));
         let Some(k) = k else {
-            return Err(Error::OutOfRange {
-                name: "particle handle",
-                value: handle as f64,
-                range: "an occupied size, from the last draw",
-            });
+            return Err(bad_handle(handle, "an occupied size, from the last draw"));
         };
         self.set_count(k, self.counts[k] - 1)?;
         self.pop.n -= 1;
@@ -60,19 +57,9 @@ impl<K: CoagulationKernel> DsaCounts<K> {
     /// budget, with a valid majorant there). Errors leave the particles unchanged (the
     /// size table may have grown). The next event is drawn afresh.
     pub fn add_particle(&mut self, x: u64) -> Result<()> {
-        if x == 0 {
-            return Err(Error::OutOfRange {
-                name: "size",
-                value: 0.0,
-                range: "1 or more",
-            });
-        }
-        self.pop.check_size(x)?;
         // N and the mass Σ k N_k stay within u64, as every state set from counts (the
         // table's length bounds the sizes; the exact sum only when that bound fails)
-        let n = self.pop.n.checked_add(1).ok_or(Error::Overflow {
-            name: "particle number",
-        })?;
+        let n = self.pop.check_added(x)?;
         let quick = n.checked_mul(x.max(self.counts.len() as u64)).is_some();
         if !quick {
             let mass = self.counts.iter().enumerate().try_fold(x, |m, (k, &c)| {
